@@ -1,0 +1,2 @@
+//! The `curvefit` command-line tool.
+fn main() {}

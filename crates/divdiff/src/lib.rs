@@ -1,0 +1,1 @@
+//! curvefit: divdiff (under construction).

@@ -1,0 +1,1 @@
+//! curvefit: energy (under construction).

@@ -1,0 +1,1 @@
+//! curvefit: strip (under construction).

@@ -1,0 +1,1 @@
+//! Test-only package: insta snapshot tests and end-to-end tests live in .

@@ -1,0 +1,54 @@
+//! `cargo xtask bench [--quick] [FILTER]`: benchmark tables. Every speed claim is a ratio against
+//! a baseline measured in the same run; nothing here is asserted as a wall-clock limit.
+
+mod energy;
+mod refine;
+mod schemes;
+mod strip;
+
+use std::time::{Duration, Instant};
+
+/// Options shared by all benchmark groups.
+#[derive(Clone, Copy, Debug)]
+pub struct Opts {
+    /// Smaller sizes and fewer repetitions (for smoke runs).
+    pub quick: bool,
+}
+
+/// Median wall time of `reps` runs of `f` (after one warm-up run).
+pub fn time_median<T>(reps: usize, mut f: impl FnMut() -> T) -> Duration {
+    std::hint::black_box(f());
+    let mut v: Vec<Duration> = (0..reps.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            std::hint::black_box(f());
+            t.elapsed()
+        })
+        .collect();
+    v.sort();
+    v[v.len() / 2]
+}
+
+/// Runs the benchmark groups whose name contains the filter.
+pub fn run(args: &[String]) -> anyhow::Result<bool> {
+    let quick = args.iter().any(|a| a == "--quick");
+    let filter = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map(String::as_str)
+        .unwrap_or("");
+    let opts = Opts { quick };
+    if "energy".contains(filter) || filter.is_empty() {
+        energy::run(opts)?;
+    }
+    if "refine".contains(filter) || filter.is_empty() {
+        refine::run(opts)?;
+    }
+    if "schemes".contains(filter) || filter.is_empty() {
+        schemes::run(opts)?;
+    }
+    if "strip".contains(filter) || filter.is_empty() {
+        strip::run(opts)?;
+    }
+    Ok(true)
+}

@@ -1,0 +1,43 @@
+//! `cargo xtask` — curvefit's single entry point for project tasks.
+//!
+//! * `cargo xtask verify`  — every identity, theorem and worked example of the seeds as a named case.
+//! * `cargo xtask figures [--out DIR]` — redraws the seeds' figures as SVG.
+//! * `cargo xtask bench [--quick]` — the benchmark tables (ratios measured in the same run).
+//! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
+
+mod bench;
+mod figures;
+mod tidy;
+mod verify;
+
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (cmd, rest) = match args.split_first() {
+        Some((c, r)) => (c.as_str(), r),
+        None => ("help", &[][..]),
+    };
+    let result = match cmd {
+        "verify" => verify::run(rest),
+        "figures" => figures::run(rest),
+        "bench" => bench::run(rest),
+        "tidy" => tidy::run(rest),
+        _ => {
+            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy>");
+            return if cmd == "help" || cmd == "--help" {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(2)
+            };
+        }
+    };
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("xtask {cmd}: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
