@@ -1,0 +1,138 @@
+use crate::Error;
+
+/// A sequence of points in R^d, stored vertex-major: coordinate `c` of point `i` is
+/// `coords[i * dim + c]`.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Points {
+    dim: usize,
+    coords: Vec<f64>,
+}
+
+impl Points {
+    /// Points of dimension `dim` from a flat vertex-major coordinate vector.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] if `dim == 0`, [`Error::LengthMismatch`] if `coords.len()` is not a
+    /// multiple of `dim`, [`Error::NonFinite`] (naming the point) for NaN or infinite coordinates.
+    pub fn new(dim: usize, coords: Vec<f64>) -> Result<Self, Error> {
+        if dim == 0 {
+            return Err(Error::OutOfRange {
+                field: "dim",
+                value: 0.0,
+                reason: "dimension must be at least 1",
+            });
+        }
+        if coords.len() % dim != 0 {
+            return Err(Error::LengthMismatch {
+                field: "coords",
+                expected: coords.len().div_ceil(dim) * dim,
+                got: coords.len(),
+            });
+        }
+        if let Some(k) = coords.iter().position(|x| !x.is_finite()) {
+            return Err(Error::NonFinite {
+                field: "points",
+                index: k / dim,
+            });
+        }
+        Ok(Points { dim, coords })
+    }
+
+    /// Points from rows `[[x, y, …], …]`, all of the same dimension d ≥ 1.
+    ///
+    /// # Errors
+    /// [`Error::TooFew`] for no rows, [`Error::DimensionMismatch`] naming the first row whose
+    /// length differs from the first row's, [`Error::NonFinite`] naming the point.
+    pub fn from_rows<R: AsRef<[f64]>>(rows: &[R]) -> Result<Self, Error> {
+        let first = rows.first().ok_or(Error::TooFew {
+            field: "points",
+            needed: 1,
+            got: 0,
+        })?;
+        let dim = first.as_ref().len();
+        if dim == 0 {
+            return Err(Error::DimensionMismatch {
+                index: 0,
+                expected: 1,
+                got: 0,
+            });
+        }
+        let mut coords = Vec::with_capacity(rows.len() * dim);
+        for (i, r) in rows.iter().enumerate() {
+            let r = r.as_ref();
+            if r.len() != dim {
+                return Err(Error::DimensionMismatch {
+                    index: i,
+                    expected: dim,
+                    got: r.len(),
+                });
+            }
+            coords.extend_from_slice(r);
+        }
+        Points::new(dim, coords)
+    }
+
+    /// `n` points at the origin of R^dim.
+    pub fn zeros(n: usize, dim: usize) -> Self {
+        Points {
+            dim: dim.max(1),
+            coords: vec![0.0; n * dim.max(1)],
+        }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.coords.len() / self.dim.max(1)
+    }
+
+    /// Whether there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.coords.is_empty()
+    }
+
+    /// The dimension d.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Point `i` as a slice of length d.
+    ///
+    /// # Panics
+    /// If `i >= self.len()`.
+    pub fn point(&self, i: usize) -> &[f64] {
+        &self.coords[i * self.dim..(i + 1) * self.dim]
+    }
+
+    /// Point `i`, mutably.
+    ///
+    /// # Panics
+    /// If `i >= self.len()`.
+    pub fn point_mut(&mut self, i: usize) -> &mut [f64] {
+        &mut self.coords[i * self.dim..(i + 1) * self.dim]
+    }
+
+    /// All coordinates, vertex-major.
+    pub fn coords(&self) -> &[f64] {
+        &self.coords
+    }
+
+    /// All coordinates, vertex-major, mutably.
+    pub fn coords_mut(&mut self) -> &mut [f64] {
+        &mut self.coords
+    }
+
+    /// Consumes the points, returning the flat coordinate vector.
+    pub fn into_coords(self) -> Vec<f64> {
+        self.coords
+    }
+
+    /// Iterator over the points as slices.
+    pub fn iter(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.coords.chunks_exact(self.dim)
+    }
+
+    /// The points as rows (for serialization and tests).
+    pub fn to_rows(&self) -> Vec<Vec<f64>> {
+        self.iter().map(<[f64]>::to_vec).collect()
+    }
+}
