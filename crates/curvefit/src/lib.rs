@@ -1,1 +1,3 @@
 //! curvefit facade.
+
+pub mod cli;

@@ -1,0 +1,35 @@
+/// Errors of the `energy` crate. Variants name the offending field and index.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Invalid knots or points (from `divdiff`).
+    #[error(transparent)]
+    Divdiff(#[from] divdiff::Error),
+    /// The linear system is singular: the factorization met a non-positive pivot at `vertex`
+    /// (e.g. all weights zero, so the kernel of H is not pinned down).
+    #[error("singular system: non-positive pivot at vertex {vertex}")]
+    Singular {
+        /// The vertex whose pivot failed.
+        vertex: usize,
+    },
+    /// Two objects that must agree in size do not.
+    #[error("{field} has size {got}, expected {expected}")]
+    SizeMismatch {
+        /// The field.
+        field: &'static str,
+        /// The expected size.
+        expected: usize,
+        /// The given size.
+        got: usize,
+    },
+    /// An index is out of range.
+    #[error("{field} index {index} is out of range (size {len})")]
+    IndexOutOfRange {
+        /// The field.
+        field: &'static str,
+        /// The index given.
+        index: usize,
+        /// The valid size.
+        len: usize,
+    },
+}
