@@ -52,41 +52,60 @@ pub struct System {
     fixed: Vec<bool>,
 }
 
-/// The envelope pattern of the lower block triangle: row `i` holds columns `first[i]..=i`.
-#[derive(Clone, Debug)]
+/// The envelope pattern of the lower block triangle: row `i` holds columns `first(i)..=i`.
+/// Open: the band (first(i) = i − 2). Closed, N ≥ 5: the band, and the last two rows are full
+/// (the border). Closed, N ≤ 4: the whole lower triangle.
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Envelope {
-    pub(crate) first: Vec<usize>,
-    pub(crate) offset: Vec<usize>,
-    pub(crate) total: usize,
+    n: usize,
+    full: bool,
+    closed: bool,
 }
 
 impl Envelope {
     pub(crate) fn new(topology: Topology, n: usize) -> Self {
-        let first: Vec<usize> = (0..n)
-            .map(|i| match topology {
-                Topology::Open => i.saturating_sub(2),
-                Topology::Closed if n <= 4 || i + 2 >= n => 0,
-                Topology::Closed => i.saturating_sub(2),
-            })
-            .collect();
-        let mut offset = Vec::with_capacity(n);
-        let mut total = 0;
-        for (i, f) in first.iter().enumerate() {
-            offset.push(total);
-            total += i - f + 1;
-        }
+        let closed = topology == Topology::Closed;
         Envelope {
-            first,
-            offset,
-            total,
+            n,
+            full: closed && n <= 4,
+            closed,
         }
+    }
+
+    /// First column of row `i`.
+    #[inline]
+    pub(crate) fn first(&self, i: usize) -> usize {
+        if self.full || (self.closed && i + 2 >= self.n) {
+            0
+        } else {
+            i.saturating_sub(2)
+        }
+    }
+
+    /// Offset (in blocks) of row `i`.
+    #[inline]
+    pub(crate) fn offset(&self, i: usize) -> usize {
+        if self.full {
+            return i * (i + 1) / 2;
+        }
+        let band = |i: usize| if i < 2 { i * (i + 1) / 2 } else { 3 * i - 3 };
+        if self.closed && i == self.n - 1 {
+            band(self.n - 2) + (self.n - 1)
+        } else {
+            band(i)
+        }
+    }
+
+    /// Total number of blocks.
+    pub(crate) fn total(&self) -> usize {
+        self.offset(self.n - 1) + (self.n - 1 - self.first(self.n - 1)) + 1
     }
 
     /// Index (in blocks) of the lower entry (i, j), i ≥ j, which must lie in the envelope.
     #[inline]
     pub(crate) fn index(&self, i: usize, j: usize) -> usize {
-        debug_assert!(j <= i && j >= self.first[i]);
-        self.offset[i] + (j - self.first[i])
+        debug_assert!(j <= i && j >= self.first(i));
+        self.offset(i) + (j - self.first(i))
     }
 }
 
@@ -198,7 +217,7 @@ impl System {
     }
 
     fn blocks_mut(&mut self) -> &mut Vec<f64> {
-        let total = Envelope::new(self.topology, self.n).total * self.dim * self.dim;
+        let total = Envelope::new(self.topology, self.n).total() * self.dim * self.dim;
         self.blocks.get_or_insert_with(|| vec![0.0; total])
     }
 
@@ -245,7 +264,7 @@ impl System {
         for &(a, _) in stencil {
             for &(b, _) in stencil {
                 let (i, j) = if a >= b { (a, b) } else { (b, a) };
-                if j < env.first[i] || (self.topology == Topology::Open && i - j > 2) {
+                if j < env.first(i) || (self.topology == Topology::Open && i - j > 2) {
                     return Err(Error::StencilTooWide { first: a, second: b });
                 }
                 if self.topology == Topology::Closed && i - j > 2 && n - (i - j) > 2 {
@@ -312,7 +331,7 @@ impl System {
         if let Some(blocks) = &self.blocks {
             let env = Envelope::new(self.topology, n);
             for i in 0..n {
-                for j in env.first[i]..=i {
+                for j in env.first(i)..=i {
                     let b = &blocks[env.index(i, j) * d * d..][..d * d];
                     for r in 0..d {
                         for c in 0..d {
@@ -361,7 +380,6 @@ impl System {
         Ok(Factor {
             n: self.n,
             dim: self.dim,
-            fixed: self.fixed.clone(),
             inner,
         })
     }
@@ -397,7 +415,6 @@ pub(crate) struct Parts<'a> {
 pub struct Factor {
     n: usize,
     dim: usize,
-    fixed: Vec<bool>,
     inner: Inner,
 }
 
@@ -439,8 +456,8 @@ impl Factor {
     pub(crate) fn solve_slice(&self, x: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n * self.dim);
         match &self.inner {
-            Inner::Band(f) => f.solve(x, &self.fixed),
-            Inner::Block(f) => f.solve(x, &self.fixed),
+            Inner::Band(f) => f.solve(x),
+            Inner::Block(f) => f.solve(x),
         }
     }
 
