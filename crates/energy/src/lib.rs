@@ -11,6 +11,9 @@ mod solve;
 
 pub use dense::{alpha_matrix, second_difference_matrix, warren_weimer_matrix};
 pub use error::Error;
-pub use functional::energy;
+pub use functional::{
+    energy, energy_by_jumps, knot_gradient, knot_gradient_printed, orthogonality_residuals,
+    vertex_knot_gradient,
+};
 pub use hessian::{alphas, Hessian};
 pub use solve::*;
