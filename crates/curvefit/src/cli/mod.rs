@@ -4,6 +4,8 @@
 //! to `-o FILE` (default stdout) and, with `--svg FILE`, a picture. Bad input gives exit code 2,
 //! one line on stderr naming the field (and index), and no output file.
 
+pub mod refine_types;
+
 use std::ffi::OsString;
 use std::fmt::Display;
 use std::io::{Read, Write};
@@ -396,4 +398,57 @@ pub fn write_files(files: &[(PathBuf, Vec<u8>)]) -> Result<(), InputError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::refine_types::*;
+
+    fn parse(s: &str) -> Result<RefineProblem, String> {
+        let v: serde_json::Value = serde_json::from_str(s).map_err(|e| e.to_string())?;
+        serde_path_to_error::deserialize(v).map_err(|e| {
+            let p = e.path().to_string();
+            format!("{p} | {}", e.into_inner())
+        })
+    }
+
+    #[test]
+    fn refine_defaults_follow_the_contract() {
+        let p = parse(r#"{"points": [[0,0],[1,0],[0,1]]}"#).unwrap();
+        assert!(p.closed && p.knots.is_none());
+        assert_eq!((p.k, p.knot_iterations, p.levels, p.level_k), (3, 3, 0, 1));
+        assert_eq!(p.parametrization, ParamSpec::Centripetal);
+        assert_eq!(p.constraint, ConstraintSpec::Interpolate);
+        assert_eq!(p.derivative, DerivativeSpec::Bessel);
+        assert_eq!(p.boundary, BoundarySpec::Natural);
+        assert_eq!(p.solver, SolverSpec::Exact);
+    }
+
+    #[test]
+    fn refine_variants_parse() {
+        let p = parse(
+            r#"{"points": [[0,0],[1,0],[0,1]], "parametrization": {"exponent": 0.3},
+                "constraint": {"type": "balls", "radii": [0.1, 0, 0.2]},
+                "tangents": [null, {"type": "wedge", "direction": [1,0], "half_angle": 0.2}, {"type": "tension", "radius": 1}],
+                "boundary": {"type": "near_clamped", "start": [1,0], "end": [0,1], "radius": 0.1},
+                "derivative": "average", "solver": "paper"}"#,
+        )
+        .unwrap();
+        assert_eq!(p.parametrization, ParamSpec::Exponent(0.3));
+        assert!(matches!(p.constraint, ConstraintSpec::Balls { ref radii } if radii.len() == 3));
+        assert_eq!(p.solver, SolverSpec::Paper);
+    }
+
+    #[test]
+    fn unknown_fields_are_errors_with_paths() {
+        let e = parse(r#"{"points": [[0,0]], "bogus": 1}"#).unwrap_err();
+        assert!(e.contains("bogus"), "{e}");
+        let e = parse(
+            r#"{"points": [[0,0]], "constraint": {"type": "balls", "radii": [1], "extra": 2}}"#,
+        )
+        .unwrap_err();
+        assert!(e.contains("extra"), "{e}");
+        let e = parse(r#"{"points": [[0,0], [1, "x"]]}"#).unwrap_err();
+        assert!(e.starts_with("points[1][1]"), "{e}");
+    }
 }
