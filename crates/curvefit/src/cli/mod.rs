@@ -4,6 +4,7 @@
 //! to `-o FILE` (default stdout) and, with `--svg FILE`, a picture. Bad input gives exit code 2,
 //! one line on stderr naming the field (and index), and no output file.
 
+pub mod refine;
 pub mod refine_types;
 
 use std::ffi::OsString;
@@ -175,7 +176,7 @@ fn dispatch(
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
     match cli.command {
-        Cmd::Refine(a) => run_json::<NotYet>(&a, "refine", stdin, stdout, stderr),
+        Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
         Cmd::Strip(a) => run_json::<NotYet>(&a, "strip", stdin, stdout, stderr),
         Cmd::Natural(a) => run_json::<NotYet>(&a, "natural", stdin, stdout, stderr),
     }
