@@ -61,14 +61,14 @@ pub fn divided_difference(
 ) -> Result<Vec<f64>, Error> {
     check_sizes(knots, points)?;
     let s = stencil(knots, i, order)?;
-    let d = points.dim();
     // Newton's table, one level at a time, in place: after level m, table[k] = [t_{i+k}..t_{i+k+m}] f.
     let mut table: Vec<Vec<f64>> = s.iter().map(|&(_, v)| points.point(v).to_vec()).collect();
     for m in 1..=order {
         for k in 0..=order - m {
             let dt = s[k + m].0 - s[k].0;
-            for c in 0..d {
-                table[k][c] = (table[k + 1][c] - table[k][c]) / dt;
+            let (lo, hi) = table.split_at_mut(k + 1);
+            for (x, y) in lo[k].iter_mut().zip(&hi[0]) {
+                *x = (y - *x) / dt;
             }
         }
     }

@@ -185,16 +185,22 @@ pub fn knot_gradient_printed(knots: &Knots, points: &Points) -> Result<Vec<f64>,
             let mut v = 0.0;
             if closed || i + 1 < n {
                 let h = knots.h(i as isize);
-                for k in 0..c.dim() {
-                    v -= (c.point(next)[k] - c.point(i)[k]) / h * s.point(i)[k];
-                }
+                let jump = c
+                    .point(next)
+                    .iter()
+                    .zip(c.point(i))
+                    .map(|(a, b)| (a - b) / h);
+                v -= jump.zip(s.point(i)).map(|(a, b)| a * b).sum::<f64>();
             }
             if closed || i >= 1 {
                 let h = knots.h(i as isize - 1);
                 let sl = s.point((i + knots.span_count() - 1) % knots.span_count());
-                for k in 0..c.dim() {
-                    v += (c.point(i)[k] - c.point(prev)[k]) / h * sl[k];
-                }
+                let jump = c
+                    .point(i)
+                    .iter()
+                    .zip(c.point(prev))
+                    .map(|(a, b)| (a - b) / h);
+                v += jump.zip(sl).map(|(a, b)| a * b).sum::<f64>();
             }
             v
         })
