@@ -11,7 +11,7 @@
 //! t_0 < … < t_N ([`Topology::Closed`]: the last span closes the curve, p_N = p_0, and knots and
 //! points extend periodically, t_{i+N} = t_i + T, h_{i+N} = h_i). With h_i = t_{i+1} − t_i:
 //!
-//! - divided differences Δ_{i,n} f = [t_i, …, t_{i+n}] f by the recurrence, cross-checked by the
+//! - divided differences Δ_{i,n} f = \[t_i, …, t_{i+n}\] f by the recurrence, cross-checked by the
 //!   explicit formula Δ_{i,n} f = Σ_k p_{i+k} / π'_{i,n}(t_{i+k}) ([`divided_difference`],
 //!   [`divided_difference_explicit`]);
 //! - slopes s_i = (p_{i+1} − p_i)/h_i ([`slopes`]) and second differences
