@@ -179,7 +179,8 @@ impl Hessian {
         Ok(0.5 * dot(p.coords(), hp.coords()))
     }
 
-    /// The largest absolute band entry, a scale for tolerances (|H|_max ≤ ‖H‖₂ ≤ 5 |H|_max).
+    /// The largest absolute band entry, a scale for tolerances: ‖H‖₂ ≤ 5·`max_abs()`, since each
+    /// row of H sums at most five band entries (also when bands alias for N = 3, 4).
     pub fn max_abs(&self) -> f64 {
         self.diag
             .iter()
