@@ -53,9 +53,12 @@ pub const CONIC_ACCEPT: f64 = 1e-9;
 /// A constraint is reported active when its slack (distance of L_c p to the boundary of K_c,
 /// inside) is at most this times the constraint's scale (radius, |L_c p|, offsets).
 pub const ACTIVE_RTOL: f64 = 1e-7;
-/// Regularization δ of equality blocks on wide stencils, relative to the largest diagonal entry
-/// of the Newton matrix: the penalty Gᵀ G / δ is added and removed again by iterative refinement.
-pub const EQUALITY_REGULARIZATION: f64 = 1e-10;
+/// Regularization δ of equality rows on wide stencils (rows of unit norm): δ is this times
+/// min_v c_v²/K_vv over the row's stencil (c_v its coefficients, K_vv the local diagonal of the
+/// Newton matrix without the penalty), so the penalty GᵀG/δ dominates the softest stencil
+/// vertex by 1/this while pivots stay far above [`energy::PIVOT_RTOL`]; the penalty is removed
+/// again by iterative refinement against the unregularized system.
+pub const EQUALITY_REGULARIZATION: f64 = 1e-9;
 /// Fraction of the step to the boundary of the cones taken by the interior-point method.
 pub const STEP_FRACTION: f64 = 0.99;
 
@@ -508,6 +511,8 @@ struct Prepared {
     scale_x: f64,
     /// Largest diagonal entry of H + W over free vertices.
     scale_p: f64,
+    /// Diagonal of H + W per vertex (local scale for the equality regularization).
+    pdiag: Vec<f64>,
 }
 
 /// Householder basis of the orthogonal complement of the unit vector `a`: d − 1 rows.
@@ -714,6 +719,16 @@ impl Prepared {
                 off += m;
             }
         }
+        let pdiag: Vec<f64> = (0..n)
+            .map(|v| {
+                p.diag[v]
+                    + p.smoothing
+                        .iter()
+                        .filter(|s| s.vertex == v)
+                        .map(|s| s.weight)
+                        .sum::<f64>()
+            })
+            .collect();
         let scale_p = (0..n)
             .filter(|&v| fixed[v].is_none())
             .map(|v| {
@@ -732,6 +747,7 @@ impl Prepared {
             degree,
             scale_x,
             scale_p,
+            pdiag,
         })
     }
 }
@@ -1178,7 +1194,7 @@ impl Prepared {
             let mut sys = self.base.clone();
             let mut theta = vec![0.0; d * d];
             let mut vf = vec![0.0; 16];
-            let mut diag_max = self.scale_p;
+            let mut local = self.pdiag.clone();
             let mut eq_blocks = Vec::new();
             for (bi, b) in self.blocks.iter().enumerate() {
                 let (s, z) = (&st.s[b.off..b.off + b.m], &st.z[b.off..b.off + b.m]);
@@ -1208,17 +1224,28 @@ impl Prepared {
                         theta[i * d + j] = (0..b.m).map(|r| vf[r * d + i] * vf[r * d + j]).sum();
                     }
                 }
-                let stencil_sq: f64 = b.stencil.iter().map(|e| e.1 * e.1).sum();
-                diag_max = diag_max.max(stencil_sq * (0..d).map(|k| theta[k * d + k]).fold(0.0, f64::max));
+                let tmax = (0..d).map(|k| theta[k * d + k]).fold(0.0, f64::max);
+                for &(v, c) in &b.stencil {
+                    local[v] += c * c * tmax;
+                }
                 sys.add_stencil(&b.stencil, &theta)?;
             }
-            let delta = EQUALITY_REGULARIZATION / diag_max.max(f64::MIN_POSITIVE);
+            let mut delta = vec![0.0; self.blocks.len()];
             for &bi in &eq_blocks {
                 let b = &self.blocks[bi];
+                // δ relative to the softest stencil vertex (see EQUALITY_REGULARIZATION).
+                let loc = b
+                    .stencil
+                    .iter()
+                    .map(|&(v, c)| local[v] / (c * c))
+                    .fold(f64::INFINITY, f64::min);
+                delta[bi] = EQUALITY_REGULARIZATION / loc.max(f64::MIN_POSITIVE);
                 for i in 0..d {
                     for j in 0..d {
-                        theta[i * d + j] =
-                            (0..b.m).map(|r| b.f[r * d + i] * b.f[r * d + j]).sum::<f64>() / delta;
+                        theta[i * d + j] = (0..b.m)
+                            .map(|r| b.f[r * d + i] * b.f[r * d + j])
+                            .sum::<f64>()
+                            / delta[bi];
                     }
                 }
                 sys.add_stencil(&b.stencil, &theta)?;
@@ -1226,6 +1253,9 @@ impl Prepared {
             let factor = match sys.factor() {
                 Ok(f) => f,
                 Err(e) => {
+                    if std::env::var("CONIC_DEBUG").is_ok() {
+                        eprintln!("factor failed: {e:?}");
+                    }
                     if iterations == 1 {
                         return Err(e.into());
                     }
@@ -1237,7 +1267,7 @@ impl Prepared {
                 factor: &factor,
                 sc: &sc,
                 eq_blocks: &eq_blocks,
-                delta,
+                delta: &delta,
             };
 
             // Predictor: ξ = −λ.
@@ -1417,7 +1447,7 @@ impl Prepared {
             // K = P + Σ_SOC (−w FᵀJF) (+ Σ ggᵀ/δ for the factorization).
             let mut sys = self.base.clone();
             let mut socs: Vec<(usize, Vec<f64>)> = Vec::new();
-            let mut diag_max = self.scale_p;
+            let mut local = self.pdiag.clone();
             for row in rows.iter().filter(|r| r.comp == usize::MAX) {
                 let b = &self.blocks[row.block];
                 let mut blk = vec![0.0; d * d];
@@ -1430,22 +1460,31 @@ impl Prepared {
                     }
                 }
                 sys.add_stencil(&b.stencil, &blk).ok()?;
-                let st2: f64 = b.stencil.iter().map(|e| e.1 * e.1).sum();
-                diag_max = diag_max.max(st2 * (0..d).map(|k| blk[k * d + k].abs()).fold(0.0, f64::max));
+                let bmax = (0..d).map(|k| blk[k * d + k].abs()).fold(0.0, f64::max);
+                for &(v, c) in &b.stencil {
+                    local[v] += c * c * bmax;
+                }
                 socs.push((row.block, blk));
             }
             let gn: Vec<f64> = grads.iter().map(|g| norm(g)).collect();
             if gn.iter().any(|&v| !(v > 0.0)) {
                 return best;
             }
-            let delta = EQUALITY_REGULARIZATION / diag_max.max(f64::MIN_POSITIVE);
+            let mut delta = Vec::with_capacity(rows.len());
             for (row, g) in rows.iter().zip(&grads) {
                 let b = &self.blocks[row.block];
+                let loc = b
+                    .stencil
+                    .iter()
+                    .map(|&(v, c)| local[v] / (c * c))
+                    .fold(f64::INFINITY, f64::min);
+                let dl = EQUALITY_REGULARIZATION / loc.max(f64::MIN_POSITIVE);
+                delta.push(dl);
                 let gg = dot(g, g);
                 let mut blk = vec![0.0; d * d];
                 for i in 0..d {
                     for j in 0..d {
-                        blk[i * d + j] = g[i] * g[j] / (gg * delta);
+                        blk[i * d + j] = g[i] * g[j] / (gg * dl);
                     }
                 }
                 sys.add_stencil(&b.stencil, &blk).ok()?;
@@ -1470,7 +1509,7 @@ impl Prepared {
             let b1: Vec<f64> = res.iter().map(|v| -v).collect();
             let b2: Vec<f64> = vals.iter().zip(&gn).map(|(v, l)| -v / l).collect();
             let stencils: Vec<&[(usize, f64)]> = rows.iter().map(|r| self.blocks[r.block].stencil.as_slice()).collect();
-            let (dx, dm) = self.saddle_solve(&factor, &apply_k, &stencils, &unit, delta, &b1, &b2);
+            let (dx, dm) = self.saddle_solve(&factor, &apply_k, &stencils, &unit, &delta, &b1, &b2);
             if dx.iter().chain(&dm).any(|v| !v.is_finite()) {
                 return best;
             }
@@ -1521,7 +1560,7 @@ impl Prepared {
         apply_k: &dyn Fn(&[f64]) -> Vec<f64>,
         stencils: &[&[(usize, f64)]],
         rows: &[Vec<f64>],
-        delta: f64,
+        delta: &[f64],
         b1: &[f64],
         b2: &[f64],
     ) -> (Vec<f64>, Vec<f64>) {
@@ -1557,7 +1596,7 @@ impl Prepared {
         for _ in 0..EQUALITY_REFINEMENT_STEPS {
             let mut r = e1.clone();
             for (k, e) in e2.iter().enumerate() {
-                gt_add(k, e / delta, &mut r);
+                gt_add(k, e / delta[k], &mut r);
             }
             mask(&mut r);
             let _ = factor.solve_flat(&mut r);
@@ -1565,7 +1604,7 @@ impl Prepared {
                 *a += c;
             }
             for (k, m) in dm.iter_mut().enumerate() {
-                *m += (e2[k] - g_apply(k, &r)) / delta;
+                *m += (e2[k] - g_apply(k, &r)) / delta[k];
             }
             let kdx = apply_k(&dx);
             e1 = b1.iter().zip(&kdx).map(|(a, c)| a - c).collect();
@@ -1843,7 +1882,8 @@ struct NewtonCtx<'a> {
     factor: &'a Factor,
     sc: &'a [Vec<f64>],
     eq_blocks: &'a [usize],
-    delta: f64,
+    /// Regularization δ_b per block (equality blocks only).
+    delta: &'a [f64],
 }
 
 impl NewtonCtx<'_> {
@@ -1897,7 +1937,7 @@ impl NewtonCtx<'_> {
                 let mut r = e1.clone();
                 for &bi in self.eq_blocks {
                     let b = &p.blocks[bi];
-                    let w: Vec<f64> = e2[b.off..b.off + b.m].iter().map(|v| v / self.delta).collect();
+                    let w: Vec<f64> = e2[b.off..b.off + b.m].iter().map(|v| v / self.delta[bi]).collect();
                     p.add_adjoint(b, &w, &mut r);
                 }
                 for v in 0..n {
@@ -1915,7 +1955,7 @@ impl NewtonCtx<'_> {
                     gx.resize(b.m, 0.0);
                     p.block_map(b, &r, &mut gx);
                     for k in 0..b.m {
-                        dz[b.off + k] += (e2[b.off + k] - gx[k]) / self.delta;
+                        dz[b.off + k] += (e2[b.off + k] - gx[k]) / self.delta[bi];
                     }
                 }
                 // New residuals of the unregularized system.
