@@ -11,10 +11,12 @@
 //! - **scalar fast path** (no coupling blocks): one scalar pentadiagonal LDLᵀ shared by all d
 //!   coordinate columns. For closed curves the two last rows are a dense *border* (the wrap-around
 //!   couplings fill them in), stored as two length-N vectors.
-//! - **block path**: a block Cholesky factorization on the block *envelope* of K — rows
-//!   0..N−3 span their band, the last two block rows of a closed curve span everything (border).
-//!   For closed curves with N ≤ 4 the bands alias (entries add up) and the envelope is simply the
-//!   whole lower triangle.
+//! - **block band path** (coupling blocks, d ≤ 4): a block LDLᵀ with d×d blocks fixed at compile
+//!   time, rows with two block subdiagonals and, for closed curves, a two-block-row border.
+//! - **envelope path** (d > 4, or closed curves with N ≤ 4 where the bands alias and entries add
+//!   up): a block Cholesky factorization on the block *envelope* of K — rows 0..N−3 span their
+//!   band, the last two block rows of a closed curve span everything (border); for N ≤ 4 the
+//!   envelope is the whole lower triangle.
 //!
 //! A pivot is accepted only if it exceeds [`PIVOT_RTOL`] times the diagonal entry of the same row
 //! of K (the pivot of a positive semidefinite matrix never exceeds it), so the test is relative to
@@ -22,6 +24,7 @@
 
 mod band;
 mod block;
+mod blockband;
 
 use crate::{Error, Hessian};
 use divdiff::{Points, Topology};
@@ -380,11 +383,15 @@ impl System {
     /// [`Error::Singular`] naming the vertex of the first pivot that is not above
     /// [`PIVOT_RTOL`] times its diagonal entry (or not finite).
     pub fn factor(&self) -> Result<Factor, Error> {
-        let scalar = self.blocks.is_none() && (self.topology == Topology::Open || self.n >= 5);
-        let inner = if scalar {
-            Inner::Band(band::BandFactor::new(&self.parts())?)
-        } else {
-            Inner::Block(block::BlockFactor::new(&self.parts())?)
+        let banded = self.topology == Topology::Open || self.n >= 5;
+        let parts = self.parts();
+        let inner = match (banded, self.blocks.is_some(), self.dim) {
+            (true, false, _) => Inner::Band(band::BandFactor::new(&parts)?),
+            (true, true, 1) => Inner::Bb1(blockband::BlockBand::new(&parts)?),
+            (true, true, 2) => Inner::Bb2(blockband::BlockBand::new(&parts)?),
+            (true, true, 3) => Inner::Bb3(blockband::BlockBand::new(&parts)?),
+            (true, true, 4) => Inner::Bb4(blockband::BlockBand::new(&parts)?),
+            _ => Inner::Block(block::BlockFactor::new(&parts)?),
         };
         Ok(Factor {
             n: self.n,
@@ -430,6 +437,10 @@ pub struct Factor {
 #[derive(Clone, Debug)]
 enum Inner {
     Band(band::BandFactor),
+    Bb1(blockband::BlockBand<1>),
+    Bb2(blockband::BlockBand<2>),
+    Bb3(blockband::BlockBand<3>),
+    Bb4(blockband::BlockBand<4>),
     Block(block::BlockFactor),
 }
 
@@ -466,6 +477,10 @@ impl Factor {
         debug_assert_eq!(x.len(), self.n * self.dim);
         match &self.inner {
             Inner::Band(f) => f.solve(x),
+            Inner::Bb1(f) => f.solve(x),
+            Inner::Bb2(f) => f.solve(x),
+            Inner::Bb3(f) => f.solve(x),
+            Inner::Bb4(f) => f.solve(x),
             Inner::Block(f) => f.solve(x),
         }
     }
