@@ -383,8 +383,20 @@ impl System {
     /// [`Error::Singular`] naming the vertex of the first pivot that is not above
     /// [`PIVOT_RTOL`] times its diagonal entry (or not finite).
     pub fn factor(&self) -> Result<Factor, Error> {
+        self.factor_with_tolerance(PIVOT_RTOL)
+    }
+
+    /// [`factor`](System::factor) with a caller-chosen relative pivot tolerance instead of
+    /// [`PIVOT_RTOL`]: for matrices known to be positive definite whose pivots may legitimately
+    /// be tiny relative to their diagonal (interior-point Newton systems, where barrier terms
+    /// grow without bound on some rows).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] naming the vertex of the first pivot that is not above
+    /// `pivot_rtol` times its diagonal entry (or not finite).
+    pub fn factor_with_tolerance(&self, pivot_rtol: f64) -> Result<Factor, Error> {
         let banded = self.topology == Topology::Open || self.n >= 5;
-        let parts = self.parts();
+        let parts = self.parts(pivot_rtol);
         let inner = match (banded, self.blocks.is_some(), self.dim) {
             (true, false, _) => Inner::Band(band::BandFactor::new(&parts)?),
             (true, true, 1) => Inner::Bb1(blockband::BlockBand::new(&parts)?),
@@ -400,8 +412,9 @@ impl System {
         })
     }
 
-    pub(crate) fn parts(&self) -> Parts<'_> {
+    pub(crate) fn parts(&self, rtol: f64) -> Parts<'_> {
         Parts {
+            rtol,
             topology: self.topology,
             n: self.n,
             dim: self.dim,
@@ -416,6 +429,7 @@ impl System {
 
 /// Borrowed view of a system for the factorizations.
 pub(crate) struct Parts<'a> {
+    pub(crate) rtol: f64,
     pub(crate) topology: Topology,
     pub(crate) n: usize,
     pub(crate) dim: usize,

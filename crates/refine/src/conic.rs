@@ -59,6 +59,10 @@ pub const ACTIVE_RTOL: f64 = 1e-7;
 /// vertex by 1/this while pivots stay far above [`energy::PIVOT_RTOL`]; the penalty is removed
 /// again by iterative refinement against the unregularized system.
 pub const EQUALITY_REGULARIZATION: f64 = 1e-9;
+/// Relative pivot tolerance of the interior-point and polish Newton systems (positive definite by
+/// construction, with barrier terms that grow without bound on active rows, so pivots far below
+/// [`energy::PIVOT_RTOL`] relative to their diagonal are legitimate there).
+pub const IPM_PIVOT_RTOL: f64 = 1e-22;
 /// Fraction of the step to the boundary of the cones taken by the interior-point method.
 pub const STEP_FRACTION: f64 = 0.99;
 
@@ -461,6 +465,8 @@ enum Kind {
 struct Block {
     constraint: usize,
     kind: Kind,
+    /// A ball (FᵀJF = −I): the only second-order cone the polish linearizes.
+    ball: bool,
     m: usize,
     stencil: Vec<(usize, f64)>,
     /// m × d, row-major.
@@ -710,6 +716,7 @@ impl Prepared {
                 blocks.push(Block {
                     constraint: ci,
                     kind,
+                    ball: kind == Kind::Soc && matches!(con.set, ConvexSet::Ball { .. }),
                     m,
                     stencil: free.clone(),
                     f: f.concat(),
@@ -1124,71 +1131,89 @@ impl Prepared {
         let mut iterations = 0;
         let mut tmp = vec![0.0; 16];
         let mut tmp2 = vec![0.0; 16];
-        let mut last_cert: Option<(ConicSolution, f64, Vec<f64>)> = None;
+        let mut wbuf = vec![0.0; 16];
+        let mut best_state: Option<(f64, Vec<f64>, Vec<f64>, Vec<f64>)> = None;
         let mut polish_tried = false;
+        let mut rx = vec![0.0; n * d];
+        let mut rs = vec![0.0; tm];
         loop {
-            // Certificate of the current iterate.
-            let sol = self.certificate(problem, &st, iterations);
-            let total = sol.kkt.total;
-            if std::env::var("CONIC_DEBUG").is_ok() {
-                eprintln!("it {iterations}: {:?}", sol.kkt);
+            // Residuals: r_x = Px + c − Σ LᵀFᵀz (free rows), r_s = s − h − F L x.
+            let g = self.apply_p(&st.x);
+            let mut gn: f64 = 0.0;
+            for v in 0..n {
+                if self.is_free(v) {
+                    for k in 0..d {
+                        let i = v * d + k;
+                        rx[i] = g[i] + self.c[i];
+                        gn = gn.max(rx[i].abs());
+                    }
+                } else {
+                    rx[v * d..(v + 1) * d].fill(0.0);
+                }
             }
-            if total < best {
-                best = total;
+            let mut zsum = vec![0.0; n * d];
+            for b in &self.blocks {
+                wbuf.clear();
+                wbuf.extend(st.z[b.off..b.off + b.m].iter().map(|v| -v));
+                self.add_adjoint(b, &wbuf, &mut zsum);
             }
-            best_primal = best_primal.min(sol.kkt.primal);
-            if total <= opts.tolerance || (!polish_tried && total <= POLISH_FROM) {
-                polish_tried = true;
-                if let Some(p) = self.polish(problem, &st, iterations) {
-                    if p.kkt.total <= opts.tolerance.max(total) {
-                        return Ok(p);
+            let mut zn: f64 = 0.0;
+            for v in 0..n {
+                if self.is_free(v) {
+                    for k in 0..d {
+                        let i = v * d + k;
+                        rx[i] += zsum[i];
+                        zn = zn.max(zsum[i].abs());
+                    }
+                }
+            }
+            let mut sn: f64 = 0.0;
+            for b in &self.blocks {
+                tmp.resize(b.m, 0.0);
+                self.block_map(b, &st.x, &mut tmp);
+                for r in 0..b.m {
+                    rs[b.off + r] = st.s[b.off + r] - b.h[r] - tmp[r];
+                    sn = sn.max(b.h[r].abs()).max(tmp[r].abs());
+                }
+            }
+            let gap: f64 = self
+                .blocks
+                .iter()
+                .filter(|b| b.kind != Kind::Zero)
+                .map(|b| dot(&st.s[b.off..b.off + b.m], &st.z[b.off..b.off + b.m]))
+                .sum();
+            let mu = if self.degree > 0.0 { gap / self.degree } else { 0.0 };
+            // Cheap relative residuals of the iterate (the certificate is computed near the end).
+            let xs = self.scale_x.max(inf_norm(&st.x)).max(f64::MIN_POSITIVE);
+            let sden = gn.max(zn).max(self.scale_p * xs).max(f64::MIN_POSITIVE);
+            let primal = inf_norm(&rs) / sn.max(f64::MIN_POSITIVE);
+            let cheap = (inf_norm(&rx) / sden).max(primal).max(gap.abs() / (sden * xs));
+            best_primal = best_primal.min(primal);
+            if best_state.as_ref().is_none_or(|b| cheap < b.0) {
+                best_state = Some((cheap, st.x.clone(), st.s.clone(), st.z.clone()));
+            }
+            if cheap <= POLISH_FROM || iterations >= opts.max_iterations {
+                let sol = self.certificate(problem, &st, iterations);
+                let total = sol.kkt.total;
+                best = best.min(total);
+                if total <= opts.tolerance || !polish_tried {
+                    polish_tried = true;
+                    let pol = self.polish(problem, &st, iterations);
+                    if let Some(p) = pol {
+                        best = best.min(p.kkt.total);
+                        if p.kkt.total <= opts.tolerance {
+                            return Ok(p);
+                        }
                     }
                 }
                 if total <= opts.tolerance {
                     return Ok(sol);
                 }
             }
-            match &last_cert {
-                Some((_, t, _)) if *t <= total => {}
-                _ => last_cert = Some((sol, total, st.x.clone())),
-            }
             if iterations >= opts.max_iterations {
                 break;
             }
             iterations += 1;
-
-            // Residuals: r_x = Px + c − Σ LᵀFᵀz (free rows), r_s = s − h − F L x.
-            let mut rx = self.apply_p(&st.x);
-            for (r, cv) in rx.iter_mut().zip(&self.c) {
-                *r += cv;
-            }
-            for b in &self.blocks {
-                let w: Vec<f64> = st.z[b.off..b.off + b.m].iter().map(|v| -v).collect();
-                self.add_adjoint(b, &w, &mut rx);
-            }
-            for v in 0..n {
-                if !self.is_free(v) {
-                    rx[v * d..(v + 1) * d].fill(0.0);
-                }
-            }
-            let mut rs = vec![0.0; tm];
-            for b in &self.blocks {
-                tmp.resize(b.m, 0.0);
-                self.block_map(b, &st.x, &mut tmp);
-                for r in 0..b.m {
-                    rs[b.off + r] = st.s[b.off + r] - b.h[r] - tmp[r];
-                }
-            }
-            let mu = if self.degree > 0.0 {
-                self.blocks
-                    .iter()
-                    .filter(|b| b.kind != Kind::Zero)
-                    .map(|b| dot(&st.s[b.off..b.off + b.m], &st.z[b.off..b.off + b.m]))
-                    .sum::<f64>()
-                    / self.degree
-            } else {
-                0.0
-            };
 
             // Scalings, λ, Newton matrix.
             let mut sys = self.base.clone();
@@ -1250,12 +1275,9 @@ impl Prepared {
                 }
                 sys.add_stencil(&b.stencil, &theta)?;
             }
-            let factor = match sys.factor() {
+            let factor = match sys.factor_with_tolerance(IPM_PIVOT_RTOL) {
                 Ok(f) => f,
                 Err(e) => {
-                    if std::env::var("CONIC_DEBUG").is_ok() {
-                        eprintln!("factor failed: {e:?}");
-                    }
                     if iterations == 1 {
                         return Err(e.into());
                     }
@@ -1340,10 +1362,19 @@ impl Prepared {
                 }
             }
         }
-        // Not at the target: accept the best certificate if it is within CONIC_ACCEPT.
-        if let Some((sol, t, _)) = last_cert {
-            if t <= CONIC_ACCEPT {
+        // Not at the target: accept the best iterate if its certificate is within CONIC_ACCEPT.
+        if let Some((_, x, s, z)) = best_state {
+            let bst = State { x, s, z };
+            let sol = self.certificate(problem, &bst, iterations);
+            best = best.min(sol.kkt.total);
+            if sol.kkt.total <= CONIC_ACCEPT {
                 return Ok(sol);
+            }
+            if let Some(p) = self.polish(problem, &bst, iterations) {
+                best = best.min(p.kkt.total);
+                if p.kkt.total <= CONIC_ACCEPT {
+                    return Ok(p);
+                }
             }
         }
         let worst = self.worst_constraint(problem, &st);
@@ -1388,8 +1419,10 @@ impl Prepared {
                 Kind::Soc => {
                     let ds = s[0] - norm(&s[1..]);
                     if z[0] >= omega * ds {
-                        if norm(s) <= 1e-9 * self.scale_x.max(f64::MIN_POSITIVE) {
-                            return None; // at the apex: J s = 0 carries no direction
+                        if !b.ball || norm(s) <= 1e-9 * self.scale_x.max(f64::MIN_POSITIVE) {
+                            // An active wedge has an indefinite curvature term, and at the apex
+                            // J s = 0 carries no direction: the interior-point result stands.
+                            return None;
                         }
                         rows.push(Row { block: bi, comp: usize::MAX, mult: z[0] / s[0] });
                     }
@@ -1489,7 +1522,7 @@ impl Prepared {
                 }
                 sys.add_stencil(&b.stencil, &blk).ok()?;
             }
-            let factor = sys.factor().ok()?;
+            let factor = sys.factor_with_tolerance(IPM_PIVOT_RTOL).ok()?;
             let apply_k = |v: &[f64]| -> Vec<f64> {
                 let mut out = self.apply_p(v);
                 for (bi, blk) in &socs {
@@ -1615,7 +1648,7 @@ impl Prepared {
             for (k, e) in e2.iter_mut().enumerate() {
                 *e = b2[k] - g_apply(k, &dx);
             }
-            if inf_norm(&e1).max(inf_norm(&e2)) <= 1e-15 * bnorm {
+            if inf_norm(&e1).max(inf_norm(&e2)) <= REFINEMENT_RTOL * bnorm {
                 break;
             }
         }
@@ -1920,10 +1953,7 @@ impl NewtonCtx<'_> {
         }
         let mut dx = vec![0.0; n * d];
         let mut dz = vec![0.0; tm];
-        if self.eq_blocks.is_empty() {
-            dx.copy_from_slice(&b1);
-            let _ = self.factor.solve_flat(&mut dx);
-        } else {
+        {
             // Iterative refinement on [K −Gᵀ; G 0][dx; dz_e] = [b1; r_s,e].
             let mut e1 = b1.clone();
             let mut e2: Vec<f64> = vec![0.0; tm];
@@ -1932,7 +1962,12 @@ impl NewtonCtx<'_> {
                 e2[b.off..b.off + b.m].copy_from_slice(&rs[b.off..b.off + b.m]);
             }
             let bnorm = inf_norm(&b1).max(inf_norm(&e2)).max(f64::MIN_POSITIVE);
-            for _ in 0..EQUALITY_REFINEMENT_STEPS {
+            let steps = if self.eq_blocks.is_empty() {
+                NEWTON_REFINEMENT_STEPS
+            } else {
+                EQUALITY_REFINEMENT_STEPS
+            };
+            for _ in 0..steps {
                 // ddx = K_δ⁻¹(e1 + Gᵀ e2/δ); ddz = (e2 − G ddx)/δ.
                 let mut r = e1.clone();
                 for &bi in self.eq_blocks {
@@ -1978,7 +2013,7 @@ impl NewtonCtx<'_> {
                         e1[v * d..(v + 1) * d].fill(0.0);
                     }
                 }
-                if inf_norm(&e1).max(inf_norm(&e2)) <= 1e-15 * bnorm {
+                if inf_norm(&e1).max(inf_norm(&e2)) <= REFINEMENT_RTOL * bnorm {
                     break;
                 }
             }
@@ -2033,6 +2068,12 @@ pub const POLISH_STEPS: usize = 3;
 /// The polish is first tried when the interior-point iterate's relative KKT residual is below this.
 pub const POLISH_FROM: f64 = 1e-8;
 
+/// Iterative-refinement steps (against the unregularized operator) of Newton systems without
+/// equality rows: the first solve plus corrections.
+pub const NEWTON_REFINEMENT_STEPS: usize = 2;
+/// Iterative refinement stops when the residual is below this times the right-hand side.
+pub const REFINEMENT_RTOL: f64 = 1e-14;
+
 /// Iterative-refinement steps for Newton systems with equality blocks on wide stencils.
 pub const EQUALITY_REFINEMENT_STEPS: usize = 6;
 
@@ -2082,18 +2123,5 @@ mod tests {
         let a = max_step(Kind::Soc, &u, &du, 10.0);
         let v: Vec<f64> = u.iter().zip(&du).map(|(x, y)| x + a * y).collect();
         assert!(soc_j(&v).abs() < 1e-10 && v[0] > 0.0, "{a} {v:?}");
-    }
-}
-#[cfg(test)]
-mod debug_tests {
-    use super::*;
-    #[test]
-    fn tiny_polytope() {
-        let hs = vec![(vec![1.0, 0.0], 1.0), (vec![-1.0, 0.0], 1.0), (vec![0.0, 1.0], 2.0), (vec![0.3, -1.0], -0.5)];
-        let mut p = ConicProblem::from_bands(Topology::Open, vec![0.0], vec![0.0], vec![0.0], 2).unwrap();
-        p.add_smoothing(0, 1.0, &[0.0, 0.0]).unwrap();
-        p.add_constraint(&[(0, 1.0)], ConvexSet::HalfSpaces(hs)).unwrap();
-        let r = p.solve(&ConicOptions::default());
-        eprintln!("{r:?}");
     }
 }

@@ -194,19 +194,16 @@ impl Spec {
         let Am = csc(&A, nv, false);
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
-            .tol_gap_abs(1e-12)
-            .tol_gap_rel(1e-12)
-            .tol_feas(1e-12)
+            .tol_gap_abs(1e-11)
+            .tol_gap_rel(1e-11)
+            .tol_feas(1e-11)
             .max_iter(200)
             .build()
             .unwrap();
         let mut solver = DefaultSolver::new(&Pm, &q, &Am, &b, &cones, settings).unwrap();
         solver.solve();
         assert!(
-            matches!(
-                solver.solution.status,
-                SolverStatus::Solved | SolverStatus::AlmostSolved
-            ),
+            matches!(solver.solution.status, SolverStatus::Solved),
             "clarabel status {:?}",
             solver.solution.status
         );
@@ -227,10 +224,12 @@ fn check(spec: &Spec) -> ConicSolution {
     let scale = sol.objective.abs().max(reference.abs()).max(floor);
     assert!(
         (sol.objective - reference).abs() <= 1e-8 * scale,
-        "objective {} vs clarabel {} (rel {:e})",
+        "objective {} vs clarabel {} (rel {:e}), {:?}, {} iterations",
         sol.objective,
         reference,
-        (sol.objective - reference).abs() / scale
+        (sol.objective - reference).abs() / scale,
+        sol.kkt,
+        sol.iterations
     );
     // The reported energy is ½ pᵀHp of the reported points.
     let e = h.energy(&sol.points).unwrap();
