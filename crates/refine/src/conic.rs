@@ -1290,6 +1290,11 @@ impl Prepared {
                 sc: &sc,
                 eq_blocks: &eq_blocks,
                 delta: &delta,
+                refine_steps: if cheap <= REFINE_FROM {
+                    NEWTON_REFINEMENT_STEPS
+                } else {
+                    1
+                },
             };
 
             // Predictor: ξ = −λ.
@@ -1917,6 +1922,8 @@ struct NewtonCtx<'a> {
     eq_blocks: &'a [usize],
     /// Regularization δ_b per block (equality blocks only).
     delta: &'a [f64],
+    /// Refinement steps without equality rows (0 early on, when accuracy does not matter yet).
+    refine_steps: usize,
 }
 
 impl NewtonCtx<'_> {
@@ -1963,11 +1970,11 @@ impl NewtonCtx<'_> {
             }
             let bnorm = inf_norm(&b1).max(inf_norm(&e2)).max(f64::MIN_POSITIVE);
             let steps = if self.eq_blocks.is_empty() {
-                NEWTON_REFINEMENT_STEPS
+                self.refine_steps
             } else {
                 EQUALITY_REFINEMENT_STEPS
             };
-            for _ in 0..steps {
+            for step in 0..steps {
                 // ddx = K_δ⁻¹(e1 + Gᵀ e2/δ); ddz = (e2 − G ddx)/δ.
                 let mut r = e1.clone();
                 for &bi in self.eq_blocks {
@@ -1992,6 +1999,9 @@ impl NewtonCtx<'_> {
                     for k in 0..b.m {
                         dz[b.off + k] += (e2[b.off + k] - gx[k]) / self.delta[bi];
                     }
+                }
+                if step + 1 == steps {
+                    break;
                 }
                 // New residuals of the unregularized system.
                 let kdx = self.apply_k(&dx);
@@ -2071,6 +2081,9 @@ pub const POLISH_FROM: f64 = 1e-8;
 /// Iterative-refinement steps (against the unregularized operator) of Newton systems without
 /// equality rows: the first solve plus corrections.
 pub const NEWTON_REFINEMENT_STEPS: usize = 2;
+/// Newton systems without equality rows are refined only once the iterate's relative residual is
+/// below this (early directions need no accuracy).
+pub const REFINE_FROM: f64 = 1e-6;
 /// Iterative refinement stops when the residual is below this times the right-hand side.
 pub const REFINEMENT_RTOL: f64 = 1e-14;
 
