@@ -13,10 +13,18 @@
 //! assert_eq!(knots.vertex_count(), pts.len());
 //! ```
 
+mod derivative;
+mod differences;
 mod error;
 mod knots;
+mod parametrize;
 mod points;
 
+pub use derivative::{derivative_stencil, vertex_derivative, vertex_derivatives, DerivativeRule};
+pub use differences::{
+    divided_difference, divided_difference_explicit, jumps, second_differences, slopes,
+};
 pub use error::Error;
 pub use knots::{Knots, Topology};
+pub use parametrize::{parametrize, Parametrization};
 pub use points::Points;
