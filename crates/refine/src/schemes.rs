@@ -25,7 +25,7 @@ pub use dense::RationalMatrix;
 pub use nary::{NaryScheme, MAX_ARITY, MAX_SCHEME_POINTS, MAX_SUBDIVISION_COORDS};
 pub use natural::{
     natural_inner_product_matrix, natural_interpolation_matrix, natural_subdivision_matrix,
-    upsampling_matrix, NaturalScheme, MAX_EXACT_INTERVALS, MAX_NATURAL_COORDS,
+    upsampling_matrix, NaturalScheme, SparseRow, MAX_EXACT_INTERVALS, MAX_NATURAL_COORDS,
 };
 pub use num_rational::BigRational;
 pub use rational::{lagrange_weights, rational_to_f64};

@@ -2,6 +2,9 @@
 //! polynomial reproduction, partition of unity, correct rounding, and application to closed and
 //! open polygons against an independent reference implementation.
 
+// Index loops mirror the formulas (rows, columns, coordinates) in this numerical test code.
+#![allow(clippy::needless_range_loop)]
+
 use divdiff::{Points, Topology};
 use num_bigint::BigInt;
 use num_rational::BigRational;
@@ -77,12 +80,6 @@ fn ternary_six_point_rule_matches_an_independent_vandermonde_solve() {
     );
 }
 
-fn eval_poly(coef: &[BigRational], x: &BigRational) -> BigRational {
-    coef.iter()
-        .rev()
-        .fold(BigRational::zero(), |acc, c| acc * x + c)
-}
-
 /// Every rule (centred and one-sided) reproduces polynomials of degree ≤ 2m + 1 exactly, and
 /// fails for the monomial of degree 2m + 2 (so the check has teeth); every rule sums to one.
 #[test]
@@ -105,9 +102,15 @@ fn polynomial_reproduction_and_partition_of_unity_exactly() {
                             .sum();
                         let exact = lhs == Pow::pow(&x, deg as u32);
                         if deg <= 2 * m + 1 || a == 0 {
-                            assert!(exact, "degree {deg} not reproduced: P={points} n={arity} t={t} a={a}");
+                            assert!(
+                                exact,
+                                "degree {deg} not reproduced: P={points} n={arity} t={t} a={a}"
+                            );
                         } else {
-                            assert!(!exact, "degree {deg} unexpectedly reproduced: P={points} n={arity} a={a}");
+                            assert!(
+                                !exact,
+                                "degree {deg} unexpectedly reproduced: P={points} n={arity} a={a}"
+                            );
                         }
                     }
                 }
@@ -252,19 +255,33 @@ fn short_open_polygon_reproduces_its_own_degree() {
 fn bad_parameters_are_typed_errors() {
     assert!(matches!(
         NaryScheme::new(3, 2),
-        Err(Error::SchemeParameter { field: "points", value: 3, .. })
+        Err(Error::SchemeParameter {
+            field: "points",
+            value: 3,
+            ..
+        })
     ));
     assert!(matches!(
         NaryScheme::new(0, 2),
-        Err(Error::SchemeParameter { field: "points", .. })
+        Err(Error::SchemeParameter {
+            field: "points",
+            ..
+        })
     ));
     assert!(matches!(
         NaryScheme::new(4, 1),
-        Err(Error::SchemeParameter { field: "arity", value: 1, .. })
+        Err(Error::SchemeParameter {
+            field: "arity",
+            value: 1,
+            ..
+        })
     ));
     assert!(matches!(
         NaryScheme::new(34, 2),
-        Err(Error::SchemeParameter { field: "points", .. })
+        Err(Error::SchemeParameter {
+            field: "points",
+            ..
+        })
     ));
     let s = NaryScheme::new(4, 2).unwrap();
     let one = Points::from_rows(&[[1.0, 2.0]]).unwrap();
@@ -275,7 +292,10 @@ fn bad_parameters_are_typed_errors() {
     let two = Points::from_rows(&[[1.0, 2.0], [3.0, 4.0]]).unwrap();
     assert!(matches!(
         s.subdivide(&two, Topology::Closed, 40),
-        Err(Error::TooLarge { field: "levels", .. })
+        Err(Error::TooLarge {
+            field: "levels",
+            ..
+        })
     ));
     assert!(matches!(
         s.subdivide(&two, Topology::Open, usize::MAX),

@@ -3,6 +3,9 @@
 //! recurrence of N, the book's Bézier table on [0, 4], and the energies against an independent
 //! natural-spline solver.
 
+// Index loops mirror the formulas (rows, columns, coordinates) in this numerical test code.
+#![allow(clippy::needless_range_loop)]
+
 use divdiff::Points;
 use num_bigint::BigInt;
 use num_rational::BigRational;
@@ -52,7 +55,11 @@ fn two_scale_relation_holds_exactly() {
             let ef = natural_inner_product_matrix(l, level + 1).unwrap();
             let ec = natural_inner_product_matrix(l, level).unwrap();
             let u = upsampling_matrix(l, level).unwrap();
-            assert_eq!(ef.mul(&s).unwrap(), u.mul(&ec).unwrap(), "L={l} level={level}");
+            assert_eq!(
+                ef.mul(&s).unwrap(),
+                u.mul(&ec).unwrap(),
+                "L={l} level={level}"
+            );
         }
     }
 }
@@ -83,7 +90,10 @@ fn subdivision_matrix_structure() {
         assert_eq!(nonzeros(&s, 0), vec![(0, BigRational::one())]);
         assert_eq!(nonzeros(&s, 2 * l), vec![(l, BigRational::one())]);
         for j in 0..l {
-            assert_eq!(nonzeros(&s, 2 * j + 1), vec![(j, q(1, 2)), (j + 1, q(1, 2))]);
+            assert_eq!(
+                nonzeros(&s, 2 * j + 1),
+                vec![(j, q(1, 2)), (j + 1, q(1, 2))]
+            );
         }
         for j in 1..l {
             assert_eq!(
@@ -188,11 +198,81 @@ fn solve4(mut m: Vec<Vec<BigRational>>, mut b: Vec<BigRational>) -> Vec<BigRatio
 #[test]
 fn bezier_table_on_zero_four_is_reproduced() {
     let table: [[(i64, i64); 13]; 5] = [
-        [(1, 1), (2, 3), (1, 3), (1, 6), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1)],
-        [(0, 1), (1, 3), (2, 3), (2, 3), (2, 3), (1, 3), (1, 6), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1)],
-        [(0, 1), (0, 1), (0, 1), (1, 6), (1, 3), (2, 3), (2, 3), (2, 3), (1, 3), (1, 6), (0, 1), (0, 1), (0, 1)],
-        [(0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (1, 6), (1, 3), (2, 3), (2, 3), (2, 3), (1, 3), (0, 1)],
-        [(0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (0, 1), (1, 6), (1, 3), (2, 3), (1, 1)],
+        [
+            (1, 1),
+            (2, 3),
+            (1, 3),
+            (1, 6),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+        ],
+        [
+            (0, 1),
+            (1, 3),
+            (2, 3),
+            (2, 3),
+            (2, 3),
+            (1, 3),
+            (1, 6),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+        ],
+        [
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (1, 6),
+            (1, 3),
+            (2, 3),
+            (2, 3),
+            (2, 3),
+            (1, 3),
+            (1, 6),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+        ],
+        [
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (1, 6),
+            (1, 3),
+            (2, 3),
+            (2, 3),
+            (2, 3),
+            (1, 3),
+            (0, 1),
+        ],
+        [
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (0, 1),
+            (1, 6),
+            (1, 3),
+            (2, 3),
+            (1, 1),
+        ],
     ];
     let s0 = natural_subdivision_matrix(4, 0).unwrap();
     let s1 = natural_subdivision_matrix(4, 1).unwrap();
@@ -352,7 +432,10 @@ fn bad_input_is_a_typed_error() {
     ));
     assert!(matches!(
         natural_subdivision_matrix(0, 0),
-        Err(Error::SchemeParameter { field: "intervals", .. })
+        Err(Error::SchemeParameter {
+            field: "intervals",
+            ..
+        })
     ));
     assert!(matches!(
         natural_subdivision_matrix(300, 1),

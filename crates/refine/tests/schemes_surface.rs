@@ -2,6 +2,9 @@
 //! seed's printed 2-D masks, separable application against direct 2-D mask application, bicubic
 //! reproduction on open grids, and the OBJ quad mesh.
 
+// Index loops mirror the formulas (rows, columns, coordinates) in this numerical test code.
+#![allow(clippy::needless_range_loop)]
+
 use divdiff::Points;
 use num_bigint::BigInt;
 use num_rational::BigRational;
@@ -24,10 +27,22 @@ fn seed_magnitudes() -> Vec<((usize, usize), usize, Vec<(i64, i64)>)> {
             (1, 1),
             2,
             vec![
-                (1, 256), (9, 256), (9, 256), (1, 256),
-                (9, 256), (81, 256), (81, 256), (9, 256),
-                (9, 256), (81, 256), (81, 256), (9, 256),
-                (1, 256), (9, 256), (9, 256), (1, 256),
+                (1, 256),
+                (9, 256),
+                (9, 256),
+                (1, 256),
+                (9, 256),
+                (81, 256),
+                (81, 256),
+                (9, 256),
+                (9, 256),
+                (81, 256),
+                (81, 256),
+                (9, 256),
+                (1, 256),
+                (9, 256),
+                (9, 256),
+                (1, 256),
             ],
         ),
         // Ternary 4-point tensor product, p_{3i+1, 3j+1}.
@@ -35,10 +50,22 @@ fn seed_magnitudes() -> Vec<((usize, usize), usize, Vec<(i64, i64)>)> {
             (1, 1),
             3,
             vec![
-                (25, 6561), (100, 2187), (50, 2187), (20, 6561),
-                (100, 2187), (400, 729), (200, 729), (80, 2187),
-                (50, 2187), (200, 729), (100, 729), (40, 2187),
-                (20, 6561), (80, 2187), (40, 2187), (16, 6561),
+                (25, 6561),
+                (100, 2187),
+                (50, 2187),
+                (20, 6561),
+                (100, 2187),
+                (400, 729),
+                (200, 729),
+                (80, 2187),
+                (50, 2187),
+                (200, 729),
+                (100, 729),
+                (40, 2187),
+                (20, 6561),
+                (80, 2187),
+                (40, 2187),
+                (16, 6561),
             ],
         ),
         // p_{3i+1, 3j+2}.
@@ -46,10 +73,22 @@ fn seed_magnitudes() -> Vec<((usize, usize), usize, Vec<(i64, i64)>)> {
             (1, 2),
             3,
             vec![
-                (20, 6561), (50, 2187), (100, 2187), (25, 6561),
-                (80, 2187), (200, 729), (400, 729), (100, 2187),
-                (40, 2187), (100, 729), (200, 729), (50, 2187),
-                (16, 6561), (40, 2187), (80, 2187), (20, 6561),
+                (20, 6561),
+                (50, 2187),
+                (100, 2187),
+                (25, 6561),
+                (80, 2187),
+                (200, 729),
+                (400, 729),
+                (100, 2187),
+                (40, 2187),
+                (100, 729),
+                (200, 729),
+                (50, 2187),
+                (16, 6561),
+                (40, 2187),
+                (80, 2187),
+                (20, 6561),
             ],
         ),
         // p_{3i+2, 3j+1}.
@@ -57,10 +96,22 @@ fn seed_magnitudes() -> Vec<((usize, usize), usize, Vec<(i64, i64)>)> {
             (2, 1),
             3,
             vec![
-                (20, 6561), (80, 2187), (40, 2187), (16, 6561),
-                (50, 2187), (200, 729), (100, 729), (40, 2187),
-                (100, 2187), (400, 729), (200, 729), (80, 2187),
-                (25, 6561), (100, 2187), (50, 2187), (20, 6561),
+                (20, 6561),
+                (80, 2187),
+                (40, 2187),
+                (16, 6561),
+                (50, 2187),
+                (200, 729),
+                (100, 729),
+                (40, 2187),
+                (100, 2187),
+                (400, 729),
+                (200, 729),
+                (80, 2187),
+                (25, 6561),
+                (100, 2187),
+                (50, 2187),
+                (20, 6561),
             ],
         ),
         // p_{3i+2, 3j+2}.
@@ -68,10 +119,22 @@ fn seed_magnitudes() -> Vec<((usize, usize), usize, Vec<(i64, i64)>)> {
             (2, 2),
             3,
             vec![
-                (16, 6561), (40, 2187), (80, 2187), (20, 6561),
-                (40, 2187), (100, 729), (200, 729), (50, 2187),
-                (80, 2187), (200, 729), (400, 729), (100, 2187),
-                (20, 6561), (50, 2187), (100, 2187), (25, 6561),
+                (16, 6561),
+                (40, 2187),
+                (80, 2187),
+                (20, 6561),
+                (40, 2187),
+                (100, 729),
+                (200, 729),
+                (50, 2187),
+                (80, 2187),
+                (200, 729),
+                (400, 729),
+                (100, 2187),
+                (20, 6561),
+                (50, 2187),
+                (100, 2187),
+                (25, 6561),
             ],
         ),
     ]
@@ -212,7 +275,11 @@ fn obj_quad_mesh_counts_and_wrapping() {
     for i in 0..4 {
         for j in 0..3 {
             let t = i as f64 * std::f64::consts::FRAC_PI_2;
-            pts.push([t.cos() * (2.0 + j as f64), t.sin() * (2.0 + j as f64), j as f64]);
+            pts.push([
+                t.cos() * (2.0 + j as f64),
+                t.sin() * (2.0 + j as f64),
+                j as f64,
+            ]);
         }
     }
     // Closed in i (around the axis), open in j: a ring of 4 × 3 points.
@@ -224,7 +291,7 @@ fn obj_quad_mesh_counts_and_wrapping() {
     let f: Vec<&str> = obj.lines().filter(|l| l.starts_with("f ")).collect();
     assert_eq!(v, 16 * 9);
     assert_eq!(f.len(), 16 * 8); // 16 spans around (wrapping), 8 along j
-    // The last ring of quads joins row 15 to row 0: face indices stay within 1..=v.
+                                 // The last ring of quads joins row 15 to row 0: face indices stay within 1..=v.
     for line in &f {
         for idx in line.split_whitespace().skip(1) {
             let k: usize = idx.parse().unwrap();
@@ -232,7 +299,7 @@ fn obj_quad_mesh_counts_and_wrapping() {
         }
     }
     assert!(f.contains(&"f 136 137 2 1")); // (15, 0), (15, 1), (0, 1), (0, 0), 1-based
-    // Interpolation: coarse point (1, 2) is fine point (4, 8).
+                                           // Interpolation: coarse point (1, 2) is fine point (4, 8).
     assert_eq!(fine.point(4, 8), grid.point(1, 2));
 }
 
@@ -249,7 +316,10 @@ fn grid_errors_are_typed() {
     ));
     let p4 = Points::from_rows(&[[0.0; 4], [1.0; 4], [2.0; 4], [3.0; 4]]).unwrap();
     let g = QuadGrid::new(2, 2, p4, false, false).unwrap();
-    assert!(matches!(quad_mesh_obj(&g), Err(Error::ObjDimension { dim: 4 })));
+    assert!(matches!(
+        quad_mesh_obj(&g),
+        Err(Error::ObjDimension { dim: 4 })
+    ));
     let s = NaryScheme::new(4, 3).unwrap();
     assert!(matches!(
         s.subdivide_grid(&g, 30),

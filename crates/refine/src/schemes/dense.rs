@@ -147,8 +147,8 @@ pub(super) fn solve(mut a: RationalMatrix, mut b: Vec<BigRational>) -> Option<Ve
     let mut x = vec![BigRational::zero(); n];
     for k in (0..n).rev() {
         let mut s = b[k].clone();
-        for j in k + 1..n {
-            s -= a.get(k, j) * &x[j];
+        for (j, xj) in x.iter().enumerate().skip(k + 1) {
+            s -= a.get(k, j) * xj;
         }
         x[k] = s / a.get(k, k);
     }

@@ -208,9 +208,9 @@ pub fn natural_interpolation_matrix(
         for drop in 0..k {
             let mut m = RationalMatrix::zeros(k, k);
             let mut rhs = vec![BigRational::zero(); k];
-            for e in 0..k {
+            for (e, &col) in cols.iter().enumerate() {
                 for (c, &r) in rows.iter().enumerate() {
-                    let mut v = s.get(r, cols[e]).clone();
+                    let mut v = s.get(r, col).clone();
                     if c == e {
                         v -= BigRational::one();
                     }
@@ -244,8 +244,10 @@ pub fn natural_interpolation_matrix(
     Ok(n)
 }
 
-/// One sparse row: (column, exact weight, rounded weight).
-type Row = Vec<(usize, BigRational, f64)>;
+/// One sparse matrix row: (column, exact weight, correctly rounded weight) for each nonzero.
+pub type SparseRow = Vec<(usize, BigRational, f64)>;
+
+type Row = SparseRow;
 
 /// A family of matrices M(L) with ρL + 1 rows and L + 1 columns whose rows are local stencils,
 /// identical (up to a shift) away from the ends. Built from one exactly derived member M(L_T)
@@ -391,10 +393,7 @@ impl NaturalScheme {
     ///
     /// # Errors
     /// [`Error::SchemeParameter`] for L = 0.
-    pub fn subdivision_rows(
-        &self,
-        intervals: usize,
-    ) -> Result<Vec<Vec<(usize, BigRational, f64)>>, Error> {
+    pub fn subdivision_rows(&self, intervals: usize) -> Result<Vec<SparseRow>, Error> {
         self.subdivision.rows_for(intervals)
     }
 
@@ -402,10 +401,7 @@ impl NaturalScheme {
     ///
     /// # Errors
     /// [`Error::SchemeParameter`] for L = 0.
-    pub fn interpolation_rows(
-        &self,
-        intervals: usize,
-    ) -> Result<Vec<Vec<(usize, BigRational, f64)>>, Error> {
+    pub fn interpolation_rows(&self, intervals: usize) -> Result<Vec<SparseRow>, Error> {
         self.interpolation.rows_for(intervals)
     }
 
