@@ -156,6 +156,55 @@ fn template_rows_match_exact_derivation() {
     }
 }
 
+/// The O(N) application paths (subdivision, limit values, N⁻¹) agree with the exactly derived
+/// matrices applied densely, for L on both sides of the template size.
+#[test]
+fn application_matches_exact_matrices() {
+    let scheme = NaturalScheme::new().unwrap();
+    for l in [1usize, 2, 5, 8, 9, 10, 17, 31] {
+        let vals: Vec<f64> = (0..=l)
+            .flat_map(|i| {
+                [
+                    (i as f64 * 0.7).sin(),
+                    (i as f64 * 1.3).cos() + 0.1 * i as f64,
+                ]
+            })
+            .collect();
+        let p = Points::new(2, vals.clone()).unwrap();
+        let s = natural_subdivision_matrix(l, 0).unwrap().to_f64_rows();
+        let n = natural_interpolation_matrix(l, 0).unwrap().to_f64_rows();
+        let vref = &vals;
+        let dense = |m: &[Vec<f64>]| -> Vec<f64> {
+            let mut out = Vec::new();
+            for row in m {
+                for d in 0..2 {
+                    out.push(
+                        row.iter()
+                            .enumerate()
+                            .map(|(c, w)| w * vref[2 * c + d])
+                            .sum::<f64>(),
+                    );
+                }
+            }
+            out
+        };
+        let close = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-14)
+        };
+        assert!(
+            close(scheme.subdivide_once(&p).unwrap().coords(), &dense(&s)),
+            "S, L={l}"
+        );
+        let nv = dense(&n);
+        assert!(
+            close(scheme.limit_values(&p).unwrap().coords(), &nv),
+            "N, L={l}"
+        );
+        let back = scheme.interpolate(&Points::new(2, nv).unwrap()).unwrap();
+        assert!(close(back.coords(), &vals), "N^-1, L={l}");
+    }
+}
+
 fn bernstein(k: usize, t: &BigRational) -> BigRational {
     let binom = [1, 3, 3, 1][k];
     let one_minus = BigRational::one() - t;

@@ -289,27 +289,59 @@ impl NaryScheme {
         }
     }
 
+    /// The range of spans i whose centred stencil i−m..i+m+1 lies inside 0..count (no wrap,
+    /// no end shift): i in m..count−m−1. Empty when the polygon is shorter than the stencil.
+    fn interior_range(&self, count: usize) -> std::ops::Range<usize> {
+        let m = self.m;
+        m..count.saturating_sub(m + 1).max(m)
+    }
+
+    /// Interior spans by the fixed-size kernel when (dimension, stencil) is one of the common
+    /// pairs, else by the general window kernel. Returns nothing; fills `out` blocks lo..hi.
+    fn interior(&self, dim: usize, src: &[f64], out: &mut [f64], range: std::ops::Range<usize>) {
+        let (n, p) = (self.arity, self.points());
+        let rules = &self.floats[self.m * n * p..(self.m + 1) * n * p];
+        macro_rules! fixed {
+            ($(($d:literal, $p:literal)),*) => {
+                match (dim, p) {
+                    $(($d, $p) => interior_fixed::<$d, $p>(self.m, n, rules, src, out, range),)*
+                    _ => interior_general(dim, self.m, n, p, rules, src, out, range),
+                }
+            };
+        }
+        fixed!(
+            (1, 2),
+            (1, 4),
+            (1, 6),
+            (1, 8),
+            (2, 2),
+            (2, 4),
+            (2, 6),
+            (2, 8),
+            (3, 2),
+            (3, 4),
+            (3, 6),
+            (3, 8)
+        );
+    }
+
     fn closed_level<const D: usize>(&self, dim: usize, src: &[f64], out: &mut [f64]) {
         let count = src.len() / dim;
         let (m, n, p) = (self.m, self.arity, self.points());
         let rules = &self.floats[self.m * n * p..(self.m + 1) * n * p];
+        let range = self.interior_range(count);
+        self.interior(dim, src, out, range.clone());
+        // The spans near the seam: periodic indices.
         let mut idx = vec![0usize; p];
-        for (i, block) in out.chunks_exact_mut(n * dim).enumerate() {
+        for i in (0..range.start).chain(range.end..count) {
+            let block = &mut out[i * n * dim..(i + 1) * n * dim];
             let (first, rest) = block.split_at_mut(dim);
             first.copy_from_slice(&src[i * dim..(i + 1) * dim]);
-            if i >= m && i + m + 1 < count {
-                // Interior: the stencil is a contiguous window, no index arithmetic.
-                let window = &src[(i - m) * dim..(i + m + 2) * dim];
-                for (a, dst) in rest.chunks_exact_mut(dim).enumerate() {
-                    combine_window::<D>(dim, &rules[(a + 1) * p..(a + 2) * p], window, dst);
-                }
-            } else {
-                for (j, slot) in idx.iter_mut().enumerate() {
-                    *slot = (i + j + count * (m + 1) - m) % count;
-                }
-                for (a, dst) in rest.chunks_exact_mut(dim).enumerate() {
-                    combine_indexed::<D>(dim, &rules[(a + 1) * p..(a + 2) * p], src, &idx, dst);
-                }
+            for (j, slot) in idx.iter_mut().enumerate() {
+                *slot = (i + j + count * (m + 1) - m) % count;
+            }
+            for (a, dst) in rest.chunks_exact_mut(dim).enumerate() {
+                combine_indexed::<D>(dim, &rules[(a + 1) * p..(a + 2) * p], src, &idx, dst);
             }
         }
     }
@@ -319,14 +351,17 @@ impl NaryScheme {
         let n = self.arity;
         let short;
         // Stencil width and rule table: the scheme's own unless the polygon is shorter.
-        let (p, table): (usize, &[f64]) = if count >= self.points() {
-            (self.points(), &self.floats)
+        let (p, table, range): (usize, &[f64], _) = if count >= self.points() {
+            let range = self.interior_range(count);
+            self.interior(dim, src, out, range.clone());
+            (self.points(), &self.floats, range)
         } else {
             short = flatten(&rule_table(count, n));
-            (count, &short)
+            (count, &short, 0..0)
         };
         let m = (p - 2) / 2;
-        for i in 0..count - 1 {
+        // The spans near the ends: one-sided stencils shifted inside the polygon.
+        for i in (0..range.start.min(count - 1)).chain(range.end.max(range.start)..count - 1) {
             let start = i.saturating_sub(m).min(count - p);
             let t = i - start;
             let window = &src[start * dim..(start + p) * dim];
@@ -340,6 +375,66 @@ impl NaryScheme {
         }
         let last = (count - 1) * n * dim;
         out[last..last + dim].copy_from_slice(&src[(count - 1) * dim..]);
+    }
+}
+
+/// Interior spans with compile-time dimension `D` and stencil width `P`: the loops unroll and
+/// the bounds checks fold into one slice check per span, so the kernel runs at memory speed.
+fn interior_fixed<const D: usize, const P: usize>(
+    m: usize,
+    n: usize,
+    rules: &[f64],
+    src: &[f64],
+    out: &mut [f64],
+    range: std::ops::Range<usize>,
+) {
+    let weights: Vec<[f64; P]> = rules
+        .chunks_exact(P)
+        .map(|c| {
+            let mut w = [0.0; P];
+            w.copy_from_slice(c);
+            w
+        })
+        .collect();
+    for i in range {
+        // Copy the window into a local array first: the loads happen once, and the products
+        // below then work on registers with no bounds checks.
+        let win = &src[(i - m) * D..(i - m + P) * D];
+        let pts: [[f64; D]; P] = std::array::from_fn(|j| std::array::from_fn(|c| win[j * D + c]));
+        let block = &mut out[i * n * D..(i + 1) * n * D];
+        block[..D].copy_from_slice(&pts[m]);
+        for (w, dst) in weights[1..].iter().zip(block[D..].chunks_exact_mut(D)) {
+            let mut acc = [0.0f64; D];
+            for (wj, pj) in w.iter().zip(&pts) {
+                for c in 0..D {
+                    acc[c] += wj * pj[c];
+                }
+            }
+            dst.copy_from_slice(&acc);
+        }
+    }
+}
+
+/// Interior spans for any dimension and stencil width.
+#[allow(clippy::too_many_arguments)]
+fn interior_general(
+    dim: usize,
+    m: usize,
+    n: usize,
+    p: usize,
+    rules: &[f64],
+    src: &[f64],
+    out: &mut [f64],
+    range: std::ops::Range<usize>,
+) {
+    for i in range {
+        let window = &src[(i - m) * dim..(i + m + 2) * dim];
+        let block = &mut out[i * n * dim..(i + 1) * n * dim];
+        let (first, rest) = block.split_at_mut(dim);
+        first.copy_from_slice(&src[i * dim..(i + 1) * dim]);
+        for (a, dst) in rest.chunks_exact_mut(dim).enumerate() {
+            combine_window::<0>(dim, &rules[(a + 1) * p..(a + 2) * p], window, dst);
+        }
     }
 }
 

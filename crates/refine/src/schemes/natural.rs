@@ -259,7 +259,83 @@ struct Template {
     rho: usize,
     lt: usize,
     rows: Vec<Row>,
+    /// `rows` without the exact weights, for application.
+    frows: Vec<Vec<(usize, f64)>>,
     derive: fn(usize) -> Result<RationalMatrix, Error>,
+}
+
+/// The rows of one member M(L) in `f64`, without materializing them for large L.
+struct FloatRows<'a> {
+    template: &'a Template,
+    l: usize,
+    /// The exactly derived rows when L ≤ L_T (empty otherwise).
+    small: Vec<Vec<(usize, f64)>>,
+}
+
+impl FloatRows<'_> {
+    fn count(&self) -> usize {
+        self.template.rho * self.l + 1
+    }
+
+    /// Row r as (entries, shift): the entry (c, w) sits in column c + shift (the shift is
+    /// negative for the first interior rows, which sit left of the template's middle row).
+    fn row(&self, r: usize) -> (&[(usize, f64)], isize) {
+        let t = self.template;
+        if !self.small.is_empty() {
+            return (&self.small[r], 0);
+        }
+        let (rho, b, l) = (t.rho, TEMPLATE_END, self.l);
+        let shift = l - t.lt;
+        let mid = t.lt / 2;
+        if r < rho * b {
+            (&t.frows[r], 0)
+        } else if r > rho * (l - b) {
+            (&t.frows[r - rho * shift], shift as isize)
+        } else {
+            // Interior: the template's middle row of this phase, moved from column mid to j.
+            let (j, phase) = (r / rho, r % rho);
+            (&t.frows[rho * mid + phase], j as isize - mid as isize)
+        }
+    }
+
+    /// out = M(L) p, vertex-major, `dim` coordinates per point.
+    fn apply(&self, p: &[f64], dim: usize) -> Vec<f64> {
+        match dim {
+            1 => self.apply_dim::<1>(p, 1),
+            2 => self.apply_dim::<2>(p, 2),
+            3 => self.apply_dim::<3>(p, 3),
+            _ => self.apply_dim::<0>(p, dim),
+        }
+    }
+
+    /// `D` = dim as a constant (0: run-time dimension). Rows are visited in order; each is a
+    /// short list of (column, weight), so the pass is O(N) and streams through memory.
+    fn apply_dim<const D: usize>(&self, p: &[f64], dim: usize) -> Vec<f64> {
+        let mut out = vec![0.0; self.count() * dim];
+        for (r, dst) in out.chunks_exact_mut(dim).enumerate() {
+            let (entries, shift) = self.row(r);
+            if D > 0 {
+                let mut acc = [0.0f64; D];
+                for &(c, w) in entries {
+                    let col = (c as isize + shift) as usize;
+                    let src = &p[col * D..(col + 1) * D];
+                    for k in 0..D {
+                        acc[k] += w * src[k];
+                    }
+                }
+                dst.copy_from_slice(&acc);
+            } else {
+                for &(c, w) in entries {
+                    let col = (c as isize + shift) as usize;
+                    let src = &p[col * dim..(col + 1) * dim];
+                    for (d, &v) in dst.iter_mut().zip(src) {
+                        *d += w * v;
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Coarse intervals at each end taken verbatim from the template.
@@ -281,6 +357,12 @@ fn sparse_rows(m: &RationalMatrix) -> Vec<Row> {
         .collect()
 }
 
+fn float_rows(rows: &[Row]) -> Vec<Vec<(usize, f64)>> {
+    rows.iter()
+        .map(|r| r.iter().map(|(c, _, f)| (*c, *f)).collect())
+        .collect()
+}
+
 impl Template {
     fn new(rho: usize, derive: fn(usize) -> Result<RationalMatrix, Error>) -> Result<Self, Error> {
         let lt = TEMPLATE_INTERVALS;
@@ -288,7 +370,27 @@ impl Template {
             rho,
             lt,
             rows: sparse_rows(&derive(lt)?),
+            frows: Vec::new(),
             derive,
+        }
+        .with_floats())
+    }
+
+    fn with_floats(mut self) -> Self {
+        self.frows = float_rows(&self.rows);
+        self
+    }
+
+    fn float_rows_for(&self, l: usize) -> Result<FloatRows<'_>, Error> {
+        let small = if l <= self.lt {
+            float_rows(&sparse_rows(&(self.derive)(l)?))
+        } else {
+            Vec::new()
+        };
+        Ok(FloatRows {
+            template: self,
+            l,
+            small,
         })
     }
 
@@ -364,19 +466,6 @@ fn check_points(points: &Points) -> Result<usize, Error> {
     Ok(points.len() - 1)
 }
 
-fn apply_rows(rows: &[Row], p: &Points) -> Vec<f64> {
-    let dim = p.dim();
-    let mut out = vec![0.0; rows.len() * dim];
-    for (row, dst) in rows.iter().zip(out.chunks_exact_mut(dim)) {
-        for (c, _, w) in row {
-            for (d, &v) in dst.iter_mut().zip(p.point(*c)) {
-                *d += w * v;
-            }
-        }
-    }
-    out
-}
-
 impl NaturalScheme {
     /// Derives the rules (exactly, from the two-scale relation; see the module docs).
     ///
@@ -412,8 +501,11 @@ impl NaturalScheme {
     /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
     pub fn subdivide_once(&self, points: &Points) -> Result<Points, Error> {
         let l = check_points(points)?;
-        let rows = self.subdivision.rows_for(l)?;
-        Ok(Points::new(points.dim(), apply_rows(&rows, points))?)
+        let rows = self.subdivision.float_rows_for(l)?;
+        Ok(Points::new(
+            points.dim(),
+            rows.apply(points.coords(), points.dim()),
+        )?)
     }
 
     /// The polygons p_0, p_1, …, p_levels of `levels` rounds of subdivision from p_0 = `points`.
@@ -472,8 +564,11 @@ impl NaturalScheme {
     /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
     pub fn limit_values(&self, points: &Points) -> Result<Points, Error> {
         let l = check_points(points)?;
-        let rows = self.interpolation.rows_for(l)?;
-        Ok(Points::new(points.dim(), apply_rows(&rows, points))?)
+        let rows = self.interpolation.float_rows_for(l)?;
+        Ok(Points::new(
+            points.dim(),
+            rows.apply(points.coords(), points.dim()),
+        )?)
     }
 
     /// The exact energy ∫ |p_∞''|² of the limit curve, p_0ᵀ E_0 N_0 p_0 (Theorem 6.4), summed
@@ -506,12 +601,13 @@ impl NaturalScheme {
     /// if N were not tridiagonal or a pivot vanished (does not occur for natural splines).
     pub fn interpolate(&self, values: &Points) -> Result<Points, Error> {
         let l = check_points(values)?;
-        let rows = self.interpolation.rows_for(l)?;
+        let rows = self.interpolation.float_rows_for(l)?;
         let n = l + 1;
         let (mut sub, mut diag, mut sup) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        for (i, row) in rows.iter().enumerate() {
-            for (c, _, w) in row {
-                match *c as isize - i as isize {
+        for i in 0..n {
+            let (entries, shift) = rows.row(i);
+            for (c, w) in entries {
+                match *c as isize + shift - i as isize {
                     -1 => sub[i] = *w,
                     0 => diag[i] = *w,
                     1 => sup[i] = *w,
