@@ -20,7 +20,10 @@ fn q(n: i64, d: i64) -> BigRational {
 /// the order printed: offsets (r, s), r = −1..2 outer, s = −1..2 inner. The text extraction has
 /// lost every minus sign, so signs are checked separately (they must make the mask sum to 1 and
 /// follow the product of the curve rules' signs).
-fn seed_magnitudes() -> Vec<((usize, usize), usize, Vec<(i64, i64)>)> {
+/// (residue, arity, printed magnitudes as (numerator, denominator)).
+type PrintedMask = ((usize, usize), usize, Vec<(i64, i64)>);
+
+fn seed_magnitudes() -> Vec<PrintedMask> {
     vec![
         // Kobbelt: tensor product of the binary 4-point scheme, p_{2i+1, 2j+1}.
         (

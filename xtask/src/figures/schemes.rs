@@ -15,14 +15,6 @@ fn xy(p: &Points) -> Vec<[f64; 2]> {
     p.iter().map(|q| [q[0], q[1]]).collect()
 }
 
-fn closed_xy(p: &Points) -> Vec<[f64; 2]> {
-    let mut v = xy(p);
-    if let Some(&f) = v.first() {
-        v.push(f);
-    }
-    v
-}
-
 /// The control polygon of Khan et al. Fig. 3 is not printed; a closed hexagon-like polygon with
 /// one sharp corner shows the same behaviour (interpolation, smoothing, overshoot near the corner).
 fn khan_polygon() -> anyhow::Result<Points> {

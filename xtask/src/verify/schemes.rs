@@ -100,13 +100,13 @@ fn reproduction() -> anyhow::Result<Outcome> {
                         for (j, wj) in w.iter().enumerate() {
                             let mut p = q("1");
                             for _ in 0..deg {
-                                p = p * q(&j.to_string());
+                                p *= q(&j.to_string());
                             }
-                            lhs = lhs + wj * p;
+                            lhs += wj * p;
                         }
                         let mut rhs = q("1");
                         for _ in 0..deg {
-                            rhs = rhs * &x;
+                            rhs *= &x;
                         }
                         let defect = rational_to_f64(&(lhs - rhs)).abs();
                         if deg < points {
@@ -210,6 +210,31 @@ fn closed_vs_reference() -> anyhow::Result<Outcome> {
     ))
 }
 
+/// The scheme is interpolating: level-k point i is level-(k+1) point n·i, bit for bit.
+fn old_points_kept() -> anyhow::Result<Outcome> {
+    let mut seed = 3u64;
+    let mut kept = true;
+    for (points, arity, topology) in [
+        (4, 2, Topology::Closed),
+        (6, 3, Topology::Open),
+        (8, 5, Topology::Closed),
+        (4, 4, Topology::Open),
+    ] {
+        let s = NaryScheme::new(points, arity)?;
+        let coords: Vec<f64> = (0..10 * 3).map(|_| lcg(&mut seed)).collect();
+        let p = Points::new(3, coords)?;
+        let fine = s.subdivide(&p, topology, 2)?;
+        for i in 0..p.len() {
+            let a = p.point(i).iter().map(|x| x.to_bits());
+            kept &= a.eq(fine.point(i * arity * arity).iter().map(|x| x.to_bits()));
+        }
+    }
+    Ok(Outcome::flag(
+        kept,
+        "old points reappear unchanged (bitwise) after 2 levels, open and closed",
+    ))
+}
+
 fn open_cubic() -> anyhow::Result<Outcome> {
     let f = |x: f64| [x * x * x - 2.0 * x + 1.0, 0.5 * x * x - x * x * x / 7.0];
     let mut worst = 0.0f64;
@@ -220,8 +245,8 @@ fn open_cubic() -> anyhow::Result<Outcome> {
         let nn = (arity * arity) as f64;
         for k in 0..got.len() {
             let e = f(k as f64 / nn);
-            for c in 0..2 {
-                worst = worst.max((got.point(k)[c] - e[c]).abs());
+            for (g, ec) in got.point(k).iter().zip(e) {
+                worst = worst.max((g - ec).abs());
             }
         }
     }
@@ -408,10 +433,10 @@ fn bernstein(k: usize, t: &BigRational) -> BigRational {
     let om = q("1") - t;
     let mut v = q(binom);
     for _ in 0..k {
-        v = v * t;
+        v *= t;
     }
     for _ in 0..3 - k {
-        v = v * &om;
+        v *= &om;
     }
     v
 }
@@ -784,6 +809,7 @@ pub fn cases() -> Vec<Case> {
         Case::holds("khan/3.13/floats-correctly-rounded", rounding),
         Case::holds("khan/3.13/closed-apply-vs-naive", closed_vs_reference),
         Case::holds("khan/3.13/open-ends-reproduce-cubics", open_cubic),
+        Case::holds("khan/3.13/interpolating-old-points-kept", old_points_kept),
         Case::holds("khan/4.2/kobbelt-mask-(1,1)", || {
             seed_mask(
                 2,
