@@ -58,6 +58,12 @@ pub struct NaryScheme {
     exact: Vec<Vec<Vec<BigRational>>>,
     /// The same, correctly rounded, flat: index `(t * arity + a) * points + j`.
     floats: Vec<f64>,
+    /// Symmetric form of the centred rules for the interior kernel, per residue a = 1..=n/2:
+    /// half-sums (w_a[j] + w_a[P−1−j])/2 then half-differences (w_a[j] − w_a[P−1−j])/2,
+    /// j < P/2, each exact then rounded (flat, `2 · (P/2)` entries per residue). The rule of
+    /// residue n − a is the mirror of residue a's, so both come from the same sums and
+    /// differences of mirrored points.
+    symmetric: Vec<f64>,
 }
 
 /// The exact one-sided rules for `count` nodes: `[t][a]` is the Lagrange basis on the nodes
@@ -121,11 +127,23 @@ impl NaryScheme {
         }
         let exact = rule_table(points, arity);
         let floats = flatten(&exact);
+        let m = (points - 2) / 2;
+        let half = BigRational::new(BigInt::from(1), BigInt::from(2));
+        let mut symmetric = Vec::with_capacity(arity * points);
+        for w in &exact[m][1..=arity / 2] {
+            for j in 0..points / 2 {
+                symmetric.push(rational_to_f64(&((&w[j] + &w[points - 1 - j]) * &half)));
+            }
+            for j in 0..points / 2 {
+                symmetric.push(rational_to_f64(&((&w[j] - &w[points - 1 - j]) * &half)));
+            }
+        }
         Ok(NaryScheme {
-            m: (points - 2) / 2,
+            m,
             arity,
             exact,
             floats,
+            symmetric,
         })
     }
 
@@ -304,7 +322,7 @@ impl NaryScheme {
         macro_rules! fixed {
             ($(($d:literal, $p:literal)),*) => {
                 match (dim, p) {
-                    $(($d, $p) => interior_fixed::<$d, $p>(self.m, n, rules, src, out, range),)*
+                    $(($d, $p) => interior_fixed::<$d, $p>(self.m, n, &self.symmetric, src, out, range),)*
                     _ => interior_general(dim, self.m, n, p, rules, src, out, range),
                 }
             };
@@ -379,38 +397,86 @@ impl NaryScheme {
 }
 
 /// Interior spans with compile-time dimension `D` and stencil width `P`: the loops unroll and
-/// the bounds checks fold into one slice check per span, so the kernel runs at memory speed.
+/// the bounds checks fold into one slice check per span. The rules are applied in symmetric form
+/// (see `NaryScheme::symmetric`): with S_j = p_j + p_{P−1−j} and D_j = p_j − p_{P−1−j},
+/// new_a = Σ hs_j S_j + hd_j D_j and new_{n−a} = Σ hs_j S_j − hd_j D_j, which halves the
+/// multiplications (the mirror of residue a is residue n − a, by the symmetry of the nodes).
 fn interior_fixed<const D: usize, const P: usize>(
     m: usize,
     n: usize,
-    rules: &[f64],
+    symmetric: &[f64],
     src: &[f64],
     out: &mut [f64],
     range: std::ops::Range<usize>,
 ) {
-    let weights: Vec<[f64; P]> = rules
-        .chunks_exact(P)
+    let h = P / 2;
+    let pairs: Vec<([f64; P], [f64; P])> = symmetric
+        .chunks_exact(2 * h)
         .map(|c| {
-            let mut w = [0.0; P];
-            w.copy_from_slice(c);
-            w
+            let (mut hs, mut hd) = ([0.0; P], [0.0; P]);
+            hs[..h].copy_from_slice(&c[..h]);
+            hd[..h].copy_from_slice(&c[h..]);
+            (hs, hd)
         })
         .collect();
+    let need_differences = n > 2;
+    if range.is_empty() {
+        return;
+    }
+    // Zipped iterators over the input windows and the output blocks: no per-span index
+    // arithmetic, and each window is re-sliced to the constant length P·D so that the indexing
+    // below needs no bounds checks.
     for i in range {
-        // Copy the window into a local array first: the loads happen once, and the products
-        // below then work on registers with no bounds checks.
-        let win = &src[(i - m) * D..(i - m + P) * D];
-        let pts: [[f64; D]; P] = std::array::from_fn(|j| std::array::from_fn(|c| win[j * D + c]));
-        let block = &mut out[i * n * D..(i + 1) * n * D];
-        block[..D].copy_from_slice(&pts[m]);
-        for (w, dst) in weights[1..].iter().zip(block[D..].chunks_exact_mut(D)) {
-            let mut acc = [0.0f64; D];
-            for (wj, pj) in w.iter().zip(&pts) {
+        let win = &src[(i - m) * D..];
+        let block = &mut out[i * n * D..];
+        let win = &win[..P * D];
+        // Built element by element (no zero-fill, no memset/memcpy calls for these tiny arrays;
+        // entries j ≥ P/2 are unused constants).
+        let sum: [[f64; D]; P] = std::array::from_fn(|j| {
+            std::array::from_fn(|c| {
+                if j < h {
+                    win[j * D + c] + win[(P - 1 - j) * D + c]
+                } else {
+                    0.0
+                }
+            })
+        });
+        let dif: [[f64; D]; P] = std::array::from_fn(|j| {
+            std::array::from_fn(|c| {
+                if need_differences && j < h {
+                    win[j * D + c] - win[(P - 1 - j) * D + c]
+                } else {
+                    0.0
+                }
+            })
+        });
+        for c in 0..D {
+            block[c] = win[m * D + c];
+        }
+        for (q, (hs, hd)) in pairs.iter().enumerate() {
+            let (a, mirror) = (q + 1, n - q - 1);
+            let mut u = [0.0f64; D];
+            for j in 0..h {
                 for c in 0..D {
-                    acc[c] += wj * pj[c];
+                    u[c] += hs[j] * sum[j][c];
                 }
             }
-            dst.copy_from_slice(&acc);
+            if a == mirror {
+                for c in 0..D {
+                    block[a * D + c] = u[c];
+                }
+            } else {
+                let mut v = [0.0f64; D];
+                for j in 0..h {
+                    for c in 0..D {
+                        v[c] += hd[j] * dif[j][c];
+                    }
+                }
+                for c in 0..D {
+                    block[a * D + c] = u[c] + v[c];
+                    block[mirror * D + c] = u[c] - v[c];
+                }
+            }
         }
     }
 }
