@@ -5,7 +5,7 @@
 //!
 //! Result: `{"points": P, "arity": N, "rules": [{"residue": a, "offsets": [−m, …, m+1],
 //! "weights": ["num/den", …], "floats": [...]}, … for a = 0..N−1]}`, meaning
-//! p^{k+1}_{N·i+a} = Σ_l weights[l] · p^k_{i+offsets[l]}. `--surface` adds `"surface_rules":
+//! p^{k+1}_{N·i+a} = Σ_l weights\[l\] · p^k_{i+offsets\[l\]}. `--surface` adds `"surface_rules":
 //! [{"residue": [a, b], "offsets": [[r, s], …], "weights": [...], "floats": [...]}, …]` (row-major
 //! in (a, b) and in (r, s)). `--apply` adds `"polygon": {"closed", "levels", "input", "output"}`.
 //!

@@ -163,7 +163,7 @@ impl NaryScheme {
     }
 
     /// The offsets −m, …, m + 1 of the centred rule: weight l of [`NaryScheme::rule`] multiplies
-    /// p^k_{i + offsets[l]}.
+    /// p^k_{i + offsets\[l\]}.
     pub fn offsets(&self) -> Vec<isize> {
         (-(self.m as isize)..=(self.m as isize + 1)).collect()
     }

@@ -24,7 +24,7 @@ use crate::Error;
 /// ([`natural_subdivision_matrix`] etc.): they are dense, for derivation and checks only.
 pub const MAX_EXACT_INTERVALS: usize = 512;
 
-/// Largest number of output coordinates (points × dimension) [`NaturalScheme::subdivide`] may
+/// Largest number of output coordinates (points × dimension) [`NaturalScheme::subdivide_levels`] may
 /// produce.
 pub const MAX_NATURAL_COORDS: usize = 1 << 30;
 

@@ -132,7 +132,7 @@ impl QuadGrid {
 }
 
 /// One two-dimensional rule of the tensor-product scheme (4.2):
-/// p^{k+1}_{n i + a, n j + b} = Σ_l weights[l] · p^k_{i + offsets[l].0, j + offsets[l].1}.
+/// p^{k+1}_{n i + a, n j + b} = Σ_l weights\[l\] · p^k_{i + offsets\[l\].0, j + offsets\[l\].1}.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceRule {
     /// The residues (a, b).
