@@ -47,7 +47,7 @@ impl Gradient for Phi<'_> {
     }
 }
 
-type Out = (Vec<f64>, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
+type Out = (f64, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
 
 pub(crate) fn bfgs(
     outer: &OuterRef<'_>,
@@ -100,5 +100,5 @@ pub(crate) fn bfgs(
     let (_, g, sols) = outer
         .value_grad(&best, &mut h, stats, solves)
         .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
-    Ok((best.clone(), iters, (sols, best, g)))
+    Ok((f64::NAN, iters, (sols, best, g)))
 }

@@ -460,7 +460,7 @@ fn pair_candidates(th: &[f64; 4], g1: &[f64; 4], g2: &[f64; 4]) -> Vec<[f64; 2]>
     let z = Poly::constant(0.0);
     let syl = vec![
         vec![b3.clone(), b2.clone(), b1.clone(), b0.clone(), z.clone()],
-        vec![z.clone(), b3, b2, b1, b0],
+        vec![z.clone(), b3.clone(), b2.clone(), b1.clone(), b0.clone()],
         vec![a2.clone(), a1.clone(), a0.clone(), z.clone(), z.clone()],
         vec![z.clone(), a2.clone(), a1.clone(), a0.clone(), z.clone()],
         vec![z.clone(), z, a2.clone(), a1.clone(), a0.clone()],
@@ -478,7 +478,14 @@ fn pair_candidates(th: &[f64; 4], g1: &[f64; 4], g2: &[f64; 4]) -> Vec<[f64; 2]>
         } else {
             roots::find_roots_quadratic(c2, c1, c0).as_ref().to_vec()
         };
-        for l2 in cands {
+        // the common root of Q and P at this Y: both roots of the quadratic and the roots of
+        // the cubic serve as starting points (near-degenerate configurations make one of the
+        // two numerically unreliable); Newton polishing and validation sort them out
+        let mut all = cands;
+        all.extend_from_slice(
+            roots::find_roots_cubic(b3.eval(yv), b2.eval(yv), b1.eval(yv), b0.eval(yv)).as_ref(),
+        );
+        for l2 in all {
             if l2 > 0.0 && l2 < yv {
                 out.push([yv - l2, yv]);
             }

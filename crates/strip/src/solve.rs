@@ -148,6 +148,8 @@ pub struct Solution {
     pub norm: f64,
     /// Final (projected) gradient norm ‖∇Φ‖₂.
     pub gradient_norm: f64,
+    /// Newton decrement ½ gᵀH⁻¹g at the solution (≈ Φ − min Φ; NaN for BFGS).
+    pub newton_decrement: f64,
     /// Outer iterations.
     pub iterations: usize,
     /// Per-interval solves (all outer iterations and line-search trials).
@@ -304,6 +306,8 @@ struct Outer {
     fixed_val: Vec<Option<f64>>,
     boxes: Vec<(f64, f64)>,
     fixed_slope: Vec<Option<f64>>,
+    /// Kink cones of the lower and upper bound at each grid point (slope intervals).
+    cones: Vec<[(f64, f64); 2]>,
     sv: Vec<Option<usize>>,
     zv: Vec<Option<usize>>,
     nvar: usize,
@@ -342,6 +346,48 @@ impl Outer {
     fn theta(&self, j: usize, s: &[f64], z: &[f64]) -> [f64; 4] {
         let h = self.cells[j].h;
         [s[j], h * z[j], s[j + 1], h * z[j + 1]]
+    }
+
+    /// The box of every unknown at x: free grid values have their strip interval; the slope at
+    /// a grid point whose value sits on a bound is confined to the bound's kink cone (f − e ≥ 0
+    /// next to a contact at a vertex needs e'(τ+) ≤ f'(τ) ≤ e'(τ−); likewise for d). Elsewhere
+    /// slopes are free.
+    fn var_boxes(&self, x: &[f64]) -> Vec<Option<(f64, f64)>> {
+        let mut b = vec![None; x.len()];
+        for (j, v) in self.sv.iter().enumerate() {
+            if let Some(k) = *v {
+                let (lo, hi) = self.boxes[j];
+                b[k] = Some((lo, hi));
+                if let Some(kz) = self.zv[j] {
+                    if x[k] <= lo {
+                        b[kz] = Some(self.cones[j][0]);
+                    } else if x[k] >= hi {
+                        b[kz] = Some(self.cones[j][1]);
+                    }
+                }
+            }
+        }
+        b
+    }
+
+    /// Projection on the (x-dependent) boxes: values first, then the slopes they confine.
+    fn project(&self, x: &mut [f64]) {
+        for (j, v) in self.sv.iter().enumerate() {
+            if let Some(k) = *v {
+                let (lo, hi) = self.boxes[j];
+                x[k] = x[k].clamp(lo, hi);
+            }
+        }
+        let b = self.var_boxes(x);
+        for j in 0..self.zv.len() {
+            if let (Some(kz), Some(_)) = (self.zv[j], self.sv[j]) {
+                if let Some((lo, hi)) = b[kz] {
+                    if lo <= hi {
+                        x[kz] = x[kz].clamp(lo, hi);
+                    }
+                }
+            }
+        }
     }
 
     fn var_ids(&self, j: usize) -> [Option<usize>; 4] {
@@ -605,7 +651,22 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
                 y[i] = v;
                 fixed_val[j] = Some(v);
             }
+            // problem (10): free grid values stay ε·width inside the strip (with ε = 0 they may
+            // touch a bound at a vertex; their slope is then confined to the kink cone)
             None => boxes[j] = (lo + margin, hi - margin),
+        }
+    }
+    let mut cones = vec![[(f64::NEG_INFINITY, f64::INFINITY); 2]; m];
+    for (j, cone) in cones.iter_mut().enumerate() {
+        let slope_end = |g: &[f64; 4], h: f64| crate::cell::cubic3(g, h).1;
+        if j > 0 && j + 1 < m && opts.boundary_margin == 0.0 {
+            let (l, r) = (&cells[j - 1], &cells[j]);
+            if let (Some(gl), Some(gr)) = (&l.lower, &r.lower) {
+                cone[0] = (gr[1], slope_end(gl, l.h));
+            }
+            if let (Some(gl), Some(gr)) = (&l.upper, &r.upper) {
+                cone[1] = (slope_end(gl, l.h), gr[1]);
+            }
         }
     }
     let mut fixed_slope = vec![None; m];
@@ -640,6 +701,7 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
         fixed_val,
         boxes,
         fixed_slope,
+        cones,
         sv,
         zv,
         nvar,
@@ -657,8 +719,10 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
         let i = t.partition_point(|v| *v <= tj).clamp(1, n - 1) - 1;
         let (v, d) = hermite_eval(t[i], t[i + 1], y[i], y[i + 1], z0[i], z0[i + 1], tj);
         if let Some(k) = outer.sv[j] {
+            // start strictly inside (every cell is then feasible for any slopes)
             let (lo, hi) = outer.boxes[j];
-            x[k] = v.clamp(lo, hi);
+            let inset = INITIAL_INSET * (hi - lo);
+            x[k] = v.clamp(lo + inset, hi - inset);
         }
         if let Some(k) = outer.zv[j] {
             x[k] = match grid[j].1 {
@@ -670,7 +734,7 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     let mut stats = CellStats::default();
     let mut solves = 0usize;
     let mut hints: Hints = vec![None; m - 1];
-    let (x, iterations, ev) = match opts.method {
+    let (decrement, iterations, ev) = match opts.method {
         Method::Newton => newton(&outer, x, opts, &mut hints, &mut stats, &mut solves)?,
         Method::Bfgs => {
             if outer.sv.iter().any(Option::is_some) {
@@ -679,9 +743,10 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
             crate::bfgs::bfgs(&outer_ref(&outer), x, opts, &mut stats, &mut solves)?
         }
     };
-    let _ = x;
     let pg = projected_grad(&outer, &ev.1, &ev.2);
-    assemble(problem, &outer, &grid, &ev.0, ev.2, pg, iterations, solves, stats, shifted)
+    let mut sol = assemble(problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted)?;
+    sol.newton_decrement = decrement;
+    Ok(sol)
 }
 
 /// Borrowed view for the BFGS module.
@@ -712,10 +777,10 @@ impl OuterRef<'_> {
 }
 
 fn projected_grad(o: &Outer, x: &[f64], g: &[f64]) -> Vec<f64> {
+    let boxes = o.var_boxes(x);
     let mut pg = g.to_vec();
-    for (j, v) in o.sv.iter().enumerate() {
-        if let Some(k) = *v {
-            let (lo, hi) = o.boxes[j];
+    for k in 0..x.len() {
+        if let Some((lo, hi)) = boxes[k] {
             let eps = 1e-13 * (1.0 + x[k].abs());
             if (x[k] <= lo + eps && g[k] > 0.0) || (x[k] >= hi - eps && g[k] < 0.0) {
                 pg[k] = 0.0;
@@ -729,12 +794,16 @@ fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
+/// Free grid values start at least this fraction of the strip width inside the strip.
+const INITIAL_INSET: f64 = 0.01;
+/// Stop when the Newton decrement ½ gᵀH⁻¹g is below this fraction of 1 + Φ.
+pub const DECREMENT_TOL: f64 = 1e-15;
 /// Line-search backtracking steps before giving up.
 const LINE_SEARCH_STEPS: usize = 60;
 /// Armijo sufficient-decrease constant.
 const ARMIJO: f64 = 1e-4;
 
-type NewtonOut = (Vec<f64>, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
+type NewtonOut = (f64, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
 
 /// Projected Newton on the banded Hessian. Returns (x, iterations, (cells, x, gradient)).
 fn newton(
@@ -746,12 +815,6 @@ fn newton(
     solves: &mut usize,
 ) -> Result<NewtonOut, Error> {
     let nv = o.nvar;
-    let mut boxed: Vec<Option<(f64, f64)>> = vec![None; nv];
-    for (j, v) in o.sv.iter().enumerate() {
-        if let Some(k) = *v {
-            boxed[k] = Some(o.boxes[j]);
-        }
-    }
     let mut band = Band::zeros(nv);
     let mut ev = o
         .eval(&x, hints, Some(&mut band), stats, solves)
@@ -759,6 +822,7 @@ fn newton(
     let g0 = inf_norm(&projected_grad(o, &x, &ev.grad));
     let tol = opts.gradient_tol * (1.0 + g0);
     let mut it = 0;
+    let mut newton_decrement = 0.0;
     while it < opts.max_iterations {
         let pg = projected_grad(o, &x, &ev.grad);
         if inf_norm(&pg) <= tol || nv == 0 {
@@ -766,8 +830,9 @@ fn newton(
         }
         it += 1;
         // active set: boxed variables at a bound with the gradient pushing outward
+        let boxed = o.var_boxes(&x);
         let active: Vec<bool> = (0..nv)
-            .map(|k| boxed[k].is_some() && pg[k] == 0.0)
+            .map(|k| boxed[k].is_some() && pg[k] == 0.0 && ev.grad[k] != 0.0)
             .collect();
         let mut hb = band.clone();
         for k in 0..nv {
@@ -782,6 +847,7 @@ fn newton(
             }
         }
         let rhs: Vec<f64> = (0..nv).map(|k| if active[k] { 0.0 } else { -ev.grad[k] }).collect();
+        newton_decrement = f64::INFINITY;
         let mut lambda = 0.0;
         let maxdiag = hb.a.iter().fold(0.0f64, |m, r| m.max(r[0].abs())).max(1e-300);
         let dir = loop {
@@ -797,28 +863,43 @@ fn newton(
                 break rhs.clone();
             }
         };
-        // projected backtracking line search
-        let mut alpha = 1.0;
-        let mut accepted = None;
-        for _ in 0..LINE_SEARCH_STEPS {
-            let xn: Vec<f64> = (0..nv)
-                .map(|k| {
-                    let v = x[k] + alpha * dir[k];
-                    match boxed[k] {
-                        Some((lo, hi)) => v.clamp(lo, hi),
-                        None => v,
-                    }
-                })
-                .collect();
-            let mut h2 = hints.clone();
-            if let Ok(e) = o.eval(&xn, &mut h2, None, stats, solves) {
-                let dec: f64 = (0..nv).map(|k| ev.grad[k] * (xn[k] - x[k])).sum();
-                if e.phi <= ev.phi + ARMIJO * dec || (e.phi - ev.phi).abs() <= 1e-15 * ev.phi.abs() && dec <= 0.0 {
-                    accepted = Some((xn, h2, e.phi));
-                    break;
-                }
+        // Newton decrement: ½ gᵀH⁻¹g estimates Φ − min Φ; along very stiff directions (contacts
+        // next to a grid point) it is the meaningful convergence measure, not ‖g‖
+        if lambda == 0.0 {
+            newton_decrement = 0.5 * (0..nv).map(|k| rhs[k] * dir[k]).sum::<f64>();
+            if newton_decrement <= DECREMENT_TOL * (1.0 + ev.phi.abs()) {
+                break;
             }
-            alpha *= 0.5;
+        }
+        // projected backtracking line search along the Newton direction; if it cannot decrease
+        // Φ (a Hessian that jumps across candidate regions), along the diagonally scaled and
+        // then the plain negative gradient
+        let diag_dir: Vec<f64> = (0..nv)
+            .map(|k| {
+                let d = band.a[k][0];
+                if active[k] { 0.0 } else { -ev.grad[k] / if d > 0.0 { d } else { 1.0 } }
+            })
+            .collect();
+        let grad_dir: Vec<f64> = (0..nv).map(|k| if active[k] { 0.0 } else { -ev.grad[k] }).collect();
+        let mut accepted = None;
+        for dir in [&dir, &diag_dir, &grad_dir] {
+            let mut alpha = 1.0;
+            for _ in 0..LINE_SEARCH_STEPS {
+                let mut xn: Vec<f64> = (0..nv).map(|k| x[k] + alpha * dir[k]).collect();
+                o.project(&mut xn);
+                let mut h2 = hints.clone();
+                if let Ok(e) = o.eval(&xn, &mut h2, None, stats, solves) {
+                    let dec: f64 = (0..nv).map(|k| ev.grad[k] * (xn[k] - x[k])).sum();
+                    if dec < 0.0 && e.phi <= ev.phi + ARMIJO * dec {
+                        accepted = Some((xn, h2, e.phi));
+                        break;
+                    }
+                }
+                alpha *= 0.5;
+            }
+            if accepted.is_some() {
+                break;
+            }
         }
         let Some((xn, h2, _)) = accepted else {
             break; // no further decrease representable: converged to rounding
@@ -830,8 +911,26 @@ fn newton(
             .eval(&x, hints, Some(&mut band), stats, solves)
             .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
     }
+    // the decrement at the final point (on the free, non-active unknowns)
+    let pg = projected_grad(o, &x, &ev.grad);
+    let mut hb = band;
+    for k in 0..nv {
+        if pg[k] == 0.0 {
+            hb.a[k] = [0.0; 4];
+            hb.a[k][0] = 1.0;
+            for d in 1..=3 {
+                if k + d < nv {
+                    hb.a[k + d][d] = 0.0;
+                }
+            }
+        }
+    }
+    newton_decrement = match hb.solve(&pg) {
+        Some(d) => 0.5 * pg.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
+        None => newton_decrement,
+    };
     let g = ev.grad.clone();
-    Ok((x.clone(), it, (ev.sols, x, g)))
+    Ok((newton_decrement, it, (ev.sols, x, g)))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -920,6 +1019,7 @@ fn assemble(
         energy,
         norm: energy.sqrt(),
         gradient_norm: gn,
+        newton_decrement: f64::NAN,
         iterations,
         cell_solves: solves,
         candidates: stats.candidates,
