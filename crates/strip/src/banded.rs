@@ -49,7 +49,7 @@ impl Band {
             for k in 1..=w.min(i) {
                 s -= l[i][k] * l[i][k] * d[i - k];
             }
-            if !(s > 0.0) || !s.is_finite() {
+            if s.is_nan() || s <= 0.0 || !s.is_finite() {
                 return None;
             }
             d[i] = s;

@@ -7,13 +7,13 @@ use argmin::core::{CostFunction, Executor, Gradient, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::BFGS;
 
-use crate::cell::{CellSolution, CellStats, Shape};
+use crate::cell::{CellSolution, CellStats};
 use crate::error::Error;
-use crate::solve::{OuterRef, Options};
+use crate::solve::{Hints, Options, OuterRef};
 
 struct Phi<'a> {
     outer: &'a OuterRef<'a>,
-    hints: &'a RefCell<Vec<Option<(Shape, [f64; 2])>>>,
+    hints: &'a RefCell<Hints>,
     stats: &'a RefCell<(CellStats, usize)>,
 }
 
@@ -83,7 +83,11 @@ pub(crate) fn bfgs(
             row[i] = 1.0;
         }
         let res = Executor::new(phi, solver)
-            .configure(|s| s.param(x0).inv_hessian(h0).max_iters(opts.max_iterations as u64))
+            .configure(|s| {
+                s.param(x0)
+                    .inv_hessian(h0)
+                    .max_iters(opts.max_iterations as u64)
+            })
             .run()
             .map_err(|e| Error::Bfgs {
                 message: e.to_string(),

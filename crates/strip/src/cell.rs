@@ -129,7 +129,10 @@ pub(crate) struct Pw {
 #[inline]
 pub(crate) fn ends(l: f64, v0: f64, v1: f64, m0: f64, m1: f64) -> (f64, f64) {
     let d = (v1 - v0) / l;
-    ((6.0 * d - 4.0 * m0 - 2.0 * m1) / l, (-6.0 * d + 2.0 * m0 + 4.0 * m1) / l)
+    (
+        (6.0 * d - 4.0 * m0 - 2.0 * m1) / l,
+        (-6.0 * d + 2.0 * m0 + 4.0 * m1) / l,
+    )
 }
 
 impl Pw {
@@ -184,7 +187,12 @@ impl Pw {
         let l = self.x[j + 1] - self.x[j];
         let (v0, v1, m0, m1) = (self.v[j], self.v[j + 1], self.m[j], self.m[j + 1]);
         let d = (v1 - v0) / l;
-        [v0, m0, (3.0 * d - 2.0 * m0 - m1) / l, (m0 + m1 - 2.0 * d) / (l * l)]
+        [
+            v0,
+            m0,
+            (3.0 * d - 2.0 * m0 - m1) / l,
+            (m0 + m1 - 2.0 * d) / (l * l),
+        ]
     }
 }
 
@@ -585,7 +593,8 @@ pub(crate) fn hessian(cell: &Cell, th: &[f64; 4], sol: &CellSolution) -> [[f64; 
     let shape = sol.shape;
     let k = shape.unknowns();
     let t = sol.tau;
-    let gr = |th: &[f64; 4], t: &[f64; 2]| build(cell, th, shape, t).map(|pw| (pw.grad(), pw.jumps2()));
+    let gr =
+        |th: &[f64; 4], t: &[f64; 2]| build(cell, th, shape, t).map(|pw| (pw.grad(), pw.jumps2()));
     let mut g_th = [[0.0; 4]; 4]; // g_th[i][j] = ∂G_i/∂θ_j
     let mut r_th = [[0.0; 4]; 2];
     for j in 0..4 {
@@ -653,15 +662,29 @@ mod tests {
     use super::*;
 
     fn tol() -> CellTol {
-        CellTol { feas: 1e-10, c2: 1e-12 }
+        CellTol {
+            feas: 1e-10,
+            c2: 1e-12,
+        }
     }
 
     #[test]
     fn free_cell_energy_matches_closed_form() {
         // math.md §4: ∫f''² = (4/h)(z0²+z0z1+z1²) − (12Δ/h)(z0+z1) + 12Δ²/h, h = 1.
-        let cell = Cell { lower: None, upper: None };
+        let cell = Cell {
+            lower: None,
+            upper: None,
+        };
         let th = [0.3, -1.2, 1.1, 0.7];
-        let s = solve_cell(&cell, &th, &tol(), Pruning::None, None, &mut CellStats::default()).unwrap();
+        let s = solve_cell(
+            &cell,
+            &th,
+            &tol(),
+            Pruning::None,
+            None,
+            &mut CellStats::default(),
+        )
+        .unwrap();
         let (z0, z1, d) = (th[1], th[3], th[2] - th[0]);
         let e = 4.0 * (z0 * z0 + z0 * z1 + z1 * z1) - 12.0 * d * (z0 + z1) + 12.0 * d * d;
         assert!((s.energy - e).abs() < 1e-12 * e.abs());
@@ -671,10 +694,24 @@ mod tests {
     #[test]
     fn touching_point_is_c2_and_tangent() {
         // Lower bound e = 0; data high at the ends with steep inward slopes forces contact.
-        let cell = Cell { lower: Some([0.0; 4]), upper: None };
+        let cell = Cell {
+            lower: Some([0.0; 4]),
+            upper: None,
+        };
         let th = [0.2, -2.0, 0.25, 2.0];
-        let s = solve_cell(&cell, &th, &tol(), Pruning::None, None, &mut CellStats::default()).unwrap();
-        assert!(matches!(s.shape, Shape::Touch(Side::Lower) | Shape::Subarc(Side::Lower)));
+        let s = solve_cell(
+            &cell,
+            &th,
+            &tol(),
+            Pruning::None,
+            None,
+            &mut CellStats::default(),
+        )
+        .unwrap();
+        assert!(matches!(
+            s.shape,
+            Shape::Touch(Side::Lower) | Shape::Subarc(Side::Lower)
+        ));
         let j = s.pw.jumps2();
         assert!(j[0].abs() < 1e-9 && j[1].abs() < 1e-9);
         // tangency: value and slope of the bound at the contact

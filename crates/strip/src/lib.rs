@@ -39,6 +39,10 @@
 //! assert!((s.eval(1.0) - 1.0).abs() < 1e-12);
 //! ```
 
+// Index loops mirror the formulas (several arrays indexed together); iterator chains would
+// obscure them.
+#![allow(clippy::needless_range_loop)]
+
 mod banded;
 mod bfgs;
 mod cell;

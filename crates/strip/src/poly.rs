@@ -98,7 +98,11 @@ pub(crate) fn det(m: &[Vec<Poly>]) -> Poly {
             })
             .collect();
         let term = m[0][j].mul(&det(&minor));
-        acc = if j % 2 == 0 { acc.add(&term) } else { acc.sub(&term) };
+        acc = if j % 2 == 0 {
+            acc.add(&term)
+        } else {
+            acc.sub(&term)
+        };
     }
     acc
 }

@@ -39,15 +39,16 @@ pub struct LowerBoundQp {
 pub fn lower_bound_qp(problem: &Problem, extra: &[f64]) -> LowerBoundQp {
     let t = &problem.t;
     let n = t.len();
-    let mut grid: Vec<(f64, Option<usize>)> = t.iter().enumerate().map(|(i, &v)| (v, Some(i))).collect();
+    let mut grid: Vec<(f64, Option<usize>)> =
+        t.iter().enumerate().map(|(i, &v)| (v, Some(i))).collect();
     grid.extend(
         extra
             .iter()
-            .filter(|x| **x > t[0] && **x < t[n - 1] && t.iter().all(|s| s != *x))
+            .filter(|x| **x > t[0] && **x < t[n - 1] && t.iter().all(|s| !s.total_cmp(x).is_eq()))
             .map(|&x| (x, None)),
     );
     grid.sort_by(|a, b| a.0.total_cmp(&b.0));
-    grid.dedup_by(|a, b| a.0 == b.0);
+    grid.dedup_by(|a, b| a.0.total_cmp(&b.0).is_eq());
     let mm = grid.len();
     let vi = |k: usize| k;
     let mi = |k: usize| mm + k;

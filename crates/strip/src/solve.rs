@@ -2,7 +2,9 @@
 //! assembled solution.
 
 use crate::banded::Band;
-use crate::cell::{hessian, solve_cell, Cell, CellSolution, CellStats, CellTol, Pruning, Shape, Side};
+use crate::cell::{
+    hessian, solve_cell, Cell, CellSolution, CellStats, CellTol, Pruning, Shape, Side,
+};
 use crate::error::Error;
 
 /// A bound of the strip.
@@ -28,7 +30,11 @@ impl Bound {
         Bound::Polyline(
             (0..=m)
                 .map(|k| {
-                    let t = if k == m { t1 } else { t0 + (t1 - t0) * k as f64 / m as f64 };
+                    let t = if k == m {
+                        t1
+                    } else {
+                        t0 + (t1 - t0) * k as f64 / m as f64
+                    };
                     [t, f(t)]
                 })
                 .collect(),
@@ -321,7 +327,7 @@ struct Eval {
     sols: Vec<CellSolution>,
 }
 
-type Hints = Vec<Option<(Shape, [f64; 2])>>;
+pub(crate) type Hints = Vec<Option<(Shape, [f64; 2])>>;
 
 impl Outer {
     fn unpack(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
@@ -515,12 +521,12 @@ fn hermite_eval(t0: f64, t1: f64, y0: f64, y1: f64, z0: f64, z1: f64, t: f64) ->
 /// naming the field or interval.
 pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     validate(problem)?;
-    if !(opts.boundary_margin >= 0.0 && opts.boundary_margin < 0.5) {
+    if !(0.0..0.5).contains(&opts.boundary_margin) {
         return Err(Error::BadOption {
             name: "boundary_margin",
         });
     }
-    if !(opts.gradient_tol > 0.0) {
+    if opts.gradient_tol.is_nan() || opts.gradient_tol <= 0.0 {
         return Err(Error::BadOption {
             name: "gradient_tol",
         });
@@ -529,7 +535,8 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     let n = t.len();
     let range = t[n - 1] - t[0];
     // grid: data sites plus interior polyline vertices
-    let mut grid: Vec<(f64, Option<usize>)> = t.iter().enumerate().map(|(i, &v)| (v, Some(i))).collect();
+    let mut grid: Vec<(f64, Option<usize>)> =
+        t.iter().enumerate().map(|(i, &v)| (v, Some(i))).collect();
     for b in [&problem.lower, &problem.upper] {
         if let Bound::Polyline(p) = b {
             for v in p {
@@ -744,7 +751,9 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
         }
     };
     let pg = projected_grad(&outer, &ev.1, &ev.2);
-    let mut sol = assemble(problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted)?;
+    let mut sol = assemble(
+        problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
+    )?;
     sol.newton_decrement = decrement;
     Ok(sol)
 }
@@ -846,10 +855,15 @@ fn newton(
                 }
             }
         }
-        let rhs: Vec<f64> = (0..nv).map(|k| if active[k] { 0.0 } else { -ev.grad[k] }).collect();
+        let rhs: Vec<f64> = (0..nv)
+            .map(|k| if active[k] { 0.0 } else { -ev.grad[k] })
+            .collect();
         newton_decrement = f64::INFINITY;
         let mut lambda = 0.0;
-        let maxdiag = hb.a.iter().fold(0.0f64, |m, r| m.max(r[0].abs())).max(1e-300);
+        let maxdiag =
+            hb.a.iter()
+                .fold(0.0f64, |m, r| m.max(r[0].abs()))
+                .max(1e-300);
         let dir = loop {
             let mut hl = hb.clone();
             for r in hl.a.iter_mut() {
@@ -858,7 +872,11 @@ fn newton(
             if let Some(d) = hl.solve(&rhs) {
                 break d;
             }
-            lambda = if lambda == 0.0 { 1e-12 * maxdiag } else { lambda * 10.0 };
+            lambda = if lambda == 0.0 {
+                1e-12 * maxdiag
+            } else {
+                lambda * 10.0
+            };
             if lambda > 1e6 * maxdiag {
                 break rhs.clone();
             }
@@ -877,10 +895,16 @@ fn newton(
         let diag_dir: Vec<f64> = (0..nv)
             .map(|k| {
                 let d = band.a[k][0];
-                if active[k] { 0.0 } else { -ev.grad[k] / if d > 0.0 { d } else { 1.0 } }
+                if active[k] {
+                    0.0
+                } else {
+                    -ev.grad[k] / if d > 0.0 { d } else { 1.0 }
+                }
             })
             .collect();
-        let grad_dir: Vec<f64> = (0..nv).map(|k| if active[k] { 0.0 } else { -ev.grad[k] }).collect();
+        let grad_dir: Vec<f64> = (0..nv)
+            .map(|k| if active[k] { 0.0 } else { -ev.grad[k] })
+            .collect();
         let mut accepted = None;
         for dir in [&dir, &diag_dir, &grad_dir] {
             let mut alpha = 1.0;
@@ -986,7 +1010,11 @@ fn assemble(
                 });
             }
             Shape::Pair(sd) => {
-                let other = if sd == Side::Lower { Side::Upper } else { Side::Lower };
+                let other = if sd == Side::Lower {
+                    Side::Upper
+                } else {
+                    Side::Lower
+                };
                 extra.push(ExtraKnot {
                     t: at(0),
                     kind: KnotKind::Touch(sd),

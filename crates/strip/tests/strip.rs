@@ -17,8 +17,12 @@ const Y16: [f64; 16] = [
 fn polygon_strip(y: &[f64], w: f64) -> Problem {
     let n = y.len();
     let t: Vec<f64> = (0..n).map(|i| i as f64).collect();
-    let lo = (0..n - 1).map(|i| [y[i] - w, y[i + 1] - y[i], 0.0, 0.0]).collect();
-    let up = (0..n - 1).map(|i| [y[i] + w, y[i + 1] - y[i], 0.0, 0.0]).collect();
+    let lo = (0..n - 1)
+        .map(|i| [y[i] - w, y[i + 1] - y[i], 0.0, 0.0])
+        .collect();
+    let up = (0..n - 1)
+        .map(|i| [y[i] + w, y[i + 1] - y[i], 0.0, 0.0])
+        .collect();
     Problem {
         t,
         y: y.to_vec(),
@@ -88,7 +92,11 @@ fn inactive_strip_gives_the_natural_spline() {
     }
     for (i, mi) in m.iter().enumerate() {
         let d2 = s.derivative(t[i].min(6.999_999_999), 2);
-        let d2 = if i == n - 1 { s.derivative(t[i] - 1e-300, 2) } else { d2 };
+        let d2 = if i == n - 1 {
+            s.derivative(t[i] - 1e-300, 2)
+        } else {
+            d2
+        };
         assert!((d2 - mi).abs() <= 1e-11 * (1.0 + mi.abs()), "M[{i}]");
     }
     // energy ∫ f''² of the natural spline from the moments: Σ h/3 (M_i² + M_i M_{i+1} + M_{i+1}²)
@@ -108,8 +116,13 @@ fn assert_structure(p: &Problem, s: &strip::Solution) {
     if p.end_slopes == [None, None] {
         assert!(!matches!(s.shapes[0], Shape::Subarc(_)));
         assert!(!matches!(s.shapes[n - 2], Shape::Subarc(_)));
-        let scale = 1.0 + (0..s.coefficients.len()).fold(0.0f64, |a, j| a.max(s.coefficients[j][2].abs()));
-        assert!(s.derivative(p.t[0], 2).abs() <= 1e-8 * scale, "f''(t1) = {}", s.derivative(p.t[0], 2));
+        let scale =
+            1.0 + (0..s.coefficients.len()).fold(0.0f64, |a, j| a.max(s.coefficients[j][2].abs()));
+        assert!(
+            s.derivative(p.t[0], 2).abs() <= 1e-8 * scale,
+            "f''(t1) = {}",
+            s.derivative(p.t[0], 2)
+        );
         let last = s.coefficients.last().unwrap();
         let hl = p.t[n - 1] - s.breaks[s.breaks.len() - 2];
         let f2_end = 2.0 * last[2] + 6.0 * last[3] * hl;
@@ -150,7 +163,11 @@ fn theorem_2_1_structure_and_every_kind_active() {
         let s = solve(&p, &Options::default()).unwrap();
         assert_structure(&p, &s);
         assert!(s.gradient_norm <= 1e-6, "gradient {}", s.gradient_norm);
-        assert!(s.newton_decrement <= 1e-13 * s.energy, "decrement {}", s.newton_decrement);
+        assert!(
+            s.newton_decrement <= 1e-13 * s.energy,
+            "decrement {}",
+            s.newton_decrement
+        );
     }
     // w = 0.1 activates every kind (checked, not assumed)
     let s = solve(&polygon_strip(&Y16, 0.1), &Options::default()).unwrap();
@@ -162,9 +179,16 @@ fn theorem_2_1_structure_and_every_kind_active() {
         Shape::Pair(Side::Lower),
         Shape::Pair(Side::Upper),
     ] {
-        assert!(s.shapes.contains(&shape), "{shape:?} not active: {:?}", s.shapes);
+        assert!(
+            s.shapes.contains(&shape),
+            "{shape:?} not active: {:?}",
+            s.shapes
+        );
     }
-    assert!(s.extra_knots.iter().any(|k| k.kind == KnotKind::SubarcStart(Side::Lower)));
+    assert!(s
+        .extra_knots
+        .iter()
+        .any(|k| k.kind == KnotKind::SubarcStart(Side::Lower)));
 }
 
 #[test]
@@ -175,8 +199,16 @@ fn optimal_against_an_independent_clarabel_lower_bound() {
         let grid = common::qp_grid(&p, 16, Some(&s));
         let lb = common::qp_lower_bound(&p, &grid);
         let rel = (s.energy - lb) / s.energy;
-        assert!(rel >= -1e-9, "energy {} below the lower bound {lb}", s.energy);
-        assert!(rel <= 1e-6, "energy {} vs lower bound {lb}: gap {rel:e}", s.energy);
+        assert!(
+            rel >= -1e-9,
+            "energy {} below the lower bound {lb}",
+            s.energy
+        );
+        assert!(
+            rel <= 1e-6,
+            "energy {} vs lower bound {lb}: gap {rel:e}",
+            s.energy
+        );
     }
 }
 
@@ -199,7 +231,9 @@ fn newton_and_bfgs_agree() {
 }
 
 /// One interval: (θ, lower, upper, expected shape).
-fn designed_cells() -> Vec<([f64; 4], Option<[f64; 4]>, Option<[f64; 4]>, Shape)> {
+type Design = ([f64; 4], Option<[f64; 4]>, Option<[f64; 4]>, Shape);
+
+fn designed_cells() -> Vec<Design> {
     let e = Some([0.0; 4]);
     let d = Some([1.0, 0.0, 0.0, 0.0]);
     vec![
@@ -226,7 +260,11 @@ fn each_candidate_kind_is_exact() {
         let r = solve_interval(h, th, lo, up, Pruning::None).unwrap();
         assert_eq!(r.shape, want, "cell {k}");
         assert!(r.certified, "cell {k}");
-        assert!(r.c2_residual <= 1e-9, "cell {k}: C² residual {}", r.c2_residual);
+        assert!(
+            r.c2_residual <= 1e-9,
+            "cell {k}: C² residual {}",
+            r.c2_residual
+        );
         assert!(r.margin >= -1e-12, "cell {k}: margin {}", r.margin);
         // Hermite data reproduced at both ends
         let (s0, c0) = r.pieces[0];
@@ -235,7 +273,10 @@ fn each_candidate_kind_is_exact() {
         let l = h - sl;
         let f1 = cl[0] + l * (cl[1] + l * (cl[2] + l * cl[3]));
         let d1 = cl[1] + l * (2.0 * cl[2] + 3.0 * l * cl[3]);
-        assert!((f1 - th[2]).abs() < 1e-12 && (d1 - th[3]).abs() < 1e-10, "cell {k}");
+        assert!(
+            (f1 - th[2]).abs() < 1e-12 && (d1 - th[3]).abs() < 1e-10,
+            "cell {k}"
+        );
         assert!(s0.abs() < 1e-300);
         // contact: f = bound and f' = bound' at every extra knot (tangency)
         for (j, &x) in r.knots.iter().enumerate() {
@@ -246,11 +287,18 @@ fn each_candidate_kind_is_exact() {
                 Shape::Pair(Side::Upper) => Side::Lower,
                 Shape::Free => unreachable!(),
             };
-            let g = if side == Side::Lower { lo.unwrap() } else { up.unwrap() };
+            let g = if side == Side::Lower {
+                lo.unwrap()
+            } else {
+                up.unwrap()
+            };
             let (_, c) = r.pieces[j + 1];
             let gv = g[0] + x * (g[1] + x * (g[2] + x * g[3]));
             let gd = g[1] + x * (2.0 * g[2] + 3.0 * x * g[3]);
-            assert!((c[0] - gv).abs() < 1e-12 && (c[1] - gd).abs() < 1e-10, "cell {k} knot {j}");
+            assert!(
+                (c[0] - gv).abs() < 1e-12 && (c[1] - gd).abs() < 1e-10,
+                "cell {k} knot {j}"
+            );
         }
         // on a subarc of a linear bound f'' = 0
         if let Shape::Subarc(_) = want {
@@ -364,9 +412,13 @@ fn end_slopes_and_a_cubic_bound_piece() {
     let t: Vec<f64> = (0..9).map(|i| 2.0 * i as f64).collect();
     let y = vec![1.0, 1.6, 0.8, 1.4, 1.0, 1.5, 0.7, 1.2, 0.9];
     let n = t.len();
-    let mut lo: Vec<[f64; 4]> = (0..n - 1).map(|i| [0.65 - 0.05 * (i % 2) as f64, 0.0, 0.0, 0.0]).collect();
+    let mut lo: Vec<[f64; 4]> = (0..n - 1)
+        .map(|i| [0.65 - 0.05 * (i % 2) as f64, 0.0, 0.0, 0.0])
+        .collect();
     lo[3] = [1.35, -0.05, 0.0, -0.05]; // cubic: 1.35 − 0.05 s − 0.05 s³ on [6, 8]
-    let up: Vec<[f64; 4]> = (0..n - 1).map(|i| [1.72 - 0.1 * (i % 3) as f64, 0.0, 0.0, 0.0]).collect();
+    let up: Vec<[f64; 4]> = (0..n - 1)
+        .map(|i| [1.72 - 0.1 * (i % 3) as f64, 0.0, 0.0, 0.0])
+        .collect();
     let p = Problem {
         t,
         y,
@@ -407,11 +459,19 @@ fn polyline_bounds_converge_as_the_grid_refines() {
         let s = solve(&p, &Options::default()).unwrap();
         assert!(common::max_violation(&p, &s, 8000) <= 1e-9);
         // converged: the Newton decrement (≈ Φ − min Φ) is negligible
-        assert!(s.newton_decrement <= 1e-12 * s.energy, "m = {m}: decrement {}", s.newton_decrement);
+        assert!(
+            s.newton_decrement <= 1e-12 * s.energy,
+            "m = {m}: decrement {}",
+            s.newton_decrement
+        );
         // optimal for the polyline problem: against the Clarabel lower bound of that problem
         let lb = common::qp_lower_bound(&p, &common::qp_grid(&p, 40, Some(&s)));
         let gap = (s.energy - lb) / s.energy;
-        assert!((-1e-9..=1e-6).contains(&gap), "m = {m}: energy {} lower bound {lb}", s.energy);
+        assert!(
+            (-1e-9..=1e-6).contains(&gap),
+            "m = {m}: energy {} lower bound {lb}",
+            s.energy
+        );
         energies.push(s.energy);
         sols.push(s);
     }
@@ -420,10 +480,12 @@ fn polyline_bounds_converge_as_the_grid_refines() {
     assert!(diffs[3] < diffs[0] * 0.25, "energies {energies:?}");
     // and the functions converge uniformly
     let last = sols.last().unwrap();
-    let dist = |s: &strip::Solution| (0..=400).fold(0.0f64, |a, k| {
-        let x = 4.0 * k as f64 / 400.0;
-        a.max((s.eval(x) - last.eval(x)).abs())
-    });
+    let dist = |s: &strip::Solution| {
+        (0..=400).fold(0.0f64, |a, k| {
+            let x = 4.0 * k as f64 / 400.0;
+            a.max((s.eval(x) - last.eval(x)).abs())
+        })
+    };
     assert!(dist(&sols[3]) < dist(&sols[0]), "no uniform convergence");
 }
 
@@ -466,35 +528,70 @@ fn bad_input_is_a_typed_error() {
     p.y[4] += 0.5;
     assert!(matches!(
         solve(&p, &Options::default()),
-        Err(Error::DataOutsideBounds { index: 4, side: Side::Upper, .. })
+        Err(Error::DataOutsideBounds {
+            index: 4,
+            side: Side::Upper,
+            ..
+        })
     ));
     let mut p = good.clone();
     if let Bound::Pieces(up) = &mut p.upper {
         up[6] = [-5.0, 0.0, 0.0, 0.0];
     }
-    assert!(matches!(solve(&p, &Options::default()), Err(Error::EmptyStrip { interval: 6, .. })));
+    assert!(matches!(
+        solve(&p, &Options::default()),
+        Err(Error::EmptyStrip { interval: 6, .. })
+    ));
     let mut p = good.clone();
     p.t[3] = p.t[2];
-    assert_eq!(solve(&p, &Options::default()), Err(Error::NonIncreasingSites { index: 3 }));
+    assert_eq!(
+        solve(&p, &Options::default()),
+        Err(Error::NonIncreasingSites { index: 3 })
+    );
     let mut p = good.clone();
     p.y[7] = f64::NAN;
-    assert_eq!(solve(&p, &Options::default()), Err(Error::NonFinite { field: "y", index: 7 }));
+    assert_eq!(
+        solve(&p, &Options::default()),
+        Err(Error::NonFinite {
+            field: "y",
+            index: 7
+        })
+    );
     let mut p = good.clone();
     if let Bound::Pieces(lo) = &mut p.lower {
         lo[3][2] = f64::INFINITY;
     }
     assert_eq!(
         solve(&p, &Options::default()),
-        Err(Error::NonFinite { field: "lower.pieces", index: 3 })
+        Err(Error::NonFinite {
+            field: "lower.pieces",
+            index: 3
+        })
     );
     let mut p = good.clone();
     if let Bound::Pieces(lo) = &mut p.lower {
         lo.pop();
     }
-    assert!(matches!(solve(&p, &Options::default()), Err(Error::LengthMismatch { field: "lower.pieces", .. })));
-    let p = Problem { t: vec![0.0], y: vec![1.0], ..Problem::default() };
-    assert_eq!(solve(&p, &Options::default()), Err(Error::TooFewPoints { len: 1 }));
+    assert!(matches!(
+        solve(&p, &Options::default()),
+        Err(Error::LengthMismatch {
+            field: "lower.pieces",
+            ..
+        })
+    ));
+    let p = Problem {
+        t: vec![0.0],
+        y: vec![1.0],
+        ..Problem::default()
+    };
+    assert_eq!(
+        solve(&p, &Options::default()),
+        Err(Error::TooFewPoints { len: 1 })
+    );
     let mut p = good;
     p.lower = Bound::Polyline(vec![[1.0, -5.0], [15.0, -5.0]]);
-    assert!(matches!(solve(&p, &Options::default()), Err(Error::PolylineDoesNotCover { side: Side::Lower })));
+    assert!(matches!(
+        solve(&p, &Options::default()),
+        Err(Error::PolylineDoesNotCover { side: Side::Lower })
+    ));
 }

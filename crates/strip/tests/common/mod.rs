@@ -2,7 +2,9 @@
 #![allow(dead_code)]
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
 use strip::{lower_bound_qp, Problem, Solution};
 
 /// min(primal, dual) objective of the lower-bound QP on the data sites plus `extra` points:
