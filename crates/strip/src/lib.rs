@@ -47,6 +47,7 @@ mod banded;
 mod bfgs;
 mod cell;
 mod error;
+pub mod examples;
 mod poly;
 mod qp;
 mod solve;

@@ -146,7 +146,8 @@ pub struct Solution {
     pub grid_values: Vec<f64>,
     /// The shape of the solution in each grid interval.
     pub shapes: Vec<Shape>,
-    /// The extra knots with their kinds.
+    /// The extra knots with their kinds, sorted by t. With polyline bounds this includes grid
+    /// vertices where f touches a bound (its value held ε·width inside, problem (10)).
     pub extra_knots: Vec<ExtraKnot>,
     /// ∫ f''².
     pub energy: f64,
@@ -1029,6 +1030,28 @@ fn assemble(
         }
     }
     breaks.push(*problem.t.last().unwrap_or(&0.0));
+    // contacts at grid vertices (§4): a free grid value held on its (ε-shrunk) box bound
+    for (j, v) in o.sv.iter().enumerate() {
+        if let Some(k) = *v {
+            let (lo, hi) = o.boxes[j];
+            let tol = 1e-12 * (1.0 + x[k].abs());
+            let side = if x[k] <= lo + tol {
+                Some(Side::Lower)
+            } else if x[k] >= hi - tol {
+                Some(Side::Upper)
+            } else {
+                None
+            };
+            if let Some(side) = side {
+                extra.push(ExtraKnot {
+                    t: grid[j].0,
+                    kind: KnotKind::Touch(side),
+                    interval: j.min(sols.len() - 1),
+                });
+            }
+        }
+    }
+    extra.sort_by(|a, b| a.t.total_cmp(&b.t));
     let slopes: Vec<f64> = grid
         .iter()
         .enumerate()
