@@ -76,7 +76,10 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         s16.energy,
         tq.as_secs_f64() / t16.as_secs_f64()
     );
-    println!("{:>8} {:>12} {:>10} {:>8} {:>14}", "n", "time [ms]", "active", "iters", "µs per point");
+    println!(
+        "{:>8} {:>12} {:>10} {:>8} {:>14}",
+        "n", "time [ms]", "active", "iters", "µs per point"
+    );
     let sizes: &[usize] = if opts.quick {
         &[1_000, 3_000]
     } else {
@@ -86,7 +89,9 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     for &n in sizes {
         let p = large(n);
         let s = solve(&p, &Options::default())?;
-        let t = time_median(if opts.quick { 1 } else { 3 }, || solve(&p, &Options::default()));
+        let t = time_median(if opts.quick { 1 } else { 3 }, || {
+            solve(&p, &Options::default())
+        });
         let active = s.shapes.iter().filter(|x| **x != Shape::Free).count();
         let per = t.as_secs_f64() * 1e6 / n as f64;
         println!(
@@ -97,7 +102,10 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
             per
         );
         if let Some((n0, p0)) = base {
-            println!("         growth vs n = {n0}: time per point ×{:.2}", per / p0);
+            println!(
+                "         growth vs n = {n0}: time per point ×{:.2}",
+                per / p0
+            );
         } else {
             base = Some((n, per));
         }
