@@ -39,7 +39,6 @@ fn bound_lines(p: &Problem, b: &Bound) -> Vec<Vec<[f64; 2]>> {
                     .collect()
             })
             .collect(),
-        _ => vec![],
     }
 }
 
