@@ -4,6 +4,10 @@
 //! to `-o FILE` (default stdout) and, with `--svg FILE`, a picture. Bad input gives exit code 2,
 //! one line on stderr naming the field (and index), and no output file.
 
+pub mod demo;
+pub mod refine;
+pub mod refine_types;
+
 use std::ffi::OsString;
 use std::fmt::Display;
 use std::io::{Read, Write};
@@ -97,6 +101,12 @@ enum Cmd {
     Strip(JsonArgs),
     /// Warren–Weimer natural cubic subdivision on [0, L].
     Natural(JsonArgs),
+    /// The main job on built-in data: solves the seeds' examples, writes SVGs, index.html and a summary.
+    Demo {
+        /// Output directory.
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+    },
 }
 
 /// What went wrong, and which exit code it maps to.
@@ -173,9 +183,28 @@ fn dispatch(
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
     match cli.command {
-        Cmd::Refine(a) => run_json::<NotYet>(&a, "refine", stdin, stdout, stderr),
+        Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
         Cmd::Strip(a) => run_json::<NotYet>(&a, "strip", stdin, stdout, stderr),
         Cmd::Natural(a) => run_json::<NotYet>(&a, "natural", stdin, stdout, stderr),
+        Cmd::Demo { out } => Ok(demo::run(&out, stdout, solve_example)?),
+    }
+}
+
+/// Solves one built-in example with its subcommand.
+fn solve_example(ex: &demo::Example) -> Result<demo::Summary, InputError> {
+    match ex.command {
+        "refine" => demo::solve_with::<refine::RefineCmd>(ex.problem, |s| {
+            format!(
+                "N = {}, E = {:.6}, KKT = {:.1e}",
+                s.points.len(),
+                s.energy,
+                s.kkt_residual
+            )
+        }),
+        other => Err(InputError::new(
+            "command",
+            format!("unknown example command {other}"),
+        )),
     }
 }
 
@@ -396,4 +425,57 @@ pub fn write_files(files: &[(PathBuf, Vec<u8>)]) -> Result<(), InputError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::refine_types::*;
+
+    fn parse(s: &str) -> Result<RefineProblem, String> {
+        let v: serde_json::Value = serde_json::from_str(s).map_err(|e| e.to_string())?;
+        serde_path_to_error::deserialize(v).map_err(|e| {
+            let p = e.path().to_string();
+            format!("{p} | {}", e.into_inner())
+        })
+    }
+
+    #[test]
+    fn refine_defaults_follow_the_contract() {
+        let p = parse(r#"{"points": [[0,0],[1,0],[0,1]]}"#).unwrap();
+        assert!(p.closed && p.knots.is_none());
+        assert_eq!((p.k, p.knot_iterations, p.levels, p.level_k), (3, 3, 0, 1));
+        assert_eq!(p.parametrization, ParamSpec::Centripetal);
+        assert_eq!(p.constraint, ConstraintSpec::Interpolate);
+        assert_eq!(p.derivative, DerivativeSpec::Bessel);
+        assert_eq!(p.boundary, BoundarySpec::Natural);
+        assert_eq!(p.solver, SolverSpec::Exact);
+    }
+
+    #[test]
+    fn refine_variants_parse() {
+        let p = parse(
+            r#"{"points": [[0,0],[1,0],[0,1]], "parametrization": {"exponent": 0.3},
+                "constraint": {"type": "balls", "radii": [0.1, 0, 0.2]},
+                "tangents": [null, {"type": "wedge", "direction": [1,0], "half_angle": 0.2}, {"type": "tension", "radius": 1}],
+                "boundary": {"type": "near_clamped", "start": [1,0], "end": [0,1], "radius": 0.1},
+                "derivative": "average", "solver": "paper"}"#,
+        )
+        .unwrap();
+        assert_eq!(p.parametrization, ParamSpec::Exponent(0.3));
+        assert!(matches!(p.constraint, ConstraintSpec::Balls { ref radii } if radii.len() == 3));
+        assert_eq!(p.solver, SolverSpec::Paper);
+    }
+
+    #[test]
+    fn unknown_fields_are_errors_with_paths() {
+        let e = parse(r#"{"points": [[0,0]], "bogus": 1}"#).unwrap_err();
+        assert!(e.contains("bogus"), "{e}");
+        let e = parse(
+            r#"{"points": [[0,0]], "constraint": {"type": "balls", "radii": [1], "extra": 2}}"#,
+        )
+        .unwrap_err();
+        assert!(e.contains("extra"), "{e}");
+        let e = parse(r#"{"points": [[0,0], [1, "x"]]}"#).unwrap_err();
+        assert!(e.starts_with("points[1][1]"), "{e}");
+    }
 }
