@@ -36,6 +36,15 @@ pub enum Side {
     Upper,
 }
 
+impl std::fmt::Display for Side {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Side::Lower => "lower",
+            Side::Upper => "upper",
+        })
+    }
+}
+
 impl Side {
     fn other(self) -> Side {
         match self {
@@ -722,8 +731,9 @@ mod tests {
 }
 
 pub(crate) mod internals {
-    //! One interval in real units, for tests and benchmarks.
+    //! One interval in real units, and the outer objective, for tests and benchmarks.
     use super::*;
+    pub use crate::solve::objective;
 
     /// The solution of one interval \[0, h\] with Hermite data θ = (y0, z0, y1, z1) and bounds
     /// given as cubics in s ∈ \[0, h\].

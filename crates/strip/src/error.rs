@@ -37,7 +37,7 @@ pub enum Error {
         index: usize,
     },
     /// Polyline abscissae not strictly increasing.
-    #[error("{side:?} polyline vertex {index} does not increase in t")]
+    #[error("{side} polyline vertex {index} does not increase in t")]
     NonIncreasingPolyline {
         /// Which bound.
         side: Side,
@@ -45,13 +45,15 @@ pub enum Error {
         index: usize,
     },
     /// A polyline bound does not cover [t_1, t_n].
-    #[error("{side:?} polyline does not cover [t_1, t_n]")]
+    #[error("{side} polyline does not cover [t_1, t_n]")]
     PolylineDoesNotCover {
         /// Which bound.
         side: Side,
     },
     /// Data point `index` lies outside its bound (condition (4) fails).
-    #[error("y[{index}] lies outside the {side:?} bound (by {by:e}) at the start/end of interval {interval}")]
+    #[error(
+        "y[{index}] lies outside the {side} bound (by {by:e}) at an end of interval {interval}"
+    )]
     DataOutsideBounds {
         /// Index of the data point.
         index: usize,

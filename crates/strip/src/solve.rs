@@ -521,6 +521,65 @@ fn hermite_eval(t0: f64, t1: f64, y0: f64, y1: f64, z0: f64, z1: f64, t: f64) ->
 /// the bounds, an empty strip) and an interval without a feasible candidate give an [`Error`]
 /// naming the field or interval.
 pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
+    let Setup {
+        outer,
+        grid,
+        x0: x,
+        shifted,
+    } = setup(problem, opts)?;
+    let m = grid.len();
+    let mut stats = CellStats::default();
+    let mut solves = 0usize;
+    let mut hints: Hints = vec![None; m - 1];
+    let (decrement, iterations, ev) = match opts.method {
+        Method::Newton => newton(&outer, x, opts, &mut hints, &mut stats, &mut solves)?,
+        Method::Bfgs => {
+            if outer.sv.iter().any(Option::is_some) {
+                return Err(Error::BadOption { name: "method" });
+            }
+            crate::bfgs::bfgs(&outer_ref(&outer), x, opts, &mut stats, &mut solves)?
+        }
+    };
+    let pg = projected_grad(&outer, &ev.1, &ev.2);
+    let mut sol = assemble(
+        problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
+    )?;
+    sol.newton_decrement = decrement;
+    Ok(sol)
+}
+
+/// Φ and ∇Φ at the unknowns `x` (slopes at the data sites without prescribed end slopes, in
+/// order; for polyline bounds also the free grid values, interleaved as (s_j, z_j)), and the
+/// starting point (natural/clamped spline). For tests of the analytic gradient.
+///
+/// # Errors
+/// As [`solve`]; `NoFeasibleCandidate` when x is outside Φ's domain.
+pub fn objective(problem: &Problem, x: Option<&[f64]>) -> Result<(f64, Vec<f64>, Vec<f64>), Error> {
+    let st = setup(problem, &Options::default())?;
+    let x = x.map_or_else(|| st.x0.clone(), <[f64]>::to_vec);
+    if x.len() != st.outer.nvar {
+        return Err(Error::LengthMismatch {
+            field: "x",
+            expected: st.outer.nvar,
+            found: x.len(),
+        });
+    }
+    let mut hints: Hints = vec![None; st.grid.len() - 1];
+    let e = st
+        .outer
+        .eval(&x, &mut hints, None, &mut CellStats::default(), &mut 0)
+        .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+    Ok((e.phi, e.grad, st.x0))
+}
+
+struct Setup {
+    outer: Outer,
+    grid: Vec<(f64, Option<usize>)>,
+    x0: Vec<f64>,
+    shifted: Vec<usize>,
+}
+
+fn setup(problem: &Problem, opts: &Options) -> Result<Setup, Error> {
     validate(problem)?;
     if !(0.0..0.5).contains(&opts.boundary_margin) {
         return Err(Error::BadOption {
@@ -739,24 +798,12 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
             };
         }
     }
-    let mut stats = CellStats::default();
-    let mut solves = 0usize;
-    let mut hints: Hints = vec![None; m - 1];
-    let (decrement, iterations, ev) = match opts.method {
-        Method::Newton => newton(&outer, x, opts, &mut hints, &mut stats, &mut solves)?,
-        Method::Bfgs => {
-            if outer.sv.iter().any(Option::is_some) {
-                return Err(Error::BadOption { name: "method" });
-            }
-            crate::bfgs::bfgs(&outer_ref(&outer), x, opts, &mut stats, &mut solves)?
-        }
-    };
-    let pg = projected_grad(&outer, &ev.1, &ev.2);
-    let mut sol = assemble(
-        problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
-    )?;
-    sol.newton_decrement = decrement;
-    Ok(sol)
+    Ok(Setup {
+        outer,
+        grid,
+        x0: x,
+        shifted,
+    })
 }
 
 /// Borrowed view for the BFGS module.
