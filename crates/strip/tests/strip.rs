@@ -639,3 +639,44 @@ fn outer_gradient_matches_finite_differences() {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Random small problems (jumping linear bounds, optional end slopes): the solution is
+    /// feasible, C², and its energy lies within 1e-6 above Clarabel's lower bound.
+    #[test]
+    fn random_problems_are_optimal(
+        ys in proptest::collection::vec(-1.0f64..1.0, 6),
+        hs in proptest::collection::vec(0.3f64..2.0, 5),
+        below in proptest::collection::vec((0.05f64..0.6, -0.3f64..0.3), 5),
+        above in proptest::collection::vec((0.05f64..0.6, -0.3f64..0.3), 5),
+        s0 in proptest::option::of(-3.0f64..3.0),
+        s1 in proptest::option::of(-3.0f64..3.0),
+    ) {
+        let mut t = vec![0.0];
+        for h in &hs {
+            t.push(t.last().unwrap() + h);
+        }
+        // bounds: through y_i − w and y_{i+1} − w' (kept below both data values), tilted
+        let lo: Vec<[f64; 4]> = (0..5).map(|i| {
+            let (w, tilt) = below[i];
+            let a = ys[i] - w - tilt.max(0.0);
+            let b = ys[i + 1] - w + tilt.min(0.0);
+            [a, (b - a) / hs[i], 0.0, 0.0]
+        }).collect();
+        let up: Vec<[f64; 4]> = (0..5).map(|i| {
+            let (w, tilt) = above[i];
+            let a = ys[i] + w + tilt.max(0.0);
+            let b = ys[i + 1] + w - tilt.min(0.0);
+            [a, (b - a) / hs[i], 0.0, 0.0]
+        }).collect();
+        let p = Problem { t, y: ys, lower: Bound::Pieces(lo), upper: Bound::Pieces(up), end_slopes: [s0, s1] };
+        let s = solve(&p, &Options::default()).unwrap();
+        prop_assert!(common::max_violation(&p, &s, 5000) <= 1e-10);
+        prop_assert!(s.uncertified.is_empty());
+        let lb = common::qp_lower_bound(&p, &common::qp_grid(&p, 16, Some(&s)));
+        let gap = (s.energy - lb) / s.energy.max(1e-12);
+        prop_assert!((-1e-8..=1e-6).contains(&gap), "energy {} lower bound {lb}", s.energy);
+    }
+}
