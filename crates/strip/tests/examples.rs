@@ -25,6 +25,18 @@ fn example_5_1_has_touches_a_subarc_and_a_pair() {
         s.shapes
     );
     assert!(common::max_violation(&p, &s, 10_000) <= 1e-10);
+    // the same structure as the paper's Figure 2: nine extra knots — five single touching
+    // points, one subarc in the 12th interval, one touching pair in the 14th
+    assert_eq!(s.extra_knots.len(), 9);
+    assert_eq!(
+        s.shapes
+            .iter()
+            .filter(|x| matches!(x, Shape::Touch(_)))
+            .count(),
+        5
+    );
+    assert!(matches!(s.shapes[11], Shape::Subarc(_)));
+    assert!(matches!(s.shapes[13], Shape::Pair(_)));
     // the unconstrained spline leaves the strip
     let free = strip::Problem {
         lower: strip::Bound::None,
