@@ -680,3 +680,25 @@ proptest! {
         prop_assert!((-1e-8..=1e-6).contains(&gap), "energy {} lower bound {lb}", s.energy);
     }
 }
+
+#[test]
+fn two_points_without_bounds() {
+    // natural ends: the straight line (∫f''² = 0); clamped: the Hermite cubic, whose energy is
+    // the closed form (4/h)(z0² + z0z1 + z1²) − (12Δ/h)(z0 + z1) + 12Δ²/h (math.md §4)
+    let p = Problem {
+        t: vec![1.0, 3.0],
+        y: vec![0.5, 1.5],
+        ..Problem::default()
+    };
+    let s = solve(&p, &Options::default()).unwrap();
+    assert!(s.energy.abs() < 1e-24 && (s.eval(2.0) - 1.0).abs() < 1e-15);
+    let p = Problem {
+        end_slopes: [Some(-1.0), Some(2.0)],
+        ..p
+    };
+    let s = solve(&p, &Options::default()).unwrap();
+    let (h, d, z0, z1) = (2.0, 0.5, -1.0, 2.0);
+    let e = 4.0 / h * (z0 * z0 + z0 * z1 + z1 * z1) - 12.0 * d / h * (z0 + z1) + 12.0 * d * d / h;
+    assert!((s.energy - e).abs() < 1e-13 * e);
+    assert_eq!(s.iterations, 0);
+}
