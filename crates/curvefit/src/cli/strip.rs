@@ -109,7 +109,11 @@ fn kind_name(k: strip::KnotKind) -> String {
 fn input_error(p: &Problem, e: &strip::Error) -> InputError {
     use strip::Error as E;
     let bound_field = |s: strip::Side| {
-        let b = if s == strip::Side::Lower { &p.lower } else { &p.upper };
+        let b = if s == strip::Side::Lower {
+            &p.lower
+        } else {
+            &p.upper
+        };
         match b {
             Some(BoundSpec::Polyline(_)) => format!("{}.polyline", side_name(s)),
             _ => format!("{}.pieces", side_name(s)),
@@ -137,7 +141,9 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
         }
         E::NoFeasibleCandidate { interval } => InputError::new(
             format!("lower.pieces[{interval}]"),
-            format!("{e} (cubic bounds with more than two contacts per interval are not supported)"),
+            format!(
+                "{e} (cubic bounds with more than two contacts per interval are not supported)"
+            ),
         ),
         _ => InputError::new("", e),
     }
@@ -161,8 +167,8 @@ impl Command for Strip {
             upper: bound(&p.upper),
             end_slopes: p.end_slopes.unwrap_or([None, None]),
         };
-        let s = strip::solve(&problem, &strip::Options::default())
-            .map_err(|e| input_error(p, &e))?;
+        let s =
+            strip::solve(&problem, &strip::Options::default()).map_err(|e| input_error(p, &e))?;
         Ok(Solution {
             breaks: s.breaks,
             coefficients: s.coefficients,
@@ -297,9 +303,7 @@ mod tests {
 
     #[test]
     fn errors_name_the_field() {
-        let p = parse(
-            r#"{"t": [0, 1, 2], "y": [0, 1, 0], "lower": {"pieces": [[0,0,0,0]]}}"#,
-        );
+        let p = parse(r#"{"t": [0, 1, 2], "y": [0, 1, 0], "lower": {"pieces": [[0,0,0,0]]}}"#);
         assert_eq!(Strip::solve(&p).unwrap_err().field, "lower.pieces");
         let p = parse(r#"{"t": [0, 1, 1], "y": [0, 1, 0]}"#);
         assert_eq!(Strip::solve(&p).unwrap_err().field, "t[2]");
@@ -311,6 +315,8 @@ mod tests {
             r#"{"t": [0, 1, 2], "y": [0, 0.5, 0], "lower": {"pieces": [[-1,0,0,0],[2,0,0,0]]}, "upper": {"pieces": [[1,0,0,0],[1,0,0,0]]}}"#,
         );
         assert_eq!(Strip::solve(&p).unwrap_err().field, "lower.pieces[1]");
-        assert!(serde_json::from_str::<Problem>(r#"{"t": [0, 1], "y": [0, 1], "extra": 1}"#).is_err());
+        assert!(
+            serde_json::from_str::<Problem>(r#"{"t": [0, 1], "y": [0, 1], "extra": 1}"#).is_err()
+        );
     }
 }
