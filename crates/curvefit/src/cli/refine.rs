@@ -231,68 +231,6 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     Ok(d)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn problem(json: &str) -> RefineProblem {
-        serde_json::from_str(json).unwrap()
-    }
-
-    #[test]
-    fn split_counts_match_3_1() {
-        assert_eq!(split_count(5, 3, true), Some(20));
-        assert_eq!(split_count(5, 3, false), Some(17));
-        assert_eq!(split_count(usize::MAX, 3, true), None);
-    }
-
-    #[test]
-    fn validation_names_fields_and_indices() {
-        let cases = [
-            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
-            (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
-            (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
-                "knots[2]",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
-                "knots",
-            ),
-            (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,-1,1]}}"#,
-                "constraint.radii[1]",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,1]}}"#,
-                "constraint.radii",
-            ),
-            (r#"{"points": [[0,0],[1,0],[0,1]], "levels": 40}"#, "levels"),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "tangents": [null, {"type": "wedge", "direction": [0,0], "half_angle": 0.1}, null]}"#,
-                "tangents[1].direction",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
-                "boundary",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "closed": false, "boundary": {"type": "clamped", "start": [1], "end": [1,0]}}"#,
-                "boundary.start",
-            ),
-        ];
-        for (json, field) in cases {
-            let e = validate(&problem(json)).unwrap_err();
-            assert_eq!(e.field, field, "{json}: {e}");
-        }
-        assert_eq!(
-            validate(&problem(r#"{"points": [[0,0],[1,0],[0,1]]}"#)),
-            Ok(2)
-        );
-    }
-}
 
 /// The `refine` subcommand.
 pub enum RefineCmd {}
@@ -463,4 +401,67 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         r.active.len()
     ));
     fig.to_svg()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn problem(json: &str) -> RefineProblem {
+        serde_json::from_str(json).unwrap()
+    }
+
+    #[test]
+    fn split_counts_match_3_1() {
+        assert_eq!(split_count(5, 3, true), Some(20));
+        assert_eq!(split_count(5, 3, false), Some(17));
+        assert_eq!(split_count(usize::MAX, 3, true), None);
+    }
+
+    #[test]
+    fn validation_names_fields_and_indices() {
+        let cases = [
+            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
+            (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
+            (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
+                "knots[2]",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
+                "knots",
+            ),
+            (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,-1,1]}}"#,
+                "constraint.radii[1]",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,1]}}"#,
+                "constraint.radii",
+            ),
+            (r#"{"points": [[0,0],[1,0],[0,1]], "levels": 40}"#, "levels"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "tangents": [null, {"type": "wedge", "direction": [0,0], "half_angle": 0.1}, null]}"#,
+                "tangents[1].direction",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
+                "boundary",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": false, "boundary": {"type": "clamped", "start": [1], "end": [1,0]}}"#,
+                "boundary.start",
+            ),
+        ];
+        for (json, field) in cases {
+            let e = validate(&problem(json)).unwrap_err();
+            assert_eq!(e.field, field, "{json}: {e}");
+        }
+        assert_eq!(
+            validate(&problem(r#"{"points": [[0,0],[1,0],[0,1]]}"#)),
+            Ok(2)
+        );
+    }
 }
