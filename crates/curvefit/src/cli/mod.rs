@@ -303,6 +303,34 @@ fn solve_example(ex: &demo::Example) -> Result<demo::Summary, InputError> {
                 s.kkt_residual
             )
         }),
+        "strip" => demo::solve_with::<strip::Strip>(ex.problem, |s| {
+            format!(
+                "‖f''‖ = {:.6}, ∫f''² = {:.6}, {} extra knots, {} iterations, |∇Φ| = {:.1e}",
+                s.norm,
+                s.energy,
+                s.extra_knots.len(),
+                s.iterations,
+                s.gradient_norm
+            )
+        }),
+        "natural" => demo::solve_with::<natural::NaturalCmd>(ex.problem, |s| {
+            let last = s.levels.last().map_or(f64::NAN, |l| l.energy);
+            format!(
+                "level {} energy {:.6} → exact limit {:.6}",
+                s.levels.len().saturating_sub(1),
+                last,
+                s.limit_energy
+            )
+        }),
+        "surface" => demo::solve_with::<surface::SurfaceCmd>(ex.problem, |s| {
+            format!(
+                "{} × {} grid after {} levels, {} quads",
+                s.rows,
+                s.cols,
+                s.levels,
+                s.quads.len()
+            )
+        }),
         other => Err(InputError::new(
             "command",
             format!("unknown example command {other}"),

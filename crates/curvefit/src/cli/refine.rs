@@ -231,7 +231,6 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     Ok(d)
 }
 
-
 /// The `refine` subcommand.
 pub enum RefineCmd {}
 
