@@ -1,3 +1,4 @@
 //! curvefit facade.
 
 pub mod cli;
+pub mod plot;

@@ -1,2 +1,13 @@
-//! The `curvefit` command-line tool.
-fn main() {}
+//! The `curvefit` command-line tool. See `curvefit --help` and the README.
+
+fn main() {
+    // Solvers report failures as values; a panic would be a bug. Keep its report to one line.
+    std::panic::set_hook(Box::new(|_| {}));
+    let code = curvefit::cli::run(
+        std::env::args_os(),
+        &mut std::io::stdin().lock(),
+        &mut std::io::stdout().lock(),
+        &mut std::io::stderr().lock(),
+    );
+    std::process::exit(code);
+}

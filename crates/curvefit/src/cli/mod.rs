@@ -4,7 +4,16 @@
 //! to `-o FILE` (default stdout) and, with `--svg FILE`, a picture. Bad input gives exit code 2,
 //! one line on stderr naming the field (and index), and no output file.
 
+pub mod refine;
+pub mod refine_types;
+
+use std::ffi::OsString;
 use std::fmt::Display;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand};
 
 /// A bad-input error: the field path (e.g. `points[3]`, `constraint.radii[2]`) and what is wrong.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -47,4 +56,400 @@ pub trait Command {
     fn solve(problem: &Self::Problem) -> Result<Self::Solution, InputError>;
     /// The picture for `--svg`, or `None`.
     fn svg(problem: &Self::Problem, solution: &Self::Solution) -> Option<String>;
+}
+
+/// Exit code for bad input (and any other refusal): nothing was written.
+pub const EXIT_BAD_INPUT: i32 = 2;
+/// Exit code for an internal error (a bug): nothing was written.
+pub const EXIT_INTERNAL: i32 = 70;
+
+/// Largest problem file accepted (bytes); larger input is refused before parsing.
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+#[derive(Parser, Debug)]
+#[command(name = "curvefit", version, about = "Variational curve refinement and constrained spline interpolation", long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+/// Options shared by the JSON subcommands.
+#[derive(Args, Debug, Clone, Default)]
+pub struct JsonArgs {
+    /// Problem file (JSON), or `-` for standard input. May be omitted when `--points` is given.
+    pub problem: Option<PathBuf>,
+    /// Write the JSON result here (default: standard output).
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Also draw the result as an SVG picture.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
+    /// Read the problem's `points` from a CSV file (one point per line, comma-separated coordinates).
+    #[arg(long = "points", value_name = "FILE.csv")]
+    pub points_csv: Option<PathBuf>,
+    /// Print one JSON line {"parse_s", "solve_s", "write_s"} on standard error.
+    #[arg(long)]
+    pub timings: bool,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Kersey variational refinement (interpolation, balls, smoothing, half-spaces, tangents).
+    Refine(JsonArgs),
+    /// Best interpolation in a strip (Dontchev–Kolmanovsky).
+    Strip(JsonArgs),
+    /// Warren–Weimer natural cubic subdivision on [0, L].
+    Natural(JsonArgs),
+}
+
+/// What went wrong, and which exit code it maps to.
+#[derive(Debug)]
+pub struct Failure {
+    /// Exit code.
+    pub code: i32,
+    /// The one-line message.
+    pub error: InputError,
+}
+
+impl From<InputError> for Failure {
+    fn from(error: InputError) -> Self {
+        Failure {
+            code: EXIT_BAD_INPUT,
+            error,
+        }
+    }
+}
+
+/// Runs the command line `args` (including the program name) with the given streams and returns
+/// the process exit code. Never panics on bad input; a panic inside a solver is caught and
+/// reported as an internal error with nothing written.
+pub fn run<I, T>(
+    args: I,
+    stdin: &mut dyn Read,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
+            let text = e.render().to_string();
+            if code == 0 {
+                let _ = stdout.write_all(text.as_bytes());
+            } else {
+                let first = text
+                    .lines()
+                    .find(|l| !l.trim().is_empty())
+                    .unwrap_or("invalid arguments");
+                let _ = writeln!(stderr, "{first}");
+            }
+            return code;
+        }
+    };
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        dispatch(cli, stdin, stdout, stderr)
+    }));
+    match result {
+        Ok(Ok(())) => 0,
+        Ok(Err(f)) => {
+            let _ = writeln!(stderr, "error: {}", f.error);
+            f.code
+        }
+        Err(_) => {
+            let _ = writeln!(
+                stderr,
+                "error: internal error (a bug in curvefit); nothing was written"
+            );
+            EXIT_INTERNAL
+        }
+    }
+}
+
+fn dispatch(
+    cli: Cli,
+    stdin: &mut dyn Read,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> Result<(), Failure> {
+    match cli.command {
+        Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
+        Cmd::Strip(a) => run_json::<NotYet>(&a, "strip", stdin, stdout, stderr),
+        Cmd::Natural(a) => run_json::<NotYet>(&a, "natural", stdin, stdout, stderr),
+    }
+}
+
+/// Placeholder for subcommands whose solver has not been wired in yet: refuses every problem.
+enum NotYet {}
+
+impl Command for NotYet {
+    type Problem = serde_json::Value;
+    type Solution = serde_json::Value;
+    fn solve(_: &Self::Problem) -> Result<Self::Solution, InputError> {
+        Err(InputError::new(
+            "",
+            "this subcommand is not available in this build yet",
+        ))
+    }
+    fn svg(_: &Self::Problem, _: &Self::Solution) -> Option<String> {
+        None
+    }
+}
+
+/// The generic JSON pipeline: read → parse (with field paths) → solve → serialize → write
+/// atomically (temporary file + rename, all outputs prepared before any is renamed).
+pub fn run_json<C: Command>(
+    args: &JsonArgs,
+    name: &str,
+    stdin: &mut dyn Read,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> Result<(), Failure> {
+    let t0 = Instant::now();
+    let problem: C::Problem = parse_problem::<C>(args, stdin)?;
+    let t1 = Instant::now();
+    let solution = C::solve(&problem)?;
+    let t2 = Instant::now();
+    let json = serde_json::to_string(&solution)
+        .map_err(|e| InputError::new("", format!("cannot serialize the {name} result: {e}")))?;
+    let svg = match &args.svg {
+        Some(_) => C::svg(&problem, &solution),
+        None => None,
+    };
+    let mut outputs: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    if let (Some(path), Some(svg)) = (&args.svg, svg) {
+        outputs.push((path.clone(), svg.into_bytes()));
+    } else if let Some(path) = &args.svg {
+        return Err(InputError::new(
+            "--svg",
+            format!(
+                "`{name}` has no picture for this problem ({})",
+                path.display()
+            ),
+        )
+        .into());
+    }
+    match &args.output {
+        Some(path) => outputs.push((path.clone(), (json + "\n").into_bytes())),
+        None => {
+            write_files(&outputs)?;
+            stdout
+                .write_all(json.as_bytes())
+                .and_then(|_| stdout.write_all(b"\n"))
+                .map_err(|e| {
+                    InputError::new("-o", format!("cannot write to standard output: {e}"))
+                })?;
+            outputs.clear();
+        }
+    }
+    write_files(&outputs)?;
+    let t3 = Instant::now();
+    if args.timings {
+        let line = serde_json::json!({
+            "parse_s": (t1 - t0).as_secs_f64(),
+            "solve_s": (t2 - t1).as_secs_f64(),
+            "write_s": (t3 - t2).as_secs_f64(),
+        });
+        let _ = writeln!(stderr, "{line}");
+    }
+    Ok(())
+}
+
+/// Reads and parses the problem; `--points FILE.csv` supplies (or must not duplicate) `points`.
+fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C::Problem, Failure> {
+    let text = match &args.problem {
+        Some(p) if p.as_os_str() == "-" => read_limited(stdin, "standard input")?,
+        Some(p) => {
+            let file = std::fs::File::open(p).map_err(|e| {
+                InputError::new("problem", format!("cannot open {}: {e}", p.display()))
+            })?;
+            read_limited(&mut &file, &p.display().to_string())?
+        }
+        None if args.points_csv.is_some() => "{}".to_string(),
+        None => {
+            return Err(InputError::new(
+                "problem",
+                "no problem file given (a path, or - for standard input)",
+            )
+            .into())
+        }
+    };
+    let mut value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
+    if let Some(csv) = &args.points_csv {
+        let rows = read_csv_points(csv)?;
+        let obj = value
+            .as_object_mut()
+            .ok_or_else(|| InputError::new("problem", "the problem must be a JSON object"))?;
+        if obj.contains_key("points") {
+            return Err(
+                InputError::new("points", "given both in the problem and by --points").into(),
+            );
+        }
+        obj.insert("points".into(), serde_json::Value::from(rows));
+    }
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." { String::new() } else { path };
+        InputError::new(field, e.into_inner()).into()
+    })
+}
+
+fn read_limited(r: &mut dyn Read, what: &str) -> Result<String, Failure> {
+    let mut buf = String::new();
+    let n = r
+        .take(MAX_INPUT_BYTES + 1)
+        .read_to_string(&mut buf)
+        .map_err(|e| InputError::new("problem", format!("cannot read {what}: {e}")))?;
+    if n as u64 > MAX_INPUT_BYTES {
+        return Err(InputError::new(
+            "problem",
+            format!("{what} is larger than {MAX_INPUT_BYTES} bytes"),
+        )
+        .into());
+    }
+    Ok(buf)
+}
+
+/// Parses a CSV of points: one point per line, coordinates separated by commas (or whitespace);
+/// blank lines and lines starting with `#` are skipped; all rows must have the same length.
+pub fn parse_csv_points(text: &str) -> Result<Vec<Vec<f64>>, InputError> {
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    for (lineno, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let idx = rows.len();
+        let row = line
+            .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .map(|s| {
+                s.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        InputError::new(
+                            format!("points[{idx}]"),
+                            format!("line {}: `{s}` is not a finite number", lineno + 1),
+                        )
+                    })
+            })
+            .collect::<Result<Vec<f64>, _>>()?;
+        if let Some(first) = rows.first() {
+            if first.len() != row.len() {
+                return Err(InputError::new(
+                    format!("points[{idx}]"),
+                    format!(
+                        "line {}: {} coordinates, expected {}",
+                        lineno + 1,
+                        row.len(),
+                        first.len()
+                    ),
+                ));
+            }
+        }
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+fn read_csv_points(path: &Path) -> Result<Vec<Vec<f64>>, Failure> {
+    let file = std::fs::File::open(path)
+        .map_err(|e| InputError::new("--points", format!("cannot open {}: {e}", path.display())))?;
+    let text = read_limited(&mut &file, &path.display().to_string())?;
+    Ok(parse_csv_points(&text)?)
+}
+
+/// Writes every `(path, bytes)` to a temporary sibling first, then renames them all; on any
+/// failure the temporaries are removed and no target file is created or changed.
+pub fn write_files(files: &[(PathBuf, Vec<u8>)]) -> Result<(), InputError> {
+    let mut temps: Vec<(PathBuf, &Path)> = Vec::new();
+    let cleanup = |temps: &[(PathBuf, &Path)]| {
+        for (t, _) in temps {
+            let _ = std::fs::remove_file(t);
+        }
+    };
+    for (k, (path, bytes)) in files.iter().enumerate() {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let tmp = path.with_file_name(format!(".{name}.{}.{k}.tmp", std::process::id()));
+        if let Err(e) = std::fs::write(&tmp, bytes) {
+            cleanup(&temps);
+            let _ = std::fs::remove_file(&tmp);
+            return Err(InputError::new(
+                "output",
+                format!("cannot write {}: {e}", path.display()),
+            ));
+        }
+        temps.push((tmp, path));
+    }
+    for (tmp, path) in &temps {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            cleanup(&temps);
+            return Err(InputError::new(
+                "output",
+                format!("cannot write {}: {e}", path.display()),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::refine_types::*;
+
+    fn parse(s: &str) -> Result<RefineProblem, String> {
+        let v: serde_json::Value = serde_json::from_str(s).map_err(|e| e.to_string())?;
+        serde_path_to_error::deserialize(v).map_err(|e| {
+            let p = e.path().to_string();
+            format!("{p} | {}", e.into_inner())
+        })
+    }
+
+    #[test]
+    fn refine_defaults_follow_the_contract() {
+        let p = parse(r#"{"points": [[0,0],[1,0],[0,1]]}"#).unwrap();
+        assert!(p.closed && p.knots.is_none());
+        assert_eq!((p.k, p.knot_iterations, p.levels, p.level_k), (3, 3, 0, 1));
+        assert_eq!(p.parametrization, ParamSpec::Centripetal);
+        assert_eq!(p.constraint, ConstraintSpec::Interpolate);
+        assert_eq!(p.derivative, DerivativeSpec::Bessel);
+        assert_eq!(p.boundary, BoundarySpec::Natural);
+        assert_eq!(p.solver, SolverSpec::Exact);
+    }
+
+    #[test]
+    fn refine_variants_parse() {
+        let p = parse(
+            r#"{"points": [[0,0],[1,0],[0,1]], "parametrization": {"exponent": 0.3},
+                "constraint": {"type": "balls", "radii": [0.1, 0, 0.2]},
+                "tangents": [null, {"type": "wedge", "direction": [1,0], "half_angle": 0.2}, {"type": "tension", "radius": 1}],
+                "boundary": {"type": "near_clamped", "start": [1,0], "end": [0,1], "radius": 0.1},
+                "derivative": "average", "solver": "paper"}"#,
+        )
+        .unwrap();
+        assert_eq!(p.parametrization, ParamSpec::Exponent(0.3));
+        assert!(matches!(p.constraint, ConstraintSpec::Balls { ref radii } if radii.len() == 3));
+        assert_eq!(p.solver, SolverSpec::Paper);
+    }
+
+    #[test]
+    fn unknown_fields_are_errors_with_paths() {
+        let e = parse(r#"{"points": [[0,0]], "bogus": 1}"#).unwrap_err();
+        assert!(e.contains("bogus"), "{e}");
+        let e = parse(
+            r#"{"points": [[0,0]], "constraint": {"type": "balls", "radii": [1], "extra": 2}}"#,
+        )
+        .unwrap_err();
+        assert!(e.contains("extra"), "{e}");
+        let e = parse(r#"{"points": [[0,0], [1, "x"]]}"#).unwrap_err();
+        assert!(e.starts_with("points[1][1]"), "{e}");
+    }
 }

@@ -1,0 +1,315 @@
+//! `curvefit refine`: validation of the JSON problem and the call into `refine`.
+
+use super::refine_types::*;
+use super::InputError;
+
+/// Largest refined problem accepted: vertices × dimension of the final curve. A problem beyond it
+/// is refused before any allocation (it would need gigabytes of memory and output).
+pub const MAX_REFINED_COORDS: usize = 50_000_000;
+
+/// Number of vertices after a `k`-level split of `n` data points (open or closed), or `None` on
+/// overflow.
+pub fn split_count(n: usize, k: usize, closed: bool) -> Option<usize> {
+    let spans = if closed { n } else { n.checked_sub(1)? };
+    let v = spans.checked_mul(k.checked_add(1)?)?;
+    if closed {
+        Some(v)
+    } else {
+        v.checked_add(1)
+    }
+}
+
+fn finite(field: String, x: f64) -> Result<f64, InputError> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(InputError::new(field, "must be a finite number"))
+    }
+}
+
+fn nonneg(field: String, x: f64) -> Result<f64, InputError> {
+    let x = finite(field.clone(), x)?;
+    if x < 0.0 {
+        return Err(InputError::new(field, format!("must be ≥ 0, got {x}")));
+    }
+    Ok(x)
+}
+
+fn vector(field: String, v: &[f64], d: usize) -> Result<(), InputError> {
+    if v.len() != d {
+        return Err(InputError::new(
+            field,
+            format!("has {} coordinates, expected {d}", v.len()),
+        ));
+    }
+    for (j, &x) in v.iter().enumerate() {
+        finite(format!("{field}[{j}]"), x)?;
+    }
+    Ok(())
+}
+
+fn nonzero_vector(field: String, v: &[f64], d: usize) -> Result<(), InputError> {
+    vector(field.clone(), v, d)?;
+    if v.iter().all(|&x| x == 0.0) {
+        return Err(InputError::new(field, "must be a non-zero vector"));
+    }
+    Ok(())
+}
+
+fn halfspace(field: String, h: &HalfSpaceSpec, d: usize) -> Result<(), InputError> {
+    nonzero_vector(format!("{field}.normal"), &h.normal, d)?;
+    finite(format!("{field}.offset"), h.offset)?;
+    Ok(())
+}
+
+fn per_point_len(field: &str, got: usize, n: usize) -> Result<(), InputError> {
+    if got != n {
+        return Err(InputError::new(
+            field,
+            format!("has {got} entries, expected one per point ({n})"),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks everything that can be checked without solving; returns the dimension d.
+///
+/// # Errors
+/// An [`InputError`] naming the first offending field and index.
+pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
+    let n = p.points.len();
+    let min_n = if p.closed { 3 } else { 2 };
+    if n < min_n {
+        return Err(InputError::new(
+            "points",
+            format!(
+                "{} curves need at least {min_n} points, got {n}",
+                if p.closed { "closed" } else { "open" }
+            ),
+        ));
+    }
+    let d = p.points[0].len();
+    if d == 0 {
+        return Err(InputError::new(
+            "points[0]",
+            "has no coordinates (dimension must be at least 1)",
+        ));
+    }
+    for (i, q) in p.points.iter().enumerate() {
+        vector(format!("points[{i}]"), q, d)?;
+    }
+    let spans = if p.closed { n } else { n - 1 };
+    for i in 0..spans {
+        let j = (i + 1) % n;
+        if p.points[i] == p.points[j] {
+            return Err(InputError::new(
+                format!("points[{j}]"),
+                format!(
+                    "coincides with points[{i}] (consecutive points must differ: zero-length span)"
+                ),
+            ));
+        }
+    }
+    if let Some(t) = &p.knots {
+        let want = if p.closed { n + 1 } else { n };
+        if t.len() != want {
+            return Err(InputError::new(
+                "knots",
+                format!("has {} values, expected {want}", t.len()),
+            ));
+        }
+        for (i, &x) in t.iter().enumerate() {
+            finite(format!("knots[{i}]"), x)?;
+            if i > 0 && x <= t[i - 1] {
+                return Err(InputError::new(
+                    format!("knots[{i}]"),
+                    "knots must be strictly increasing",
+                ));
+            }
+        }
+    }
+    if let ParamSpec::Exponent(e) = p.parametrization {
+        nonneg("parametrization.exponent".into(), e)?;
+    }
+    if p.k == 0 {
+        return Err(InputError::new("k", "must be at least 1"));
+    }
+    if p.level_k == 0 {
+        return Err(InputError::new("level_k", "must be at least 1"));
+    }
+    let mut vertices = split_count(n, p.k, p.closed);
+    for _ in 0..p.levels {
+        vertices = vertices.and_then(|m| split_count(m, p.level_k, p.closed));
+        if vertices.is_none_or(|m| m.saturating_mul(d) > MAX_REFINED_COORDS) {
+            break;
+        }
+    }
+    match vertices {
+        Some(m) if m.saturating_mul(d) <= MAX_REFINED_COORDS => {}
+        _ => {
+            return Err(InputError::new(
+                "levels",
+                format!("the refined curve would exceed {MAX_REFINED_COORDS} coordinates; lower k, levels or level_k"),
+            ))
+        }
+    }
+    match &p.constraint {
+        ConstraintSpec::Interpolate => {}
+        ConstraintSpec::Balls { radii } => {
+            per_point_len("constraint.radii", radii.len(), n)?;
+            for (i, &r) in radii.iter().enumerate() {
+                nonneg(format!("constraint.radii[{i}]"), r)?;
+            }
+        }
+        ConstraintSpec::Smoothing { weights } => {
+            per_point_len("constraint.weights", weights.len(), n)?;
+            for (i, &w) in weights.iter().enumerate() {
+                nonneg(format!("constraint.weights[{i}]"), w)?;
+            }
+        }
+        ConstraintSpec::Halfspaces { sets } => {
+            per_point_len("constraint.sets", sets.len(), n)?;
+            for (i, set) in sets.iter().enumerate() {
+                for (j, h) in set.iter().enumerate() {
+                    halfspace(format!("constraint.sets[{i}][{j}]"), h, d)?;
+                }
+            }
+        }
+    }
+    if let Some(tangents) = &p.tangents {
+        per_point_len("tangents", tangents.len(), n)?;
+        for (i, t) in tangents.iter().enumerate() {
+            let f = format!("tangents[{i}]");
+            match t {
+                None => {}
+                Some(TangentSpec::Ball { center, radius }) => {
+                    vector(format!("{f}.center"), center, d)?;
+                    nonneg(format!("{f}.radius"), *radius)?;
+                }
+                Some(TangentSpec::Wedge {
+                    direction,
+                    half_angle,
+                }) => {
+                    nonzero_vector(format!("{f}.direction"), direction, d)?;
+                    let a = nonneg(format!("{f}.half_angle"), *half_angle)?;
+                    if a >= std::f64::consts::FRAC_PI_2 {
+                        return Err(InputError::new(
+                            format!("{f}.half_angle"),
+                            format!("must be below π/2 (a convex wedge), got {a}"),
+                        ));
+                    }
+                }
+                Some(TangentSpec::Tension { radius }) => {
+                    nonneg(format!("{f}.radius"), *radius)?;
+                }
+                Some(TangentSpec::Halfspaces { halfspaces }) => {
+                    for (j, h) in halfspaces.iter().enumerate() {
+                        halfspace(format!("{f}.halfspaces[{j}]"), h, d)?;
+                    }
+                }
+            }
+        }
+    }
+    match &p.boundary {
+        BoundarySpec::Natural => {}
+        _ if p.closed => {
+            return Err(InputError::new(
+                "boundary",
+                "end conditions apply to open curves only (set \"closed\": false)",
+            ))
+        }
+        BoundarySpec::Clamped { start, end } => {
+            vector("boundary.start".into(), start, d)?;
+            vector("boundary.end".into(), end, d)?;
+        }
+        BoundarySpec::NearClamped { start, end, radius } => {
+            vector("boundary.start".into(), start, d)?;
+            vector("boundary.end".into(), end, d)?;
+            nonneg("boundary.radius".into(), *radius)?;
+        }
+    }
+    Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn problem(json: &str) -> RefineProblem {
+        serde_json::from_str(json).unwrap()
+    }
+
+    #[test]
+    fn split_counts_match_3_1() {
+        assert_eq!(split_count(5, 3, true), Some(20));
+        assert_eq!(split_count(5, 3, false), Some(17));
+        assert_eq!(split_count(usize::MAX, 3, true), None);
+    }
+
+    #[test]
+    fn validation_names_fields_and_indices() {
+        let cases = [
+            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
+            (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
+            (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
+                "knots[2]",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
+                "knots",
+            ),
+            (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,-1,1]}}"#,
+                "constraint.radii[1]",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,1]}}"#,
+                "constraint.radii",
+            ),
+            (r#"{"points": [[0,0],[1,0],[0,1]], "levels": 40}"#, "levels"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "tangents": [null, {"type": "wedge", "direction": [0,0], "half_angle": 0.1}, null]}"#,
+                "tangents[1].direction",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
+                "boundary",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": false, "boundary": {"type": "clamped", "start": [1], "end": [1,0]}}"#,
+                "boundary.start",
+            ),
+        ];
+        for (json, field) in cases {
+            let e = validate(&problem(json)).unwrap_err();
+            assert_eq!(e.field, field, "{json}: {e}");
+        }
+        assert_eq!(
+            validate(&problem(r#"{"points": [[0,0],[1,0],[0,1]]}"#)),
+            Ok(2)
+        );
+    }
+}
+
+/// The `refine` subcommand.
+pub enum RefineCmd {}
+
+impl super::Command for RefineCmd {
+    type Problem = RefineProblem;
+    type Solution = RefineResult;
+
+    fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
+        validate(problem)?;
+        Err(InputError::new(
+            "",
+            "the refine solver is not wired into this build yet",
+        ))
+    }
+
+    fn svg(_: &RefineProblem, _: &RefineResult) -> Option<String> {
+        None
+    }
+}
