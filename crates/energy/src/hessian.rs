@@ -1,0 +1,203 @@
+//! The α coefficients of Kersey §2.1 and the banded Hessian H = AᵀA of E(f) = ½ pᵀHp.
+
+use divdiff::{Knots, Points, Topology};
+
+use crate::Error;
+
+/// The α coefficients of Kersey §2.1 (the rows of A), one row per vertex.
+///
+/// `alphas(knots)[i] = [α_{i,1}, α_{i,2}, α_{i,3}]` are the entries of row `i` of A on the columns
+/// i − 1, i, i + 1 (indices wrap modulo N for closed curves):
+///
+/// α_{i,1} = √2 / (h_{i−1} √(h_{i−1} + h_i)),  α_{i,3} = √2 / (h_i √(h_{i−1} + h_i)),
+/// α_{i,2} = −α_{i,1} − α_{i,3},
+///
+/// so that (Ap)_i = √2 √h_{i−1,2} Δ_{i−1,2} f and ½|Ap|² is the energy (2.1).
+///
+/// Closed curves use the periodic extension h_{−1} = h_{N−1} (the paper's h_0 = h_n), which is
+/// what the definition of E needs; the printed shortcut α_{1,1} := α_{n,3} agrees with it only on
+/// uniform knots. Open curves (Kersey §3.6) have zero first and last rows: the second difference
+/// centred at an end vertex does not exist.
+///
+/// ```
+/// use divdiff::Knots;
+/// let a = energy::alphas(&Knots::open(vec![0.0, 1.0, 2.0]).unwrap());
+/// // Uniform spacing 1: the middle row is (1, −2, 1).
+/// assert!((a[1][0] - 1.0).abs() < 1e-15 && (a[1][1] + 2.0).abs() < 1e-15);
+/// assert!(a[0].iter().chain(&a[2]).all(|&x| x == 0.0));
+/// ```
+pub fn alphas(knots: &Knots) -> Vec<[f64; 3]> {
+    let mut a = vec![[0.0; 3]; knots.vertex_count()];
+    for i in interior_rows(knots) {
+        let hl = knots.h(i as isize - 1);
+        let hr = knots.h(i as isize);
+        let root = (2.0 / (hl + hr)).sqrt();
+        let a1 = root / hl;
+        let a3 = root / hr;
+        a[i] = [a1, -a1 - a3, a3];
+    }
+    a
+}
+
+/// The Hessian H = AᵀA of Kersey's energy E(f) = ½ pᵀHp (Kersey (2.1), §3.6), stored as three bands.
+///
+/// H is symmetric positive semidefinite; pentadiagonal for open curves, cyclic pentadiagonal for
+/// closed ones. Its kernel is the constants (closed, dimension 1) or the linear polynomials in t
+/// (open, dimension 2). The same H acts on every coordinate column of R^d data.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hessian {
+    topology: Topology,
+    diag: Vec<f64>,
+    off1: Vec<f64>,
+    off2: Vec<f64>,
+}
+
+impl Hessian {
+    /// Assembles H = AᵀA from the rows of [`alphas`], in O(N).
+    ///
+    /// ```
+    /// use divdiff::Knots;
+    /// use energy::Hessian;
+    /// // Uniform open knots of spacing 1 and 5 vertices: H = D₂ᵀD₂ (Warren–Weimer E_0).
+    /// let h = Hessian::new(&Knots::open(vec![0.0, 1.0, 2.0, 3.0, 4.0]).unwrap());
+    /// let (d, o1, o2) = h.bands();
+    /// assert!((d[2] - 6.0).abs() < 1e-12 && (o1[1] + 4.0).abs() < 1e-12 && (o2[0] - 1.0).abs() < 1e-12);
+    /// ```
+    pub fn new(knots: &Knots) -> Hessian {
+        let n = knots.vertex_count();
+        let closed = knots.is_closed();
+        let mut diag = vec![0.0; n];
+        let mut off1 = vec![0.0; n];
+        let mut off2 = vec![0.0; n];
+        let a = alphas(knots);
+        for i in interior_rows(knots) {
+            let [a0, a1, a2] = a[i];
+            // Row i touches columns l = i − 1, i, r = i + 1 (mod N for closed curves; an open
+            // curve's non-zero rows are interior, so no wrap is needed there).
+            let l = if closed { (i + n - 1) % n } else { i - 1 };
+            let r = if closed { (i + 1) % n } else { i + 1 };
+            diag[l] += a0 * a0;
+            diag[i] += a1 * a1;
+            diag[r] += a2 * a2;
+            off1[l] += a0 * a1; // entry (i − 1, i)
+            off1[i] += a1 * a2; // entry (i, i + 1)
+            off2[l] += a0 * a2; // entry (i − 1, i + 1)
+        }
+        Hessian {
+            topology: knots.topology(),
+            diag,
+            off1,
+            off2,
+        }
+    }
+
+    /// Open or closed.
+    pub fn topology(&self) -> Topology {
+        self.topology
+    }
+
+    /// The number N of vertices (H is N×N).
+    pub fn len(&self) -> usize {
+        self.diag.len()
+    }
+
+    /// Whether H is empty (never, for valid knots).
+    pub fn is_empty(&self) -> bool {
+        self.diag.is_empty()
+    }
+
+    /// The bands `(diag, off1, off2)`, each of length N:
+    ///
+    /// H = Σ_j diag[j] e_j e_jᵀ + off1[j] (e_j e_{j+1}ᵀ + e_{j+1} e_jᵀ) + off2[j] (e_j e_{j+2}ᵀ + e_{j+2} e_jᵀ),
+    ///
+    /// with indices modulo N for closed curves — so for N = 3 or 4 different bands alias the same
+    /// entry and their contributions ADD. For open curves off1[N−1] = off2[N−2] = off2[N−1] = 0.
+    pub fn bands(&self) -> (&[f64], &[f64], &[f64]) {
+        (&self.diag, &self.off1, &self.off2)
+    }
+
+    /// Hp, applied to each coordinate column of `p`, in O(N d).
+    ///
+    /// # Panics
+    /// If `p.len() != self.len()`; see [`Hessian::try_apply`] for the checked version.
+    pub fn apply(&self, p: &Points) -> Points {
+        match self.try_apply(p) {
+            Ok(y) => y,
+            Err(e) => panic!("Hessian::apply: {e}"),
+        }
+    }
+
+    /// Hp, applied to each coordinate column of `p`, in O(N d).
+    ///
+    /// # Errors
+    /// [`Error::SizeMismatch`] if `p` does not have one point per vertex.
+    pub fn try_apply(&self, p: &Points) -> Result<Points, Error> {
+        let n = self.len();
+        if p.len() != n {
+            return Err(Error::SizeMismatch {
+                field: "points",
+                expected: n,
+                got: p.len(),
+            });
+        }
+        let d = p.dim();
+        let x = p.coords();
+        let mut y = vec![0.0; n * d];
+        let closed = self.topology == Topology::Closed;
+        // Adds w·x[from] to y[to] for every coordinate.
+        let mut add = |to: usize, from: usize, w: f64| {
+            for c in 0..d {
+                y[to * d + c] += w * x[from * d + c];
+            }
+        };
+        for j in 0..n {
+            add(j, j, self.diag[j]);
+            for (k, band) in [(1, &self.off1), (2, &self.off2)] {
+                let w = band[j];
+                let m = j + k;
+                let m = if closed {
+                    m % n
+                } else if m < n {
+                    m
+                } else {
+                    continue;
+                };
+                add(j, m, w);
+                add(m, j, w);
+            }
+        }
+        // Overflow to infinity is reported (as a divdiff NonFinite error), not returned.
+        Ok(Points::new(d, y)?)
+    }
+
+    /// The energy ½ pᵀHp, summed over the coordinates.
+    ///
+    /// # Errors
+    /// [`Error::SizeMismatch`] if `p` does not have one point per vertex.
+    pub fn energy(&self, p: &Points) -> Result<f64, Error> {
+        let hp = self.try_apply(p)?;
+        Ok(0.5 * dot(p.coords(), hp.coords()))
+    }
+
+    /// The largest absolute band entry, a scale for tolerances (|H|_max ≤ ‖H‖₂ ≤ 5 |H|_max).
+    pub fn max_abs(&self) -> f64 {
+        self.diag
+            .iter()
+            .chain(&self.off1)
+            .chain(&self.off2)
+            .fold(0.0, |m, x| m.max(x.abs()))
+    }
+}
+
+/// The rows of A that may be non-zero: all N for closed curves, 1..N−1 for open ones.
+pub(crate) fn interior_rows(knots: &Knots) -> std::ops::Range<usize> {
+    let n = knots.vertex_count();
+    match knots.topology() {
+        Topology::Closed => 0..n,
+        Topology::Open => 1..n.saturating_sub(1),
+    }
+}
+
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
