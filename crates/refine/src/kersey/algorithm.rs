@@ -5,7 +5,7 @@ use divdiff::{Knots, Points};
 
 use super::certify::{certify, Certificate};
 use super::problem::{Constraint, Problem, Solver};
-use super::split::{parametrize, split};
+use super::split::{parametrize, split, ParamError};
 use super::{degenerate, fixed};
 use crate::Error;
 
@@ -222,12 +222,13 @@ fn stage_loop(
     let mut sol = None;
     for it in 0..=problem.knot_iterations {
         if let Some(FixedSolution { points, .. }) = &sol {
-            *knots = parametrize(points, knots.topology(), e).map_err(|index| {
-                Error::DegenerateRefinedSpan {
+            *knots = parametrize(points, knots.topology(), e).map_err(|err| match err {
+                ParamError::ZeroSpan(index) => Error::DegenerateRefinedSpan {
                     stage,
                     index,
                     next: (index + 1) % points.len(),
-                }
+                },
+                ParamError::Knots(e) => Error::Divdiff(e),
             })?;
             iterations.knot_updates += 1;
         }

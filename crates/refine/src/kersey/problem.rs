@@ -2,6 +2,7 @@
 
 use divdiff::{Knots, Points, Topology};
 
+use super::split::ParamError;
 use crate::Error;
 
 /// How data parameters (and refined knots in the knot updates) are spaced:
@@ -254,11 +255,12 @@ impl Problem {
         self
     }
 
-    /// The smallest valid number of data points: 2 for both topologies (an open curve through
-    /// two points is a segment; a closed one runs there and back).
+    /// The smallest valid number of data points: 2 for an open curve (a segment), 3 for a
+    /// closed one (its data polygon needs three vertices, as `divdiff::Knots::closed` does).
     pub fn min_points(topology: Topology) -> usize {
         match topology {
-            Topology::Open | Topology::Closed => 2,
+            Topology::Open => 2,
+            Topology::Closed => 3,
         }
     }
 
@@ -454,12 +456,12 @@ impl Problem {
                 self.topology,
                 self.parametrization.exponent(),
             )
-            .map_err(|index| {
-                let n = self.points.len();
-                Error::CoincidentPoints {
+            .map_err(|e| match e {
+                ParamError::ZeroSpan(index) => Error::CoincidentPoints {
                     index,
-                    next: (index + 1) % n,
-                }
+                    next: (index + 1) % self.points.len(),
+                },
+                ParamError::Knots(e) => Error::Divdiff(e),
             }),
         }
     }

@@ -7,9 +7,21 @@ use crate::Error;
 /// Parameters u_1 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e for the points in order (closed
 /// curves add the closing span back to q_1). Not normalized.
 ///
-/// Returns `Err(i)` when span i (from point i to point i + 1, wrapping) has zero length and
-/// e > 0, or when the knots would not be strictly increasing in floating point.
-pub(crate) fn parametrize(points: &Points, topology: Topology, e: f64) -> Result<Knots, usize> {
+/// Why [`parametrize`] failed.
+pub(crate) enum ParamError {
+    /// Span i (from point i to point i + 1, wrapping) has zero length, or is so short that the
+    /// knots do not increase in floating point.
+    ZeroSpan(usize),
+    /// The knots are invalid for another reason (too few).
+    Knots(divdiff::Error),
+}
+
+/// Parameters u_1 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e (see the module docs).
+pub(crate) fn parametrize(
+    points: &Points,
+    topology: Topology,
+    e: f64,
+) -> Result<Knots, ParamError> {
     let n = points.len();
     let spans = match topology {
         Topology::Open => n.saturating_sub(1),
@@ -22,18 +34,18 @@ pub(crate) fn parametrize(points: &Points, topology: Topology, e: f64) -> Result
         let (a, b) = (points.point(i), points.point((i + 1) % n));
         let dist2: f64 = a.iter().zip(b).map(|(x, y)| (y - x) * (y - x)).sum();
         if dist2 == 0.0 {
-            return Err(i);
+            return Err(ParamError::ZeroSpan(i));
         }
         // |Δ|^e = (|Δ|²)^{e/2}; e = 0 gives 1 exactly.
         let step = if e == 0.0 { 1.0 } else { dist2.powf(0.5 * e) };
         let next = acc + step;
         if next <= acc {
-            return Err(i);
+            return Err(ParamError::ZeroSpan(i));
         }
         acc = next;
         t.push(acc);
     }
-    Knots::new(topology, t).map_err(|_| 0)
+    Knots::new(topology, t).map_err(ParamError::Knots)
 }
 
 /// Index of the data vertex of q_i after a k-level split: i_k = (k + 1) i (0-based; the seed's
