@@ -4,6 +4,7 @@ mod algorithm;
 mod certify;
 mod degenerate;
 mod exact;
+mod fast;
 mod fixed;
 mod operator;
 mod problem;

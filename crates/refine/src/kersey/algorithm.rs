@@ -4,8 +4,9 @@
 use divdiff::{Knots, Points};
 
 use super::certify::{certify, Certificate};
+use super::operator::Stencil;
 use super::problem::{Constraint, Problem, Solver};
-use super::split::{parametrize, split, ParamError};
+use super::split::{parametrize, ParamError};
 use super::{degenerate, fixed};
 use crate::Error;
 
@@ -79,8 +80,11 @@ impl Refinement {
 /// What one fixed-knot solve returns.
 pub(crate) struct FixedSolution {
     pub points: Points,
-    pub multipliers: Vec<Vec<f64>>,
+    /// `None`: the reactions −(Hp)_{i_k} (interpolation), filled in by the certificate.
+    pub multipliers: Option<Vec<Vec<f64>>>,
     pub iterations: usize,
+    /// The α-stencil of the knots, when the solver built it (reused by the certificate).
+    pub stencil: Option<Stencil>,
 }
 
 /// One fixed-knot problem: data `q` attached at `data_vertex` of a curve with `knots`.
@@ -90,8 +94,8 @@ pub(crate) struct FixedProblem<'a> {
     pub data_vertex: &'a [usize],
     pub constraint: &'a Constraint,
     pub problem: &'a Problem,
-    /// The split points (the paper's iteration starts from its initial weights, not from these).
-    pub start: &'a Points,
+    /// The data vertices are 0, stride, 2·stride, … (stride = k + 1).
+    pub stride: usize,
 }
 
 fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
@@ -116,12 +120,19 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     // Part 1: the near-interpolatory k-level step.
     let k = problem.k;
     let mut data_vertex: Vec<usize> = (0..q.len()).map(|i| (k + 1) * i).collect();
-    let (start, mut knots) = split(q, &u, k)?;
+    let mut knots = split_knots(&u, k)?;
     let (mut p, multipliers, cert) = if let Some(c) = &constant {
         // The constant curve on the split knots; no knot update is possible (zero spans).
-        let pts = constant_points(start.len(), c);
+        let pts = constant_points(knots.vertex_count(), c);
         let mult = degenerate::zero_multipliers(problem);
-        let cert = certify(&knots, &pts, q, &data_vertex, &problem.constraint, &mult);
+        let (cert, mult) = certify(
+            &Stencil::new(&knots),
+            &pts,
+            q,
+            &data_vertex,
+            &problem.constraint,
+            Some(mult),
+        );
         iterations.solves += 1;
         (pts, mult, cert)
     } else {
@@ -132,25 +143,33 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
             &data_vertex,
             &problem.constraint,
             problem,
-            &start,
+            k + 1,
             e,
             &mut iterations,
         )?
     };
     let active = cert.active.clone();
+    let mut energy = cert.energy;
     stages.push(stage_report(k, p.len(), &cert));
     let mut worst = cert.kkt_residual;
 
     // Part 2: further interpolatory level_k-level steps, re-initialized from the previous result.
     for level in 1..=problem.levels {
         let lk = problem.level_k;
-        let (start, mut next_knots) = split(&p, &knots, lk)?;
+        let mut next_knots = split_knots(&knots, lk)?;
         let dv: Vec<usize> = (0..p.len()).map(|i| (lk + 1) * i).collect();
         let (np, _, cert) = if constant.is_some() {
-            let mult = vec![vec![0.0; p.dim()]; p.len()];
-            let cert = certify(&next_knots, &start, &p, &dv, &Constraint::Interpolate, &mult);
+            let np = constant_points(next_knots.vertex_count(), p.point(0));
+            let (cert, mult) = certify(
+                &Stencil::new(&next_knots),
+                &np,
+                &p,
+                &dv,
+                &Constraint::Interpolate,
+                None,
+            );
             iterations.solves += 1;
-            (start.clone(), mult, cert)
+            (np, mult, cert)
         } else {
             stage_loop(
                 level,
@@ -159,12 +178,13 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
                 &dv,
                 &Constraint::Interpolate,
                 problem,
-                &start,
+                lk + 1,
                 e,
                 &mut iterations,
             )?
         };
         worst = worst.max(cert.kkt_residual);
+        energy = cert.energy;
         stages.push(stage_report(lk, np.len(), &cert));
         for v in &mut data_vertex {
             *v *= lk + 1;
@@ -172,7 +192,6 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
         p = np;
         knots = next_knots;
     }
-    let energy = super::operator::energy(&knots, &p);
     Ok(Refinement {
         points: p,
         knots,
@@ -184,6 +203,23 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
         iterations,
         stages,
     })
+}
+
+/// The knots of the k-level split (3.1), without the points (interpolation does not need them).
+fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
+    let m = k + 1;
+    let v = u.values();
+    let spans = u.span_count();
+    let mut t = Vec::with_capacity(m * spans + 1);
+    for i in 0..spans {
+        let (a, b) = (v[i], v[i + 1]);
+        for j in 0..m {
+            let s = j as f64 / m as f64;
+            t.push((1.0 - s) * a + s * b);
+        }
+    }
+    t.push(v[spans]);
+    Ok(Knots::new(u.topology(), t)?)
 }
 
 fn stage_report(k: usize, vertices: usize, cert: &Certificate) -> Stage {
@@ -215,12 +251,12 @@ fn stage_loop(
     data_vertex: &[usize],
     constraint: &Constraint,
     problem: &Problem,
-    start: &Points,
+    stride: usize,
     e: f64,
     iterations: &mut Iterations,
 ) -> Result<(Points, Vec<Vec<f64>>, Certificate), Error> {
-    let mut sol = None;
-    for it in 0..=problem.knot_iterations {
+    let mut sol: Option<FixedSolution> = None;
+    for _ in 0..=problem.knot_iterations {
         if let Some(FixedSolution { points, .. }) = &sol {
             *knots = parametrize(points, knots.topology(), e).map_err(|err| match err {
                 ParamError::ZeroSpan(index) => Error::DegenerateRefinedSpan {
@@ -238,15 +274,15 @@ fn stage_loop(
             data_vertex,
             constraint,
             problem,
-            start,
+            stride,
         };
         let s = dispatch(&fp)?;
         iterations.solves += 1;
         iterations.solver += s.iterations;
         sol = Some(s);
-        let _ = it;
     }
     let s = sol.expect("at least one solve");
-    let cert = certify(knots, &s.points, q, data_vertex, constraint, &s.multipliers);
-    Ok((s.points, s.multipliers, cert))
+    let stencil = s.stencil.unwrap_or_else(|| Stencil::new(knots));
+    let (cert, mult) = certify(&stencil, &s.points, q, data_vertex, constraint, s.multipliers);
+    Ok((s.points, mult, cert))
 }

@@ -3,9 +3,9 @@
 //! Everything here is recomputed from the points, the knots and the multipliers with the
 //! matrix-free operator of [`super::operator`], independently of the solver that produced them.
 
-use divdiff::{Knots, Points};
+use divdiff::Points;
 
-use super::operator;
+use super::operator::Stencil;
 use super::problem::Constraint;
 
 /// A data vertex counts as active when |p_{i_k} − q_i| ≥ (1 − ACTIVE_REL_TOL) ε_i (balls) or
@@ -22,35 +22,6 @@ pub(crate) struct Certificate {
     pub jmp_inactive: Option<f64>,
 }
 
-/// The scales of the relative residuals: `force` = ‖H‖_∞ · `length`, where `length` is the
-/// largest distance of a vertex or a data point from the data's centroid. Hp, the multiplier
-/// terms and the complementarity products are forces; feasibility violations are lengths.
-pub(crate) struct Scale {
-    pub length: f64,
-    pub force: f64,
-}
-
-pub(crate) fn scale(knots: &Knots, p: &Points, q: &Points) -> Scale {
-    let d = q.dim();
-    let n = q.len() as f64;
-    let mut c = vec![0.0; d];
-    for x in q.iter() {
-        for (ci, xi) in c.iter_mut().zip(x) {
-            *ci += xi / n;
-        }
-    }
-    let far = |pts: &Points| {
-        pts.iter()
-            .map(|x| x.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max))
-            .fold(0.0, f64::max)
-    };
-    let length = far(p).max(far(q)).max(f64::MIN_POSITIVE);
-    Scale {
-        length,
-        force: operator::h_norm_inf(knots) * length,
-    }
-}
-
 fn dist(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
@@ -59,42 +30,71 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
         .sqrt()
 }
 
-/// Certifies points `p` on `knots` for data `q` attached at `data_vertex`, with the
-/// constraint's multipliers in the conventions of [`crate::Refinement::multipliers`].
+/// Certifies points `p` for data `q` attached at the data vertices `data_vertex` (multiples of
+/// one stride), with the constraint's multipliers in the conventions of
+/// [`crate::Refinement::multipliers`]; `None` means "the reactions −(Hp)_{i_k}", the
+/// multipliers of interpolation, computed here from the same Hp. Returns the certificate and the
+/// multipliers.
+///
+/// The relative KKT residual is the largest of: the stationarity residual
+/// ‖Hp + Σ (constraint gradient × multiplier)‖_∞, complementarity |w (slack)| and negative
+/// multipliers, all divided by the force scale ‖H‖_∞ · L; and the constraint violation divided by
+/// the length scale L, the largest coordinate distance of a vertex or data point from the data's
+/// centroid.
 pub(crate) fn certify(
-    knots: &Knots,
+    stencil: &Stencil,
     p: &Points,
     q: &Points,
     data_vertex: &[usize],
     constraint: &Constraint,
-    multipliers: &[Vec<f64>],
-) -> Certificate {
+    multipliers: Option<Vec<Vec<f64>>>,
+) -> (Certificate, Vec<Vec<f64>>) {
     let d = p.dim();
-    let sc = scale(knots, p, q);
-    let hp = operator::apply_h(knots, p);
-    // Stationarity residual r = Hp + Σ (constraint gradient × multiplier), per vertex.
-    let mut r = hp.clone();
+    let n = q.len();
+    let mut centroid = vec![0.0; d];
+    for x in q.iter() {
+        for (c, v) in centroid.iter_mut().zip(x) {
+            *c += v / n as f64;
+        }
+    }
+    let stride = if n > 1 { data_vertex[1] } else { p.len().max(1) };
+    let pass = stencil.pass(p, stride, &centroid);
+    let q_extent = q
+        .iter()
+        .map(|x| x.iter().zip(&centroid).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);
+    let force = pass.h_norm * length;
+    let hp = &pass.data_gradient;
+    let multipliers = multipliers.unwrap_or_else(|| {
+        (0..n)
+            .map(|i| hp[i * d..(i + 1) * d].iter().map(|x| -x).collect())
+            .collect()
+    });
+    // Stationarity at the data vertices: r = (Hp)_v + Σ (constraint gradient × multiplier).
+    let mut stat = pass.free_gradient;
     let mut comp: f64 = 0.0; // complementarity, forces
     let mut primal: f64 = 0.0; // feasibility violation, lengths
     let mut dual: f64 = 0.0; // negative multipliers, forces
-    let n = q.len();
     let mut active = vec![false; n];
+    let mut r = vec![0.0; d];
     for i in 0..n {
         let v = data_vertex[i];
         let (pv, qi) = (p.point(v), q.point(i));
         let m = &multipliers[i];
+        r.copy_from_slice(&hp[i * d..(i + 1) * d]);
         match constraint {
             Constraint::Interpolate => {
                 // The multiplier of p_v = q_i is the reaction λ_i = −(Hp)_v.
                 for c in 0..d {
-                    r[v * d + c] += m[c];
+                    r[c] += m[c];
                 }
                 primal = primal.max(dist(pv, qi));
                 active[i] = true;
             }
             Constraint::Balls(radii) if radii[i] == 0.0 => {
                 for c in 0..d {
-                    r[v * d + c] += m[c];
+                    r[c] += m[c];
                 }
                 primal = primal.max(dist(pv, qi));
                 active[i] = true;
@@ -102,7 +102,7 @@ pub(crate) fn certify(
             Constraint::Balls(radii) => {
                 let (eps, w, gap) = (radii[i], m[0], dist(pv, qi));
                 for c in 0..d {
-                    r[v * d + c] += w * (pv[c] - qi[c]);
+                    r[c] += w * (pv[c] - qi[c]);
                 }
                 primal = primal.max(gap - eps);
                 dual = dual.max(-w * eps.max(gap));
@@ -112,7 +112,7 @@ pub(crate) fn certify(
             Constraint::Smoothing(weights) => {
                 let w = weights[i];
                 for c in 0..d {
-                    r[v * d + c] += w * (pv[c] - qi[c]);
+                    r[c] += w * (pv[c] - qi[c]);
                 }
             }
             Constraint::HalfSpaces(sets) => {
@@ -124,36 +124,36 @@ pub(crate) fn certify(
                         - h.offset)
                         / norm;
                     for c in 0..d {
-                        r[v * d + c] += w * h.normal[c];
+                        r[c] += w * h.normal[c];
                     }
                     primal = primal.max(g);
-                    dual = dual.max(-w * norm * sc.length);
+                    dual = dual.max(-w * norm * length);
                     comp = comp.max((w * norm * g).abs());
-                    if g >= -ACTIVE_REL_TOL * sc.length {
+                    if g >= -ACTIVE_REL_TOL * length {
                         any = true;
                     }
                 }
                 active[i] = any;
             }
         }
+        stat = r.iter().fold(stat, |a, x| a.max(x.abs()));
     }
-    let stat = r.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    let kkt = (stat / sc.force)
-        .max(comp / sc.force)
-        .max(dual / sc.force)
-        .max(primal.max(0.0) / sc.length);
+    let kkt = (stat / force)
+        .max(comp / force)
+        .max(dual / force)
+        .max(primal.max(0.0) / length);
     // Corollary 3.3 / 3.6: jmp = ½Hp vanishes at inactive data vertices.
     let jmp_inactive = (0..n)
         .filter(|&i| !active[i] && !matches!(constraint, Constraint::Smoothing(_)))
-        .map(|i| {
-            let v = data_vertex[i];
-            (0..d).fold(0.0f64, |a, c| a.max((0.5 * hp[v * d + c]).abs())) / sc.force
-        })
+        .map(|i| (0..d).fold(0.0f64, |a, c| a.max((0.5 * hp[i * d + c]).abs())) / force)
         .reduce(f64::max);
-    Certificate {
-        energy: operator::energy(knots, p),
-        kkt_residual: kkt,
-        active,
-        jmp_inactive,
-    }
+    (
+        Certificate {
+            energy: pass.energy,
+            kkt_residual: kkt,
+            active,
+            jmp_inactive,
+        },
+        multipliers,
+    )
 }

@@ -4,7 +4,7 @@ use divdiff::{Knots, Points};
 use energy::{Hessian, System};
 
 use super::algorithm::{FixedProblem, FixedSolution};
-use super::operator;
+use super::operator::{self, Stencil};
 use super::problem::{Boundary, Constraint};
 use crate::Error;
 
@@ -58,16 +58,6 @@ fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result<Points, Er
     Ok(Points::new(d, rhs)?)
 }
 
-/// The reaction −(Hp)_v at each data vertex (the multiplier of an interpolation constraint).
-fn reactions(fp: &FixedProblem<'_>, p: &Points) -> Vec<Vec<f64>> {
-    let d = p.dim();
-    let hp = operator::apply_h(fp.knots, p);
-    fp.data_vertex
-        .iter()
-        .map(|&v| hp[v * d..(v + 1) * d].iter().map(|x| -x).collect())
-        .collect()
-}
-
 /// The exact optimum of the fixed-knot problem.
 pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     let n = fp.q.len();
@@ -79,8 +69,9 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 let p = linear(fp, &vec![false; n], w)?;
                 return Ok(FixedSolution {
                     points: p,
-                    multipliers: w.iter().map(|&x| vec![x]).collect(),
+                    multipliers: Some(w.iter().map(|&x| vec![x]).collect()),
                     iterations: 1,
+                    stencil: None,
                 });
             }
             _ => {}
@@ -89,14 +80,15 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     super::exact::solve(fp)
 }
 
+/// Interpolation (3.3) at every data vertex: the fused banded solver of [`super::fast`].
 fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
-    let n = fp.q.len();
-    let p = linear(fp, &vec![true; n], &vec![0.0; n])?;
-    let multipliers = reactions(fp, &p);
+    let stencil = Stencil::new(fp.knots);
+    let p = super::fast::interpolate(fp.knots, &stencil, fp.q, fp.stride)?;
     Ok(FixedSolution {
         points: p,
-        multipliers,
+        multipliers: None,
         iterations: 1,
+        stencil: Some(stencil),
     })
 }
 
@@ -149,8 +141,9 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 .collect();
             Ok(FixedSolution {
                 points: p,
-                multipliers,
+                multipliers: Some(multipliers),
                 iterations: iters,
+                stencil: None,
             })
         }
         Constraint::HalfSpaces(_) => Err(Error::Unsupported {

@@ -37,7 +37,16 @@ pub(crate) fn parametrize(
             return Err(ParamError::ZeroSpan(i));
         }
         // |Δ|^e = (|Δ|²)^{e/2}; e = 0 gives 1 exactly.
-        let step = if e == 0.0 { 1.0 } else { dist2.powf(0.5 * e) };
+        // The common exponents avoid the (much slower) general power.
+        let step = if e == 0.0 {
+            1.0
+        } else if e == 0.5 {
+            dist2.sqrt().sqrt()
+        } else if e == 1.0 {
+            dist2.sqrt()
+        } else {
+            dist2.powf(0.5 * e)
+        };
         let next = acc + step;
         if next <= acc {
             return Err(ParamError::ZeroSpan(i));
