@@ -32,4 +32,12 @@ pub enum Error {
         /// The valid size.
         len: usize,
     },
+    /// A stencil couples two vertices more than two steps apart (K would leave the band).
+    #[error("stencil couples vertices {first} and {second}, more than two steps apart")]
+    StencilTooWide {
+        /// One stencil vertex.
+        first: usize,
+        /// Another stencil vertex.
+        second: usize,
+    },
 }
