@@ -3,10 +3,12 @@
 //! * `cargo xtask verify`  — every identity, theorem and worked example of the seeds as a named case.
 //! * `cargo xtask figures [--out DIR]` — redraws the seeds' figures as SVG.
 //! * `cargo xtask bench [--quick]` — the benchmark tables (ratios measured in the same run).
+//! * `cargo xtask fuzz [--execs N]` — mutational fuzzing of the command line (parser + solvers).
 //! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
 
 mod bench;
 mod figures;
+mod fuzz;
 mod tidy;
 mod verify;
 
@@ -23,8 +25,9 @@ fn main() -> ExitCode {
         "figures" => figures::run(rest),
         "bench" => bench::run(rest),
         "tidy" => tidy::run(rest),
+        "fuzz" => fuzz::run(rest),
         _ => {
-            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy>");
+            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--execs N]>");
             return if cmd == "help" || cmd == "--help" {
                 ExitCode::SUCCESS
             } else {

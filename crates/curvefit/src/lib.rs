@@ -1,4 +1,37 @@
-//! curvefit facade.
+//! # curvefit
+//!
+//! Variational curve refinement and constrained spline interpolation: the smoothest curve that
+//! honours a handful of data points — exact, known only within tolerances, or bounded by
+//! obstacles — with a certificate (KKT residual, multipliers, active set) that it is optimal.
+//!
+//! This crate is the facade. It re-exports the library crates and their vocabulary:
+//!
+//! | module | source |
+//! |---|---|
+//! | [`divdiff`] | knots, divided differences, discrete derivatives, parametrizations (Kersey §2) |
+//! | [`energy`] | the discrete energy E = ½pᵀHp, its identities and gradients, O(N) banded solves (Kersey §2) |
+//! | [`refine`] | Kersey's variational refinement (§3–4), Khan et al.'s n-ary schemes, Warren–Weimer's natural cubic subdivision |
+//! | [`strip`] | best interpolation in a strip (Dontchev–Kolmanovsky) |
+//!
+//! plus [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line, callable in-process).
+//!
+//! ```
+//! use curvefit::prelude::*;
+//! let knots = Knots::closed(vec![0.0, 1.0, 2.5, 3.0, 4.0]).unwrap();
+//! let h = Hessian::new(&knots);
+//! assert_eq!(h.len(), 4);
+//! ```
 
 pub mod cli;
 pub mod plot;
+
+pub use divdiff;
+pub use energy;
+pub use refine;
+pub use strip;
+
+/// The vocabulary most programs need: `use curvefit::prelude::*;`.
+pub mod prelude {
+    pub use divdiff::{Knots, Points, Topology};
+    pub use energy::Hessian;
+}

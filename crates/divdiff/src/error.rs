@@ -64,4 +64,25 @@ pub enum Error {
         /// Why it is invalid.
         reason: &'static str,
     },
+    /// An index is out of range (e.g. a vertex index ≥ N).
+    #[error("{field} index {index} is out of range (size {len})")]
+    IndexOutOfRange {
+        /// The field (e.g. `"vertex"`).
+        field: &'static str,
+        /// The index given.
+        index: usize,
+        /// The valid size.
+        len: usize,
+    },
+    /// The divided difference \[t_index, …, t_{index+order}\] f of an open curve needs knots that
+    /// do not exist (index < 0 or index + order ≥ N).
+    #[error("divided difference of order {order} at index {index} needs knots outside 0..{len}")]
+    DifferenceOutOfRange {
+        /// The first knot index.
+        index: isize,
+        /// The order of the difference.
+        order: usize,
+        /// The number of knots.
+        len: usize,
+    },
 }

@@ -4,6 +4,7 @@
 //! to `-o FILE` (default stdout) and, with `--svg FILE`, a picture. Bad input gives exit code 2,
 //! one line on stderr naming the field (and index), and no output file.
 
+pub mod demo;
 pub mod refine;
 pub mod refine_types;
 
@@ -100,6 +101,12 @@ enum Cmd {
     Strip(JsonArgs),
     /// Warren–Weimer natural cubic subdivision on [0, L].
     Natural(JsonArgs),
+    /// The main job on built-in data: solves the seeds' examples, writes SVGs, index.html and a summary.
+    Demo {
+        /// Output directory.
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+    },
 }
 
 /// What went wrong, and which exit code it maps to.
@@ -179,6 +186,25 @@ fn dispatch(
         Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
         Cmd::Strip(a) => run_json::<NotYet>(&a, "strip", stdin, stdout, stderr),
         Cmd::Natural(a) => run_json::<NotYet>(&a, "natural", stdin, stdout, stderr),
+        Cmd::Demo { out } => Ok(demo::run(&out, stdout, solve_example)?),
+    }
+}
+
+/// Solves one built-in example with its subcommand.
+fn solve_example(ex: &demo::Example) -> Result<demo::Summary, InputError> {
+    match ex.command {
+        "refine" => demo::solve_with::<refine::RefineCmd>(ex.problem, |s| {
+            format!(
+                "N = {}, E = {:.6}, KKT = {:.1e}",
+                s.points.len(),
+                s.energy,
+                s.kkt_residual
+            )
+        }),
+        other => Err(InputError::new(
+            "command",
+            format!("unknown example command {other}"),
+        )),
     }
 }
 

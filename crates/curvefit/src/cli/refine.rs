@@ -313,3 +313,154 @@ impl super::Command for RefineCmd {
         None
     }
 }
+
+/// Clips a big box by the half-planes `n · x ≤ c` (Sutherland–Hodgman); the polygon of a 2-D set.
+pub fn halfplane_polygon(
+    halfspaces: &[HalfSpaceSpec],
+    around: [f64; 2],
+    extent: f64,
+) -> Vec<[f64; 2]> {
+    let (x, y, e) = (around[0], around[1], extent);
+    let mut poly = vec![
+        [x - e, y - e],
+        [x + e, y - e],
+        [x + e, y + e],
+        [x - e, y + e],
+    ];
+    for h in halfspaces {
+        if h.normal.len() < 2 {
+            continue;
+        }
+        let f = |p: &[f64; 2]| h.normal[0] * p[0] + h.normal[1] * p[1] - h.offset;
+        let mut out = Vec::with_capacity(poly.len() + 1);
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            let (fa, fb) = (f(&a), f(&b));
+            if fa <= 0.0 {
+                out.push(a);
+            }
+            if (fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0) {
+                let s = fa / (fa - fb);
+                out.push([a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]);
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            break;
+        }
+    }
+    poly
+}
+
+/// The picture of a refinement: data points, their tolerance regions (active ones highlighted),
+/// the refined curve and the attached data vertices; curves in R^d show the first two coordinates,
+/// curves in R^1 are drawn as graphs over their knots.
+pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
+    use crate::plot::{palette, Figure, Marker, Style};
+    let d = p.points.first().map_or(0, Vec::len);
+    let xy = |v: &[f64], t: f64| -> [f64; 2] {
+        if d >= 2 {
+            [v[0], v[1]]
+        } else {
+            [t, v.first().copied().unwrap_or(0.0)]
+        }
+    };
+    let kind = match &p.constraint {
+        ConstraintSpec::Interpolate => "interpolation",
+        ConstraintSpec::Balls { .. } => "near-interpolation to balls",
+        ConstraintSpec::Smoothing { .. } => "smoothing",
+        ConstraintSpec::Halfspaces { .. } => "near-interpolation to convex polygons",
+    };
+    let mut fig = Figure::new(&format!(
+        "Variational refinement: {kind} ({}, {} points → {} vertices)",
+        if p.closed { "closed" } else { "open" },
+        p.points.len(),
+        r.points.len()
+    ));
+    fig.equal_aspect(d >= 2);
+    let data_t: Vec<f64> = r
+        .data_vertex
+        .iter()
+        .map(|&j| r.knots.get(j).copied().unwrap_or(0.0))
+        .collect();
+    let active_style = Style::stroke(palette::ACTIVE, 1.3).with_fill(palette::ACTIVE, 0.08);
+    let inactive_style = Style::stroke(palette::REGION, 1.0).with_fill(palette::REGION, 0.08);
+    match &p.constraint {
+        ConstraintSpec::Balls { radii } if d >= 2 => {
+            for (i, q) in p.points.iter().enumerate() {
+                let st = if r.active.get(i).copied().unwrap_or(false) {
+                    &active_style
+                } else {
+                    &inactive_style
+                };
+                fig.circle(xy(q, 0.0), radii[i], st.clone());
+            }
+        }
+        ConstraintSpec::Halfspaces { sets } if d == 2 => {
+            let scale = p
+                .points
+                .iter()
+                .flat_map(|q| q.iter().map(|x| x.abs()))
+                .fold(1.0f64, f64::max);
+            for (i, (q, set)) in p.points.iter().zip(sets).enumerate() {
+                let poly = halfplane_polygon(set, [q[0], q[1]], 4.0 * scale);
+                let st = if r.active.get(i).copied().unwrap_or(false) {
+                    &active_style
+                } else {
+                    &inactive_style
+                };
+                if poly.len() >= 3 {
+                    fig.polygon(&poly, st.clone());
+                }
+            }
+        }
+        _ => {}
+    }
+    let curve: Vec<[f64; 2]> = r
+        .points
+        .iter()
+        .zip(&r.knots)
+        .map(|(v, &t)| xy(v, t))
+        .collect();
+    if p.closed && d >= 2 {
+        fig.polygon(&curve, Style::stroke(palette::CURVE, 1.6));
+    } else {
+        fig.polyline(&curve, Style::stroke(palette::CURVE, 1.6));
+    }
+    let attached: Vec<[f64; 2]> = r
+        .data_vertex
+        .iter()
+        .zip(&data_t)
+        .filter_map(|(&j, &t)| r.points.get(j).map(|v| xy(v, t)))
+        .collect();
+    fig.points_sized(
+        &attached,
+        Marker::Ring,
+        6.0,
+        Style::stroke(palette::CURVE, 1.0),
+    );
+    let data: Vec<[f64; 2]> = p
+        .points
+        .iter()
+        .zip(&data_t)
+        .map(|(q, &t)| xy(q, t))
+        .collect();
+    fig.points(&data, Marker::Dot, Style::fill(palette::DATA));
+    fig.legend("refined curve", Style::stroke(palette::CURVE, 1.6));
+    fig.legend("data point", Style::fill(palette::DATA));
+    if !matches!(
+        p.constraint,
+        ConstraintSpec::Interpolate | ConstraintSpec::Smoothing { .. }
+    ) {
+        fig.legend("active constraint", Style::stroke(palette::ACTIVE, 1.3));
+        fig.legend("inactive constraint", Style::stroke(palette::REGION, 1.0));
+    }
+    let n_active = r.active.iter().filter(|&&a| a).count();
+    fig.caption(&format!(
+        "E = {:.6}   KKT residual = {:.1e}   active: {n_active} of {}",
+        r.energy,
+        r.kkt_residual,
+        r.active.len()
+    ));
+    fig.to_svg()
+}

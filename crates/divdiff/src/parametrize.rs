@@ -1,0 +1,98 @@
+//! Knots from points: the parametrizations of Kersey's Algorithm 4.1, step (iv).
+
+use crate::{Error, Knots, Points, Topology};
+
+/// A parametrization u_{i+1} = u_i + |q_{i+1} − q_i|^e (Kersey, Algorithm 4.1 step (iv)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Parametrization {
+    /// e = 0: unit spans.
+    Uniform,
+    /// e = ½ (the paper's choice).
+    Centripetal,
+    /// e = 1: spans as long as the chords.
+    Chordal,
+    /// Any exponent e, finite and ≥ 0.
+    Exponent(f64),
+}
+
+impl Parametrization {
+    /// The exponent e.
+    pub fn exponent(self) -> f64 {
+        match self {
+            Parametrization::Uniform => 0.0,
+            Parametrization::Centripetal => 0.5,
+            Parametrization::Chordal => 1.0,
+            Parametrization::Exponent(e) => e,
+        }
+    }
+}
+
+/// Knots for `points` by Algorithm 4.1 step (iv): u_0 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e
+/// (Euclidean norm), **not** normalized. A closed curve gets the closing span |q_0 − q_{N−1}|^e as
+/// its knot N + 1, so N points give N knots (open) or N + 1 knots (closed).
+///
+/// # Errors
+/// - [`Error::OutOfRange`] (`field: "exponent"`) if e is NaN, infinite or negative;
+/// - [`Error::TooFew`] for fewer than 2 points (open) or 3 points (closed);
+/// - [`Error::ZeroLengthSpan`] `{ index, next }` if two consecutive points coincide (for a closed
+///   curve also the closing pair, `next = 0`) — for every exponent, uniform included, since such
+///   a polygon has a degenerate span;
+/// - [`Error::NonFinite`] / [`Error::NonIncreasingKnots`] if a span length |q_{i+1} − q_i|^e
+///   overflows to infinity or underflows to zero.
+///
+/// ```
+/// use divdiff::{parametrize, Parametrization, Points, Topology};
+/// let q = Points::from_rows(&[[0.0, 0.0], [3.0, 4.0], [3.0, 0.0]]).unwrap();
+/// let u = parametrize(&q, Topology::Closed, Parametrization::Chordal).unwrap();
+/// assert_eq!(u.vertex_count(), 3);
+/// let want = [0.0, 5.0, 9.0, 12.0];
+/// assert!(u.values().iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12));
+/// ```
+pub fn parametrize(
+    points: &Points,
+    topology: Topology,
+    parametrization: Parametrization,
+) -> Result<Knots, Error> {
+    let e = parametrization.exponent();
+    if !e.is_finite() || e < 0.0 {
+        return Err(Error::OutOfRange {
+            field: "exponent",
+            value: e,
+            reason: "the exponent must be finite and non-negative",
+        });
+    }
+    let n = points.len();
+    let needed = match topology {
+        Topology::Open => 2,
+        Topology::Closed => 3,
+    };
+    if n < needed {
+        return Err(Error::TooFew {
+            field: "points",
+            needed,
+            got: n,
+        });
+    }
+    let spans = match topology {
+        Topology::Open => n - 1,
+        Topology::Closed => n,
+    };
+    let mut t = Vec::with_capacity(spans + 1);
+    t.push(0.0);
+    for i in 0..spans {
+        let next = (i + 1) % n;
+        let dist = points
+            .point(i)
+            .iter()
+            .zip(points.point(next))
+            .map(|(a, b)| (b - a) * (b - a))
+            .sum::<f64>()
+            .sqrt();
+        if dist <= 0.0 {
+            return Err(Error::ZeroLengthSpan { index: i, next });
+        }
+        let last = t[t.len() - 1];
+        t.push(last + dist.powf(e));
+    }
+    Knots::new(topology, t)
+}
