@@ -1,12 +1,11 @@
 //! Algorithm 4.1: the near-interpolatory k-level step with knot updates (part 1), then further
 //! interpolatory steps (part 2); and the result with its certificates.
 
-use divdiff::{Knots, Points};
+use divdiff::{Knots, Parametrization, Points};
 
 use super::certify::{certify, Certificate};
 use super::operator::Stencil;
 use super::problem::{Constraint, Problem, Solver};
-use super::split::{parametrize, ParamError};
 use super::{degenerate, fixed};
 use crate::Error;
 
@@ -110,7 +109,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     problem.validate()?;
     let q = &problem.points;
     let u = problem.data_knots()?;
-    let e = problem.parametrization.exponent();
+    let e = problem.parametrization;
     let mut iterations = Iterations::default();
     let mut stages = Vec::new();
 
@@ -252,19 +251,19 @@ fn stage_loop(
     constraint: &Constraint,
     problem: &Problem,
     stride: usize,
-    e: f64,
+    param: Parametrization,
     iterations: &mut Iterations,
 ) -> Result<(Points, Vec<Vec<f64>>, Certificate), Error> {
     let mut sol: Option<FixedSolution> = None;
     for _ in 0..=problem.knot_iterations {
         if let Some(FixedSolution { points, .. }) = &sol {
-            *knots = parametrize(points, knots.topology(), e).map_err(|err| match err {
-                ParamError::ZeroSpan(index) => Error::DegenerateRefinedSpan {
-                    stage,
-                    index,
-                    next: (index + 1) % points.len(),
-                },
-                ParamError::Knots(e) => Error::Divdiff(e),
+            *knots = divdiff::parametrize(points, knots.topology(), param).map_err(|err| {
+                match err {
+                    divdiff::Error::ZeroLengthSpan { index, next } => {
+                        Error::DegenerateRefinedSpan { stage, index, next }
+                    }
+                    e => Error::Divdiff(e),
+                }
             })?;
             iterations.knot_updates += 1;
         }

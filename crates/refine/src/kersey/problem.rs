@@ -1,35 +1,8 @@
 //! The refinement problem: data, constraints, options, and their validation.
 
-use divdiff::{Knots, Points, Topology};
+use divdiff::{DerivativeRule, Knots, Parametrization, Points, Topology};
 
-use super::split::ParamError;
 use crate::Error;
-
-/// How data parameters (and refined knots in the knot updates) are spaced:
-/// u_1 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e (Kersey, Algorithm 4.1 step (iv)); not normalized.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Parametrization {
-    /// e = 0: unit spacing.
-    Uniform,
-    /// e = ½ (the default, and the seed's recommendation).
-    Centripetal,
-    /// e = 1: chord length.
-    Chordal,
-    /// Any exponent e ≥ 0.
-    Exponent(f64),
-}
-
-impl Parametrization {
-    /// The exponent e.
-    pub fn exponent(self) -> f64 {
-        match self {
-            Parametrization::Uniform => 0.0,
-            Parametrization::Centripetal => 0.5,
-            Parametrization::Chordal => 1.0,
-            Parametrization::Exponent(e) => e,
-        }
-    }
-}
 
 /// One half-space {x : normal · x ≤ offset}.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,17 +51,6 @@ pub enum Tangent {
     },
     /// Df satisfies every half-space.
     HalfSpaces(Vec<HalfSpace>),
-}
-
-/// The approximate vertex derivative Df(t_i) (Kersey (2.2)/(2.3)).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum DerivativeRule {
-    /// (2.2): ½(s_{i−1} + s_i); one-sided differences at the ends of an open curve.
-    Average,
-    /// The derivative at t_i of the quadratic through p_{i−1}, p_i, p_{i+1} (the corrected (2.3));
-    /// the end quadratics at the ends of an open curve (§3.6).
-    #[default]
-    Bessel,
 }
 
 /// End conditions of an open curve (Kersey §3.6).
@@ -451,18 +413,14 @@ impl Problem {
         self.validate()?;
         match &self.knots {
             Some(u) => Ok(Knots::new(self.topology, u.clone())?),
-            None => crate::kersey::split::parametrize(
-                &self.points,
-                self.topology,
-                self.parametrization.exponent(),
-            )
-            .map_err(|e| match e {
-                ParamError::ZeroSpan(index) => Error::CoincidentPoints {
-                    index,
-                    next: (index + 1) % self.points.len(),
+            None => divdiff::parametrize(&self.points, self.topology, self.parametrization).map_err(
+                |e| match e {
+                    divdiff::Error::ZeroLengthSpan { index, next } => {
+                        Error::CoincidentPoints { index, next }
+                    }
+                    e => Error::Divdiff(e),
                 },
-                ParamError::Knots(e) => Error::Divdiff(e),
-            }),
+            ),
         }
     }
 }

@@ -1,61 +1,8 @@
-//! The k-level split (3.1) and the power parametrization of Algorithm 4.1 step (iv).
+//! The k-level split (3.1).
 
-use divdiff::{Knots, Points, Topology};
+use divdiff::{Knots, Points};
 
 use crate::Error;
-
-/// Parameters u_1 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e for the points in order (closed
-/// curves add the closing span back to q_1). Not normalized.
-///
-/// Why [`parametrize`] failed.
-pub(crate) enum ParamError {
-    /// Span i (from point i to point i + 1, wrapping) has zero length, or is so short that the
-    /// knots do not increase in floating point.
-    ZeroSpan(usize),
-    /// The knots are invalid for another reason (too few).
-    Knots(divdiff::Error),
-}
-
-/// Parameters u_1 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e (see the module docs).
-pub(crate) fn parametrize(
-    points: &Points,
-    topology: Topology,
-    e: f64,
-) -> Result<Knots, ParamError> {
-    let n = points.len();
-    let spans = match topology {
-        Topology::Open => n.saturating_sub(1),
-        Topology::Closed => n,
-    };
-    let mut t = Vec::with_capacity(spans + 1);
-    t.push(0.0);
-    let mut acc = 0.0;
-    for i in 0..spans {
-        let (a, b) = (points.point(i), points.point((i + 1) % n));
-        let dist2: f64 = a.iter().zip(b).map(|(x, y)| (y - x) * (y - x)).sum();
-        if dist2 == 0.0 {
-            return Err(ParamError::ZeroSpan(i));
-        }
-        // |Δ|^e = (|Δ|²)^{e/2}; e = 0 gives 1 exactly.
-        // The common exponents avoid the (much slower) general power.
-        let step = if e == 0.0 {
-            1.0
-        } else if e == 0.5 {
-            dist2.sqrt().sqrt()
-        } else if e == 1.0 {
-            dist2.sqrt()
-        } else {
-            dist2.powf(0.5 * e)
-        };
-        let next = acc + step;
-        if next <= acc {
-            return Err(ParamError::ZeroSpan(i));
-        }
-        acc = next;
-        t.push(acc);
-    }
-    Knots::new(topology, t).map_err(ParamError::Knots)
-}
 
 /// Index of the data vertex of q_i after a k-level split: i_k = (k + 1) i (0-based; the seed's
 /// 1-based i_k = (k + 1)(i − 1) + 1).
