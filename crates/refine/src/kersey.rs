@@ -11,7 +11,7 @@ mod problem;
 mod split;
 
 pub use algorithm::{Iterations, Refinement, Stage};
-pub use certify::ACTIVE_REL_TOL;
+pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
 pub use degenerate::{COMMON_POINT_SWEEPS, COMMON_POINT_TOL, STAGNATION};
 pub use fixed::PAPER_WEIGHT_FLOOR;
 pub use divdiff::{DerivativeRule, Parametrization};

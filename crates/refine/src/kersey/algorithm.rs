@@ -3,7 +3,7 @@
 
 use divdiff::{Knots, Parametrization, Points};
 
-use super::certify::{certify, Certificate};
+use super::certify::{certify, Certificate, ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
 use super::operator::Stencil;
 use super::problem::{Constraint, Problem, Solver};
 use super::{degenerate, fixed};
@@ -131,6 +131,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
             &data_vertex,
             &problem.constraint,
             Some(mult),
+            ACTIVE_REL_TOL,
         );
         iterations.solves += 1;
         (pts, mult, cert)
@@ -166,6 +167,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
                 &dv,
                 &Constraint::Interpolate,
                 None,
+                ACTIVE_REL_TOL,
             );
             iterations.solves += 1;
             (np, mult, cert)
@@ -282,6 +284,18 @@ fn stage_loop(
     }
     let s = sol.expect("at least one solve");
     let stencil = s.stencil.unwrap_or_else(|| Stencil::new(knots));
-    let (cert, mult) = certify(&stencil, &s.points, q, data_vertex, constraint, s.multipliers);
+    let tol = match problem.solver {
+        Solver::Exact => ACTIVE_REL_TOL,
+        Solver::Paper => PAPER_ACTIVE_REL_TOL,
+    };
+    let (cert, mult) = certify(
+        &stencil,
+        &s.points,
+        q,
+        data_vertex,
+        constraint,
+        s.multipliers,
+        tol,
+    );
     Ok((s.points, mult, cert))
 }
