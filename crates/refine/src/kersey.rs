@@ -13,11 +13,11 @@ mod split;
 pub use algorithm::{Iterations, Refinement, Stage};
 pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
 pub use degenerate::{COMMON_POINT_SWEEPS, COMMON_POINT_TOL, STAGNATION};
-pub use fixed::PAPER_WEIGHT_FLOOR;
 pub use divdiff::{DerivativeRule, Parametrization};
+pub use fixed::PAPER_WEIGHT_FLOOR;
 pub use problem::{
-    Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K,
-    DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS,
+    Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
+    DEFAULT_PAPER_ITERATIONS,
 };
 pub use split::{data_vertex, split};
 

@@ -9,6 +9,8 @@
 //!
 //! Every ratio is measured in the same run; nothing is asserted.
 
+// The same reference file as verify's (xtask's shared modules are not ours to edit).
+#[allow(clippy::duplicate_mod)]
 #[path = "../../../crates/refine/tests/kersey_support/mod.rs"]
 mod clarabel_ref;
 
@@ -59,7 +61,13 @@ fn ms(d: Duration) -> f64 {
 fn peer(n: usize, k: usize, reps: usize) -> Option<f64> {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/peers/refine_peer.py");
     let out = Command::new("python3")
-        .args([script, "interp", &n.to_string(), &k.to_string(), &reps.to_string()])
+        .args([
+            script,
+            "interp",
+            &n.to_string(),
+            &k.to_string(),
+            &reps.to_string(),
+        ])
         .output();
     match out {
         Ok(o) if o.status.success() => {
@@ -131,14 +139,20 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     }
     // With the default three knot updates (four solves).
     let problem = Problem::new(wavy_circle(n_peer)).with_k(k);
-    let t = time_median(reps.min(3), || problem.solve().expect("interpolation solves"));
+    let t = time_median(reps.min(3), || {
+        problem.solve().expect("interpolation solves")
+    });
     println!(
         "  n = {n_peer}, default knot_iterations = 3 (four solves + updates): {:.2} ms",
         ms(t)
     );
 
     println!("refine: balls, closed, d = 2, k = 3, knot_iterations = 0");
-    let n_balls: &[usize] = if opts.quick { &[1_000] } else { &[10_000, 100_000] };
+    let n_balls: &[usize] = if opts.quick {
+        &[1_000]
+    } else {
+        &[10_000, 100_000]
+    };
     for &n in n_balls {
         let q = wavy_circle(n);
         let r = radii(&q);
@@ -164,9 +178,8 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         );
         if n <= 10_000 {
             let start = std::time::Instant::now();
-            let reference =
-                clarabel_ref::clarabel_solve(&sol.knots, &q, &sol.data_vertex, &c)
-                    .map_err(anyhow::Error::msg)?;
+            let reference = clarabel_ref::clarabel_solve(&sol.knots, &q, &sol.data_vertex, &c)
+                .map_err(anyhow::Error::msg)?;
             let tc = start.elapsed();
             let e_ref = energy::energy(&sol.knots, &reference.points)?;
             println!(

@@ -51,9 +51,10 @@ fn balls(fig: &mut Figure, q: &Points, radii: &[f64], r: &Refinement, dx: f64) {
 fn solve(problem: Problem) -> anyhow::Result<(Refinement, &'static str)> {
     match problem.solve() {
         Ok(r) => Ok((r, "exact")),
-        Err(refine::Error::Unsupported { .. }) => {
-            Ok((problem.with_solver(Solver::Paper).solve()?, "paper iteration"))
-        }
+        Err(refine::Error::Unsupported { .. }) => Ok((
+            problem.with_solver(Solver::Paper).solve()?,
+            "paper iteration",
+        )),
         Err(e) => Err(e.into()),
     }
 }
@@ -93,7 +94,10 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
             .with_k(7)
             .with_levels(2, 1)
             .solve()?;
-        fig.polygon(&shift(&xy(&q), dx), Style::stroke(palette::REGION, 0.8).dashed("3 3"));
+        fig.polygon(
+            &shift(&xy(&q), dx),
+            Style::stroke(palette::REGION, 0.8).dashed("3 3"),
+        );
         curve(&mut fig, &r, true, dx, palette::CURVE);
         data_points(&mut fig, &q, dx);
         fig.caption(&format!(
@@ -116,10 +120,20 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
     fig.polygon(&xy(&q), Style::stroke(palette::REGION, 1.2));
     data_points(&mut fig, &q, 0.0);
     let one = Problem::new(q.clone()).with_k(1).solve()?;
-    let many = Problem::new(q.clone()).with_k(1).with_levels(4, 1).solve()?;
+    let many = Problem::new(q.clone())
+        .with_k(1)
+        .with_levels(4, 1)
+        .solve()?;
     for (r, dx) in [(&one, 4.5), (&many, 9.0)] {
-        fig.polygon(&shift(&xy(&r.points), dx), Style::stroke(palette::CURVE, 1.4));
-        fig.points(&shift(&xy(&r.points), dx), Marker::Dot, Style::fill(palette::CURVE));
+        fig.polygon(
+            &shift(&xy(&r.points), dx),
+            Style::stroke(palette::CURVE, 1.4),
+        );
+        fig.points(
+            &shift(&xy(&r.points), dx),
+            Marker::Dot,
+            Style::fill(palette::CURVE),
+        );
         data_points(&mut fig, &q, dx);
     }
     fig.caption("left: data; middle: one k = 1 step; right: four more levels");
@@ -135,7 +149,9 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
     // Fig. 3.2: near-interpolation to random balls; active (on the boundary) vs inactive.
     let mut s: u64 = 7;
     let mut rnd = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
     let n = 9;
@@ -163,9 +179,14 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
         "{which} solver, k = 7 + two levels: {n_active} of {n} balls active (red), E = {:.4}",
         r.energy
     ));
-    fig.caption(&format!("KKT residual of the ball step {:.1e}", r.stages[0].kkt_residual));
+    fig.caption(&format!(
+        "KKT residual of the ball step {:.1e}",
+        r.stages[0].kkt_residual
+    ));
     if let Some(j) = r.jmp_inactive() {
-        fig.caption(&format!("Corollary 3.3: max relative |jmp| at inactive data vertices = {j:.1e}"));
+        fig.caption(&format!(
+            "Corollary 3.3: max relative |jmp| at inactive data vertices = {j:.1e}"
+        ));
     }
     super::save(dir, "kersey_fig3_2_balls.svg", &fig.to_svg())?;
 
@@ -188,7 +209,11 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
             }
         }
         data_points(&mut fig, &q, dx);
-        fig.caption(&format!("panel {}: radius {eps}, E = {:.3} ({which})", j + 1, r.energy));
+        fig.caption(&format!(
+            "panel {}: radius {eps}, E = {:.3} ({which})",
+            j + 1,
+            r.energy
+        ));
     }
     super::save(dir, "kersey_fig3_3_star.svg", &fig.to_svg())?;
 

@@ -82,8 +82,9 @@ fn worst(
 }
 
 fn clarabel_gap(p: &Problem, r: &Refinement) -> anyhow::Result<f64> {
-    let reference = clarabel_ref::clarabel_solve(&r.knots, &p.points, &r.data_vertex, &p.constraint)
-        .map_err(anyhow::Error::msg)?;
+    let reference =
+        clarabel_ref::clarabel_solve(&r.knots, &p.points, &r.data_vertex, &p.constraint)
+            .map_err(anyhow::Error::msg)?;
     let ours = match &p.constraint {
         Constraint::Smoothing(w) => r.energy + penalty(p, r, w),
         _ => r.energy,
@@ -146,14 +147,22 @@ pub fn cases() -> Vec<Case> {
                 |q, t, _| Problem::new(q).with_topology(t).with_k(3),
                 |_, r| Ok(r.kkt_residual),
             )?;
-            Ok(Outcome::check(r, KKT_TOL, "p_ik = q_i and (Hp)_j = 0 at free j (3.3), relative"))
+            Ok(Outcome::check(
+                r,
+                KKT_TOL,
+                "p_ik = q_i and (Hp)_j = 0 at free j (3.3), relative",
+            ))
         }),
         Case::holds("kersey/thm3.1/interpolation-vs-clarabel", || {
             let r = worst(
                 |q, t, _| Problem::new(q).with_topology(t).with_k(4),
                 clarabel_gap,
             )?;
-            Ok(Outcome::check(r, ENERGY_RTOL, "relative energy difference to Clarabel"))
+            Ok(Outcome::check(
+                r,
+                ENERGY_RTOL,
+                "relative energy difference to Clarabel",
+            ))
         }),
         Case::holds("kersey/thm3.4/smoothing-kkt", || {
             let r = worst(
@@ -165,7 +174,11 @@ pub fn cases() -> Vec<Case> {
                 },
                 |_, r| Ok(r.kkt_residual),
             )?;
-            Ok(Outcome::check(r, KKT_TOL, "(H + W)p = W q~ (3.6), relative"))
+            Ok(Outcome::check(
+                r,
+                KKT_TOL,
+                "(H + W)p = W q~ (3.6), relative",
+            ))
         }),
         Case::holds("kersey/thm3.4/smoothing-vs-clarabel", || {
             let r = worst(
@@ -177,7 +190,11 @@ pub fn cases() -> Vec<Case> {
                 },
                 clarabel_gap,
             )?;
-            Ok(Outcome::check(r, ENERGY_RTOL, "relative objective difference to Clarabel"))
+            Ok(Outcome::check(
+                r,
+                ENERGY_RTOL,
+                "relative objective difference to Clarabel",
+            ))
         }),
         Case::holds("kersey/alg4.1/levels-interpolate-and-certify", || {
             let r = worst(

@@ -259,14 +259,13 @@ fn stage_loop(
     let mut sol: Option<FixedSolution> = None;
     for _ in 0..=problem.knot_iterations {
         if let Some(FixedSolution { points, .. }) = &sol {
-            *knots = divdiff::parametrize(points, knots.topology(), param).map_err(|err| {
-                match err {
+            *knots =
+                divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::DegenerateRefinedSpan { stage, index, next }
                     }
                     e => Error::Divdiff(e),
-                }
-            })?;
+                })?;
             iterations.knot_updates += 1;
         }
         let fp = FixedProblem {

@@ -62,11 +62,20 @@ pub(crate) fn certify(
             *c += v / n as f64;
         }
     }
-    let stride = if n > 1 { data_vertex[1] } else { p.len().max(1) };
+    let stride = if n > 1 {
+        data_vertex[1]
+    } else {
+        p.len().max(1)
+    };
     let pass = stencil.pass(p, stride, &centroid);
     let q_extent = q
         .iter()
-        .map(|x| x.iter().zip(&centroid).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max))
+        .map(|x| {
+            x.iter()
+                .zip(&centroid)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+        })
         .fold(0.0, f64::max);
     let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);
     let force = pass.h_norm * length;
@@ -91,15 +100,15 @@ pub(crate) fn certify(
         match constraint {
             Constraint::Interpolate => {
                 // The multiplier of p_v = q_i is the reaction λ_i = −(Hp)_v.
-                for c in 0..d {
-                    r[c] += m[c];
+                for (rc, mc) in r.iter_mut().zip(m) {
+                    *rc += mc;
                 }
                 primal = primal.max(dist(pv, qi));
                 active[i] = true;
             }
             Constraint::Balls(radii) if radii[i] == 0.0 => {
-                for c in 0..d {
-                    r[c] += m[c];
+                for (rc, mc) in r.iter_mut().zip(m) {
+                    *rc += mc;
                 }
                 primal = primal.max(dist(pv, qi));
                 active[i] = true;
@@ -125,11 +134,10 @@ pub(crate) fn certify(
                 for (j, h) in sets[i].iter().enumerate() {
                     let w = m[j];
                     let norm = h.normal.iter().map(|x| x * x).sum::<f64>().sqrt();
-                    let g = (h.normal.iter().zip(pv).map(|(a, b)| a * b).sum::<f64>()
-                        - h.offset)
+                    let g = (h.normal.iter().zip(pv).map(|(a, b)| a * b).sum::<f64>() - h.offset)
                         / norm;
-                    for c in 0..d {
-                        r[c] += w * h.normal[c];
+                    for (rc, nc) in r.iter_mut().zip(&h.normal) {
+                        *rc += w * nc;
                     }
                     primal = primal.max(g);
                     dual = dual.max(-w * norm * length);

@@ -29,7 +29,10 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// A point common to all data constraint sets, if the problem has no derivative constraints
 /// and such a point is found; `None` otherwise.
 pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
-    if problem.tangents.as_ref().is_some_and(|t| t.iter().any(Option::is_some))
+    if problem
+        .tangents
+        .as_ref()
+        .is_some_and(|t| t.iter().any(Option::is_some))
         || problem.boundary != Boundary::Natural
     {
         return None;
@@ -55,16 +58,19 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
             if (0..n).any(|i| dist(q.point(i), q.point((i + 1) % n)) > r[i] + r[(i + 1) % n]) {
                 return None;
             }
-            let violation =
-                |x: &[f64]| (0..n).map(|i| dist(x, q.point(i)) - r[i]).fold(0.0, f64::max);
+            let violation = |x: &[f64]| {
+                (0..n)
+                    .map(|i| dist(x, q.point(i)) - r[i])
+                    .fold(0.0, f64::max)
+            };
             let mut x = centroid;
             let mut last = f64::INFINITY;
             for _ in 0..COMMON_POINT_SWEEPS {
-                for i in 0..n {
+                for (i, &ri) in r.iter().enumerate() {
                     let c = q.point(i);
                     let g = dist(&x, c);
-                    if g > r[i] {
-                        let s = r[i] / g;
+                    if g > ri {
+                        let s = ri / g;
                         for (xj, cj) in x.iter_mut().zip(c) {
                             *xj = cj + s * (*xj - cj);
                         }
@@ -86,8 +92,13 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
                 for set in sets {
                     for h in set {
                         let nn: f64 = h.normal.iter().map(|a| a * a).sum();
-                        let g: f64 =
-                            h.normal.iter().zip(x.iter()).map(|(a, b)| a * b).sum::<f64>() - h.offset;
+                        let g: f64 = h
+                            .normal
+                            .iter()
+                            .zip(x.iter())
+                            .map(|(a, b)| a * b)
+                            .sum::<f64>()
+                            - h.offset;
                         if g > 0.0 {
                             for (xj, nj) in x.iter_mut().zip(&h.normal) {
                                 *xj -= g / nn * nj;

@@ -44,7 +44,10 @@ fn span_lu(rows: &[[f64; 3]], l: &mut [f64], u: &mut [f64]) -> Result<(), usize>
     }
     // B has α_2 = −α_1 − α_3 < 0 on the diagonal: the pivots stay negative and bounded away from
     // zero by its diagonal dominance; anything else means the knots were not valid.
-    match u[..k].iter().position(|&x| !(x < 0.0 && x.is_finite())) {
+    match u[..k]
+        .iter()
+        .position(|&x| x.is_nan() || x >= 0.0 || x.is_infinite())
+    {
         Some(j) => Err(j),
         None => Ok(()),
     }
@@ -143,9 +146,8 @@ pub(crate) fn interpolate(
             }
             let qi = q.point(i);
             for c in 0..d {
-                rhs[j * d + c] = ar[1] * qi[c]
-                    - ar[0] * hc[prev * d + c]
-                    - ar[2] * gc[(i % spans) * d + c];
+                rhs[j * d + c] =
+                    ar[1] * qi[c] - ar[0] * hc[prev * d + c] - ar[2] * gc[(i % spans) * d + c];
             }
         }
         solve_tridiagonal(&mut diag, &mut off, &mut rhs, d, closed && size >= 3)
@@ -256,7 +258,7 @@ fn ldl_solve(
                 e[j] -= lm[j] * e[j - 1];
             }
         }
-        if !(diag[j] > 0.0) {
+        if diag[j].is_nan() || diag[j] <= 0.0 {
             return Err(j);
         }
     }

@@ -148,7 +148,8 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         }
         Constraint::HalfSpaces(_) => Err(Error::Unsupported {
             field: "solver",
-            reason: "the paper's slot iteration (Fig. 4.1) is not implemented; use the exact solver",
+            reason:
+                "the paper's slot iteration (Fig. 4.1) is not implemented; use the exact solver",
         }),
     }
 }

@@ -413,14 +413,13 @@ impl Problem {
         self.validate()?;
         match &self.knots {
             Some(u) => Ok(Knots::new(self.topology, u.clone())?),
-            None => divdiff::parametrize(&self.points, self.topology, self.parametrization).map_err(
-                |e| match e {
+            None => divdiff::parametrize(&self.points, self.topology, self.parametrization)
+                .map_err(|e| match e {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::CoincidentPoints { index, next }
                     }
                     e => Error::Divdiff(e),
-                },
-            ),
+                }),
         }
     }
 }

@@ -77,14 +77,15 @@ pub fn clarabel_solve(
     let mut constant = 0.0;
     for (i, &v) in data_vertex.iter().enumerate() {
         let qi = q.point(i);
-        let equality = |ai: &mut Vec<usize>, aj: &mut Vec<usize>, av: &mut Vec<f64>, b: &mut Vec<f64>| {
-            for (c, &qc) in qi.iter().enumerate() {
-                ai.push(b.len());
-                aj.push(v * d + c);
-                av.push(1.0);
-                b.push(qc);
-            }
-        };
+        let equality =
+            |ai: &mut Vec<usize>, aj: &mut Vec<usize>, av: &mut Vec<f64>, b: &mut Vec<f64>| {
+                for (c, &qc) in qi.iter().enumerate() {
+                    ai.push(b.len());
+                    aj.push(v * d + c);
+                    av.push(1.0);
+                    b.push(qc);
+                }
+            };
         match constraint {
             Constraint::Interpolate => {
                 equality(&mut ai, &mut aj, &mut av, &mut b);
@@ -126,7 +127,6 @@ pub fn clarabel_solve(
                     cones.push(SupportedConeT::NonnegativeConeT(sets[i].len()));
                 }
             }
-
         }
     }
     let m = b.len();
