@@ -274,10 +274,16 @@ impl System {
             for &(b, _) in stencil {
                 let (i, j) = if a >= b { (a, b) } else { (b, a) };
                 if j < env.first(i) || (self.topology == Topology::Open && i - j > 2) {
-                    return Err(Error::StencilTooWide { first: a, second: b });
+                    return Err(Error::StencilTooWide {
+                        first: a,
+                        second: b,
+                    });
                 }
                 if self.topology == Topology::Closed && i - j > 2 && n - (i - j) > 2 {
-                    return Err(Error::StencilTooWide { first: a, second: b });
+                    return Err(Error::StencilTooWide {
+                        first: a,
+                        second: b,
+                    });
                 }
             }
         }

@@ -59,7 +59,9 @@ fn system(top: Topology, n: usize, d: usize, blocks: bool) -> anyhow::Result<Sys
 fn rhs(n: usize, d: usize) -> anyhow::Result<Points> {
     Ok(Points::new(
         d,
-        (0..n * d).map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0).collect(),
+        (0..n * d)
+            .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
+            .collect(),
     )?)
 }
 
@@ -94,7 +96,9 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         }
     }
     println!();
-    println!("Dense contrast (d = 1, closed): nalgebra LU of the same K vs the cyclic banded solve.");
+    println!(
+        "Dense contrast (d = 1, closed): nalgebra LU of the same K vs the cyclic banded solve."
+    );
     println!();
     println!("| N | dense LU | banded | ratio |");
     println!("|---:|---:|---:|---:|");
@@ -126,7 +130,11 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
                 .expect("sizes match")
         });
         // Same answer?
-        let xd = k.clone().lu().solve(&bv).unwrap_or_else(|| DVector::zeros(n));
+        let xd = k
+            .clone()
+            .lu()
+            .solve(&bv)
+            .unwrap_or_else(|| DVector::zeros(n));
         let xb = s.factor()?.solve(&b)?;
         let diff = (DVector::from_column_slice(xb.coords()) - &xd).norm() / xd.norm();
         println!(

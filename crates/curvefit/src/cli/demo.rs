@@ -22,6 +22,18 @@ pub struct Example {
 /// The built-in examples (the JSON files are in `crates/curvefit/examples/data/`).
 pub const EXAMPLES: &[Example] = &[
     Example {
+        name: "refine-interpolate-closed",
+        command: "refine",
+        title: "interpolatory refinement, centripetal knots, one 3-level step then two further levels (Kersey Figs. 1.1, 3.1)",
+        problem: include_str!("../../examples/data/refine-interpolate-closed.json"),
+    },
+    Example {
+        name: "refine-smoothing-open",
+        command: "refine",
+        title: "smoothing of noisy samples, open curve with natural ends (Kersey (3.6), §3.6)",
+        problem: include_str!("../../examples/data/refine-smoothing-open.json"),
+    },
+    Example {
         name: "strip-example-5-1",
         command: "strip",
         title: "16 points in a strip: touching points, a subarc and a touching pair (Dontchev–Kolmanovsky Fig. 2)",
