@@ -32,9 +32,9 @@ fn stencil(knots: &Knots, i: isize, order: usize) -> Result<Vec<(f64, usize)>, E
         .collect())
 }
 
-/// The divided difference Δ_{i,n} f = [t_i, …, t_{i+n}] f of the vertex data, by the recurrence
-/// [t_i..t_{i+n}] f = ([t_{i+1}..t_{i+n}] f − [t_i..t_{i+n−1}] f) / (t_{i+n} − t_i), with
-/// [t_j] f = p_j. One value per coordinate.
+/// The divided difference Δ_{i,n} f = \[t_i, …, t_{i+n}\] f of the vertex data, by the recurrence
+/// \[t_i..t_{i+n}\] f = (\[t_{i+1}..t_{i+n}\] f − \[t_i..t_{i+n−1}\] f) / (t_{i+n} − t_i), with
+/// \[t_j\] f = p_j. One value per coordinate.
 ///
 /// For closed curves any index is allowed: knots follow the periodic extension
 /// t_{j+N} = t_j + T and vertices wrap, p_{j+N} = p_j (Kersey §2). For open curves the knots
@@ -61,14 +61,14 @@ pub fn divided_difference(
 ) -> Result<Vec<f64>, Error> {
     check_sizes(knots, points)?;
     let s = stencil(knots, i, order)?;
-    let d = points.dim();
     // Newton's table, one level at a time, in place: after level m, table[k] = [t_{i+k}..t_{i+k+m}] f.
     let mut table: Vec<Vec<f64>> = s.iter().map(|&(_, v)| points.point(v).to_vec()).collect();
     for m in 1..=order {
         for k in 0..=order - m {
             let dt = s[k + m].0 - s[k].0;
-            for c in 0..d {
-                table[k][c] = (table[k + 1][c] - table[k][c]) / dt;
+            let (lo, hi) = table.split_at_mut(k + 1);
+            for (x, y) in lo[k].iter_mut().zip(&hi[0]) {
+                *x = (y - *x) / dt;
             }
         }
     }
@@ -106,7 +106,7 @@ pub fn divided_difference_explicit(
     Ok(out)
 }
 
-/// The slopes s_j = [t_j, t_{j+1}] f = (p_{j+1} − p_j) / h_j, one per span (N − 1 open, N closed;
+/// The slopes s_j = \[t_j, t_{j+1}\] f = (p_{j+1} − p_j) / h_j, one per span (N − 1 open, N closed;
 /// the last slope of a closed curve is that of the closing span p_{N−1} → p_0).
 ///
 /// # Errors
@@ -125,7 +125,7 @@ pub fn slopes(knots: &Knots, points: &Points) -> Result<Points, Error> {
 }
 
 /// The second divided differences centred at each vertex: row i is
-/// Δ_{i−1,2} f = [t_{i−1}, t_i, t_{i+1}] f = (s_i − s_{i−1}) / (h_{i−1} + h_i).
+/// Δ_{i−1,2} f = \[t_{i−1}, t_i, t_{i+1}\] f = (s_i − s_{i−1}) / (h_{i−1} + h_i).
 ///
 /// N rows. For an open curve the rows of the two end vertices are zero: the difference centred
 /// there does not exist, and storing zero is exactly "dropping the term" in the energy and the

@@ -74,7 +74,7 @@ pub enum Error {
         /// The valid size.
         len: usize,
     },
-    /// The divided difference [t_index, …, t_{index+order}] f of an open curve needs knots that
+    /// The divided difference \[t_index, …, t_{index+order}\] f of an open curve needs knots that
     /// do not exist (index < 0 or index + order ≥ N).
     #[error("divided difference of order {order} at index {index} needs knots outside 0..{len}")]
     DifferenceOutOfRange {

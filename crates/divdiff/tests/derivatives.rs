@@ -280,3 +280,30 @@ fn parametrization_errors() {
         })
     );
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Every span is |q_{i+1} − q_i|^e, the first knot is 0, and a closed curve's last span is the
+    /// closing chord (Algorithm 4.1 step (iv), not normalized).
+    #[test]
+    fn parametrize_spans_are_powers_of_chords(
+        closed in any::<bool>(),
+        d in 1usize..=4,
+        e in 0.0f64..2.0,
+        coords in prop::collection::vec(-3.0f64..3.0, 3 * 4..=10 * 4),
+    ) {
+        let n = coords.len() / 4;
+        let q = Points::new(d, coords[..n * d].to_vec()).unwrap();
+        let top = if closed { Topology::Closed } else { Topology::Open };
+        let knots = parametrize(&q, top, Parametrization::Exponent(e)).unwrap();
+        prop_assert_eq!(knots.vertex_count(), n);
+        prop_assert!(knots.values()[0].abs() <= 0.0);
+        for j in 0..knots.span_count() {
+            let (a, b) = (q.point(j), q.point((j + 1) % n));
+            let chord = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+            let want = chord.powf(e);
+            prop_assert!((knots.h(j as isize) - want).abs() <= 1e-12 * (1.0 + knots.length()));
+        }
+    }
+}

@@ -32,4 +32,18 @@ pub enum Error {
         /// The valid size.
         len: usize,
     },
+    /// A stencil couples two vertices more than two steps apart (K would leave the band).
+    #[error("stencil couples vertices {first} and {second}, more than two steps apart")]
+    StencilTooWide {
+        /// One stencil vertex.
+        first: usize,
+        /// Another stencil vertex.
+        second: usize,
+    },
+    /// A vertex is fixed twice.
+    #[error("fixed vertex {index} is given twice")]
+    DuplicateFixed {
+        /// The vertex.
+        index: usize,
+    },
 }

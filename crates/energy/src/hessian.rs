@@ -108,10 +108,10 @@ impl Hessian {
 
     /// The bands `(diag, off1, off2)`, each of length N:
     ///
-    /// H = Σ_j diag[j] e_j e_jᵀ + off1[j] (e_j e_{j+1}ᵀ + e_{j+1} e_jᵀ) + off2[j] (e_j e_{j+2}ᵀ + e_{j+2} e_jᵀ),
+    /// H = Σ_j diag\[j\] e_j e_jᵀ + off1\[j\] (e_j e_{j+1}ᵀ + e_{j+1} e_jᵀ) + off2\[j\] (e_j e_{j+2}ᵀ + e_{j+2} e_jᵀ),
     ///
     /// with indices modulo N for closed curves — so for N = 3 or 4 different bands alias the same
-    /// entry and their contributions ADD. For open curves off1[N−1] = off2[N−2] = off2[N−1] = 0.
+    /// entry and their contributions ADD. For open curves off1\[N−1\] = off2\[N−2\] = off2\[N−1\] = 0.
     pub fn bands(&self) -> (&[f64], &[f64], &[f64]) {
         (&self.diag, &self.off1, &self.off2)
     }
@@ -179,7 +179,8 @@ impl Hessian {
         Ok(0.5 * dot(p.coords(), hp.coords()))
     }
 
-    /// The largest absolute band entry, a scale for tolerances (|H|_max ≤ ‖H‖₂ ≤ 5 |H|_max).
+    /// The largest absolute band entry, a scale for tolerances: ‖H‖₂ ≤ 5·`max_abs()`, since each
+    /// row of H sums at most five band entries (also when bands alias for N = 3, 4).
     pub fn max_abs(&self) -> f64 {
         self.diag
             .iter()

@@ -39,4 +39,127 @@ pub enum Error {
         /// The pivot (row) at which elimination failed.
         index: usize,
     },
+    /// Too few data points for the curve's topology (`needed` is the smallest valid n).
+    #[error("points: {topology} curve needs at least {needed} data points, got {got}")]
+    TooFewPoints {
+        /// `"open"` or `"closed"`.
+        topology: &'static str,
+        /// The smallest valid number of data points.
+        needed: usize,
+        /// The number given.
+        got: usize,
+    },
+    /// Two consecutive data points coincide (the span from `index` to `next` has zero length;
+    /// `next` wraps to 0 for the closing span of a closed curve).
+    #[error("points[{index}] and points[{next}] coincide (consecutive data points must differ)")]
+    CoincidentPoints {
+        /// The first point of the span.
+        index: usize,
+        /// The second point of the span.
+        next: usize,
+    },
+    /// A field that must have one entry per data point (or per knot) has the wrong length.
+    #[error("{field} has length {got}, expected {expected}")]
+    WrongLength {
+        /// The field, e.g. `"radii"`.
+        field: &'static str,
+        /// The expected length.
+        expected: usize,
+        /// The given length.
+        got: usize,
+    },
+    /// A vector has the wrong number of coordinates (`index` is the data point it belongs to,
+    /// or the half-space within the set for nested fields).
+    #[error("{field}[{index}] has {got} coordinates, expected {expected}")]
+    WrongDimension {
+        /// The field, e.g. `"tangents.center"`.
+        field: &'static str,
+        /// The index of the offending entry.
+        index: usize,
+        /// The dimension of the data points.
+        expected: usize,
+        /// The dimension given.
+        got: usize,
+    },
+    /// A per-point value is out of its valid range (negative or NaN radius, weight, angle …).
+    #[error("{field}[{index}] = {value} is invalid: {reason}")]
+    InvalidValue {
+        /// The field, e.g. `"radii"`.
+        field: &'static str,
+        /// The index of the offending entry.
+        index: usize,
+        /// The value given.
+        value: f64,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// A scalar parameter is out of range (e.g. `k = 0`).
+    #[error("{field} = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// The field, e.g. `"k"`.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// A half-space of a constraint set is invalid (`point` is the data point, `index` the
+    /// half-space within its set).
+    #[error("{field}[{point}][{index}] is invalid: {reason}")]
+    InvalidHalfSpace {
+        /// The field, `"sets"` or `"tangents.halfspaces"`.
+        field: &'static str,
+        /// The data point the set belongs to.
+        point: usize,
+        /// The half-space within the set.
+        index: usize,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// The data knots are not strictly increasing (or not finite) at `index`.
+    #[error("knots[{index}] is invalid: {reason}")]
+    InvalidKnots {
+        /// The index of the first offending knot.
+        index: usize,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// Smoothing weights do not pin the curve down: the kernel of H (constants for closed
+    /// curves, linear polynomials for open ones) needs `needed` positive weights.
+    #[error("weights: at least {needed} weights must be positive, got {got}")]
+    TooFewWeights {
+        /// The number of positive weights needed.
+        needed: usize,
+        /// The number of positive weights given.
+        got: usize,
+    },
+    /// A knot update met two coincident refined vertices, so the span between them would have
+    /// zero parameter length (`stage` 0 is the near-interpolatory step, `stage` ≥ 1 the levels).
+    #[error("stage {stage}: refined vertices {index} and {next} coincide; the knot update would give a zero-length span")]
+    DegenerateRefinedSpan {
+        /// The stage of Algorithm 4.1 (0 = part 1, l ≥ 1 = level l of part 2).
+        stage: usize,
+        /// The first vertex of the span.
+        index: usize,
+        /// The second vertex of the span.
+        next: usize,
+    },
+    /// The requested combination is not supported (names the field and what is missing).
+    #[error("{field}: {reason}")]
+    Unsupported {
+        /// The field, e.g. `"solver"`.
+        field: &'static str,
+        /// What is not supported.
+        reason: &'static str,
+    },
+    /// An iterative solver did not reach its tolerance within its iteration limit.
+    #[error("{solver} did not converge in {iterations} iterations (residual {residual:e})")]
+    NotConverged {
+        /// The solver.
+        solver: &'static str,
+        /// Iterations taken.
+        iterations: usize,
+        /// The residual reached.
+        residual: f64,
+    },
 }
