@@ -219,11 +219,12 @@ impl super::Command for SurfaceCmd {
         })
     }
 
-    /// An isometric wireframe of the refined grid over the dashed control net.
+    /// The refined grid as an OBJ quad mesh (`--obj`).
     fn obj(_: &SurfaceProblem, solution: &SurfaceSolution) -> Option<Result<String, InputError>> {
         Some(obj_text(solution))
     }
 
+    /// An isometric wireframe of the refined grid over the dashed control net.
     fn svg(problem: &SurfaceProblem, solution: &SurfaceSolution) -> Option<String> {
         let mut fig = Figure::new("Tensor-product subdivision surface (Khan et al. §4)");
         fig.equal_aspect(true).axes(false);
