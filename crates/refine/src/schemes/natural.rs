@@ -298,43 +298,82 @@ impl FloatRows<'_> {
         }
     }
 
-    /// out = M(L) p, vertex-major, `dim` coordinates per point.
-    fn apply(&self, p: &[f64], dim: usize) -> Vec<f64> {
+    /// out = M(L) p, vertex-major, `dim` coordinates per point (`out` is resized; its
+    /// allocation is reused).
+    fn apply_into(&self, p: &[f64], dim: usize, out: &mut Vec<f64>) {
+        out.resize(self.count() * dim, 0.0);
         match dim {
-            1 => self.apply_dim::<1>(p, 1),
-            2 => self.apply_dim::<2>(p, 2),
-            3 => self.apply_dim::<3>(p, 3),
-            _ => self.apply_dim::<0>(p, dim),
+            1 => self.apply_dim::<1>(p, 1, out),
+            2 => self.apply_dim::<2>(p, 2, out),
+            3 => self.apply_dim::<3>(p, 3, out),
+            _ => self.apply_dim::<0>(p, dim, out),
         }
     }
 
-    /// `D` = dim as a constant (0: run-time dimension). Rows are visited in order; each is a
-    /// short list of (column, weight), so the pass is O(N) and streams through memory.
-    fn apply_dim<const D: usize>(&self, p: &[f64], dim: usize) -> Vec<f64> {
-        let mut out = vec![0.0; self.count() * dim];
-        for (r, dst) in out.chunks_exact_mut(dim).enumerate() {
+    /// `D` = dim as a constant (0: run-time dimension). End rows come from `row`; the interior
+    /// rows (all of them shifts of the template's middle rows) run in a tight loop over the
+    /// coarse index with the stencils hoisted, so the pass streams through memory.
+    fn apply_dim<const D: usize>(&self, p: &[f64], dim: usize, out: &mut [f64]) {
+        let t = self.template;
+        let rho = t.rho;
+        let (lo, hi) = if self.small.is_empty() {
+            // Interior rows r = rho·j + phase for j in TEMPLATE_END..=l − TEMPLATE_END, phase <
+            // rho, except the last j's phases beyond rho·(l − TEMPLATE_END) (end rows).
+            (rho * TEMPLATE_END, rho * (self.l - TEMPLATE_END) + 1)
+        } else {
+            (0, 0)
+        };
+        let row_into = |r: usize, dst: &mut [f64]| {
             let (entries, shift) = self.row(r);
-            if D > 0 {
-                let mut acc = [0.0f64; D];
-                for &(c, w) in entries {
-                    let col = (c as isize + shift) as usize;
-                    let src = &p[col * D..(col + 1) * D];
-                    for k in 0..D {
-                        acc[k] += w * src[k];
-                    }
-                }
-                dst.copy_from_slice(&acc);
-            } else {
-                for &(c, w) in entries {
-                    let col = (c as isize + shift) as usize;
-                    let src = &p[col * dim..(col + 1) * dim];
-                    for (d, &v) in dst.iter_mut().zip(src) {
-                        *d += w * v;
-                    }
-                }
+            combine::<D>(dim, entries, shift, p, dst);
+        };
+        for (r, dst) in out.chunks_exact_mut(dim).enumerate() {
+            if r < lo || r >= hi {
+                row_into(r, dst);
             }
         }
-        out
+        if lo < hi {
+            let mid = t.lt / 2;
+            let stencils: Vec<&[(usize, f64)]> = (0..rho)
+                .map(|phase| t.frows[rho * mid + phase].as_slice())
+                .collect();
+            for (k, dst) in out[lo * dim..hi * dim].chunks_exact_mut(dim).enumerate() {
+                let r = lo + k;
+                let (j, phase) = (r / rho, r % rho);
+                combine::<D>(dim, stencils[phase], j as isize - mid as isize, p, dst);
+            }
+        }
+    }
+}
+
+/// dst = Σ w · p[c + shift] over the (column, weight) entries.
+#[inline(always)]
+fn combine<const D: usize>(
+    dim: usize,
+    entries: &[(usize, f64)],
+    shift: isize,
+    p: &[f64],
+    dst: &mut [f64],
+) {
+    if D > 0 {
+        let mut acc = [0.0f64; D];
+        for &(c, w) in entries {
+            let col = (c as isize + shift) as usize;
+            let src = &p[col * D..(col + 1) * D];
+            for k in 0..D {
+                acc[k] += w * src[k];
+            }
+        }
+        dst.copy_from_slice(&acc);
+    } else {
+        dst.fill(0.0);
+        for &(c, w) in entries {
+            let col = (c as isize + shift) as usize;
+            let src = &p[col * dim..(col + 1) * dim];
+            for (d, &v) in dst.iter_mut().zip(src) {
+                *d += w * v;
+            }
+        }
     }
 }
 
@@ -500,12 +539,21 @@ impl NaturalScheme {
     /// # Errors
     /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
     pub fn subdivide_once(&self, points: &Points) -> Result<Points, Error> {
+        let mut out = Vec::new();
+        self.subdivide_once_into(points, &mut out)?;
+        Ok(Points::new(points.dim(), out)?)
+    }
+
+    /// One level into a caller-owned buffer (resized as needed; repeated calls of the same size
+    /// do not allocate): `out` receives S_k p_k, vertex-major, dimension `points.dim()`.
+    ///
+    /// # Errors
+    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
+    pub fn subdivide_once_into(&self, points: &Points, out: &mut Vec<f64>) -> Result<(), Error> {
         let l = check_points(points)?;
         let rows = self.subdivision.float_rows_for(l)?;
-        Ok(Points::new(
-            points.dim(),
-            rows.apply(points.coords(), points.dim()),
-        )?)
+        rows.apply_into(points.coords(), points.dim(), out);
+        Ok(())
     }
 
     /// The polygons p_0, p_1, …, p_levels of `levels` rounds of subdivision from p_0 = `points`.
@@ -565,10 +613,9 @@ impl NaturalScheme {
     pub fn limit_values(&self, points: &Points) -> Result<Points, Error> {
         let l = check_points(points)?;
         let rows = self.interpolation.float_rows_for(l)?;
-        Ok(Points::new(
-            points.dim(),
-            rows.apply(points.coords(), points.dim()),
-        )?)
+        let mut out = Vec::new();
+        rows.apply_into(points.coords(), points.dim(), &mut out);
+        Ok(Points::new(points.dim(), out)?)
     }
 
     /// The exact energy ∫ |p_∞''|² of the limit curve, p_0ᵀ E_0 N_0 p_0 (Theorem 6.4), summed
