@@ -86,7 +86,7 @@ impl super::Command for NaturalCmd {
         let limit_energy = scheme
             .limit_energy(&p0)
             .map_err(|e| InputError::new("points", e))?;
-        Ok(NaturalSolution {
+        let solution = NaturalSolution {
             levels: levels
                 .iter()
                 .enumerate()
@@ -97,7 +97,18 @@ impl super::Command for NaturalCmd {
                 })
                 .collect(),
             limit_energy,
-        })
+        };
+        // The points are convex combinations of the input (always finite); the energies are
+        // sums of squares and can overflow for coordinates near the f64 limit.
+        let finite = solution.limit_energy.is_finite()
+            && solution.levels.iter().all(|l| l.energy.is_finite());
+        if !finite {
+            return Err(InputError::new(
+                "points",
+                "coordinates too large: the energy overflows the f64 range",
+            ));
+        }
+        Ok(solution)
     }
 
     /// The control polygon p_0 and the last level; for d = 1 the graph over [0, L], for d ≥ 2
@@ -178,6 +189,9 @@ mod tests {
         assert_eq!(e.field, "levels");
         let e = NaturalCmd::solve(&problem(r#"{"points": [[], []]}"#)).unwrap_err();
         assert_eq!(e.field, "points[0]");
+        // Found by `cargo xtask fuzz`: finite input whose energy overflows.
+        let e = NaturalCmd::solve(&problem(r#"{"points": [[0,0],[1,1e308],[3,1]]}"#)).unwrap_err();
+        assert_eq!(e.field, "points");
         assert!(serde_json::from_str::<NaturalProblem>(r#"{"points": [[0]], "x": 1}"#).is_err());
     }
 }
