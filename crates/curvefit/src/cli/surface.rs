@@ -208,7 +208,15 @@ impl super::Command for SurfaceCmd {
         .map_err(|e| InputError::new("points", e))?;
         let fine = scheme
             .subdivide_grid(&grid, problem.levels)
-            .map_err(|e| InputError::new("levels", e))?;
+            .map_err(|e| match e {
+                refine::Error::TooLarge { .. } => InputError::new("levels", e),
+                // Affine combinations with weights > 1 can overflow for coordinates near the
+                // f64 limit.
+                _ => InputError::new(
+                    "points",
+                    format!("coordinates too large: the refined surface overflows f64 ({e})"),
+                ),
+            })?;
         Ok(SurfaceSolution {
             rows: fine.rows(),
             cols: fine.cols(),
@@ -339,6 +347,10 @@ mod tests {
             "scheme.arity"
         );
         assert_eq!(solve(&grid_json(3, 3, r#", "levels": 30"#)).field, "levels");
+        let e = solve(
+            r#"{"rows": 2, "cols": 3, "points": [[0,0],[1,1e308],[2,-1e308],[0,1],[1,1],[2,1]], "levels": 2}"#,
+        );
+        assert_eq!(e.field, "points");
         assert!(
             serde_json::from_str::<SurfaceProblem>(&grid_json(2, 2, r#", "bogus": 1"#)).is_err()
         );
