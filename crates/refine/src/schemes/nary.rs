@@ -29,7 +29,7 @@ pub const MAX_SUBDIVISION_COORDS: usize = 1 << 30;
 /// to `f64` ([`NaryScheme::rule`]). Away from the ends (and the seam of a closed polygon), for
 /// d ≤ 3 and 2m + 2 ≤ 8, the kernel applies each pair of mirrored rules (residues a and n − a)
 /// in the equivalent symmetric form Σ h⁺_j (p_j + p_{P−1−j}) ± h⁻_j (p_j − p_{P−1−j}), whose
-/// coefficients h± = (w_a[j] ± w_a[P−1−j])/2 are likewise exact rationals rounded once; this halves
+/// coefficients h± = (w_a\[j\] ± w_a\[P−1−j\])/2 are likewise exact rationals rounded once; this halves
 /// the multiplications, and the results agree with direct application of [`NaryScheme::rule`] to
 /// a few ulps (tested against a direct reference).
 ///
