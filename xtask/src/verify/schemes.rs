@@ -789,6 +789,17 @@ pub fn cases() -> Vec<Case> {
             )
         }),
         Case::holds("khan/3.13/lagrange-barycentric-vs-product", lagrange_direct),
+        Case::holds("khan/remark3.1/printed-binary-4-point", || {
+            printed(4, 2, 1, &["1/16", "9/16", "9/16", "1/16"])
+        }),
+        Case::holds("khan/remark3.1/printed-binary-6-point", || {
+            printed(
+                6,
+                2,
+                1,
+                &["3/256", "25/256", "75/128", "75/128", "25/256", "3/256"],
+            )
+        }),
         Case::fails(
             "khan/3.10/printed-ternary-4-point",
             "seed (3.10) prints the last weight as 4/80 (typo for 4/81)",
