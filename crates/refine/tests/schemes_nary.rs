@@ -237,6 +237,38 @@ proptest! {
     }
 }
 
+/// Every combination of short polygons (2..=10 points, shorter and longer than the stencil) and
+/// stencils up to 8 points, dimensions 1..=4, open and closed: no panic, and closed results
+/// match the periodic reference.
+#[test]
+fn short_polygons_every_stencil() {
+    for points in [2usize, 4, 6, 8] {
+        for arity in 2..=4usize {
+            let s = NaryScheme::new(points, arity).unwrap();
+            for count in 2..=10usize {
+                for dim in 1..=4usize {
+                    let rows: Vec<Vec<f64>> = (0..count)
+                        .map(|i| {
+                            (0..dim)
+                                .map(|c| ((i * 7 + c * 3) % 5) as f64 - 2.0)
+                                .collect()
+                        })
+                        .collect();
+                    let pts = Points::from_rows(&rows).unwrap();
+                    let closed = s.subdivide(&pts, Topology::Closed, 1).unwrap();
+                    assert!(close(
+                        &closed.to_rows(),
+                        &reference_closed(&s, &rows),
+                        APPLY_TOL
+                    ));
+                    let open = s.subdivide(&pts, Topology::Open, 1).unwrap();
+                    assert_eq!(open.len(), (count - 1) * arity + 1);
+                }
+            }
+        }
+    }
+}
+
 /// An open polygon with fewer points than the stencil uses the interpolant through all of them:
 /// 3 points on a parabola, refined by the 6-point rule, stay on the parabola.
 #[test]

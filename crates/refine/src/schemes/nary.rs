@@ -316,7 +316,11 @@ impl NaryScheme {
     /// no end shift): i in m..count−m−1. Empty when the polygon is shorter than the stencil.
     fn interior_range(&self, count: usize) -> std::ops::Range<usize> {
         let m = self.m;
-        m..count.saturating_sub(m + 1).max(m)
+        if count > 2 * m + 1 {
+            m..count - m - 1
+        } else {
+            0..0
+        }
     }
 
     /// Interior spans by the fixed-size kernel when (dimension, stencil) is one of the common
@@ -384,7 +388,7 @@ impl NaryScheme {
         };
         let m = (p - 2) / 2;
         // The spans near the ends: one-sided stencils shifted inside the polygon.
-        for i in (0..range.start.min(count - 1)).chain(range.end.max(range.start)..count - 1) {
+        for i in (0..range.start).chain(range.end.max(range.start)..count - 1) {
             let start = i.saturating_sub(m).min(count - p);
             let t = i - start;
             let window = &src[start * dim..(start + p) * dim];
