@@ -59,6 +59,8 @@ snap!(
     "refine",
     "refine-smoothing-closed.json"
 );
+snap!(refine_balls_closed, "refine", "refine-balls-closed.json");
+snap!(refine_balls_open, "refine", "refine-balls-open.json");
 snap!(strip_small, "strip", "strip-small.json");
 snap!(strip_end_slopes, "strip", "strip-end-slopes.json");
 snap!(strip_polyline, "strip", "strip-polyline.json");
