@@ -30,15 +30,19 @@
 //!   further interpolatory `level_k`-level steps, each re-initialized from the previous result.
 //!
 //! Two fixed-knot solvers ([`Solver`]): **exact** (the default; linear solves for interpolation
-//! and smoothing, the conic solver for constraint sets) and the **paper's multiplier iteration**
+//! and smoothing, a log-barrier Newton method on the O(N) block-banded system for balls, stopped
+//! by the certificate at [`EXACT_KKT_TARGET`]) and the **paper's multiplier iteration**
 //! (w_i := w_i |p_{i_k} − q_i| / ε_i from w_i = 1), kept to reproduce the seed's figures.
+//! Half-space sets, tangents and clamped ends (issue 4's constraint kinds) are part of the data
+//! model and validated, but solving them returns [`Error::Unsupported`] in this build.
 //!
 //! Every [`Refinement`] carries its certificate, recomputed from the points independently of the
 //! solver: the energy, the multipliers, the active set, and a **relative KKT residual** — the
 //! largest of the stationarity residual ‖Hp + Σ (constraint gradient × multiplier)‖_∞,
 //! complementarity and negative multipliers (all over ‖H‖_∞ · L), and the constraint violation
 //! (over L), where L is the largest coordinate distance of a vertex or data point from the data's
-//! centroid. Balls that share a common point make the constant curve optimal (E = 0); it is
+//! centroid, and the duality gap Σ ½w_i(ε_i² − |p_{i_k} − q_i|²) over E (a bound on the relative
+//! energy excess over the optimum). Balls that share a common point make the constant curve optimal (E = 0); it is
 //! returned directly.
 //!
 //! # Example

@@ -260,21 +260,23 @@ fn smoothing_matches_clarabel() {
         assert!(r.kkt_residual <= KKT_TOL, "kkt {}", r.kkt_residual);
         let c = Constraint::Smoothing(w.clone());
         let reference = clarabel_solve(&r.knots, &house(), &r.data_vertex, &c).unwrap();
-        let penalty: f64 = (0..5)
-            .map(|i| {
-                let v = r.data_vertex[i];
-                0.5 * w[i]
-                    * (0..2)
-                        .map(|c| (r.points.point(v)[c] - house().point(i)[c]).powi(2))
-                        .sum::<f64>()
-            })
-            .sum();
-        assert!(
-            rel(r.energy + penalty, reference.objective) <= ENERGY_RTOL,
-            "{} vs {}",
-            r.energy + penalty,
-            reference.objective
-        );
+        // E + ½Σ w|p − q|², evaluated by the same code at both solutions.
+        let objective = |p: &Points| {
+            energy::energy(&r.knots, p).unwrap()
+                + (0..5)
+                    .map(|i| {
+                        let v = r.data_vertex[i];
+                        0.5 * w[i]
+                            * (0..2)
+                                .map(|c| (p.point(v)[c] - house().point(i)[c]).powi(2))
+                                .sum::<f64>()
+                    })
+                    .sum::<f64>()
+        };
+        let (ours, theirs) = (objective(&r.points), objective(&reference.points));
+        assert!(rel(ours, theirs) <= ENERGY_RTOL, "{ours} vs {theirs}");
+        // Clarabel's own objective value agrees too (a second, independent evaluation).
+        assert!(rel(ours, reference.objective) <= 1e-6);
     }
 }
 
@@ -399,4 +401,52 @@ fn levels_refine_further_and_keep_the_data() {
     // positive; the final E is the energy of the returned points on the returned knots.
     assert!(rel(r.energy, energy::energy(&r.knots, &r.points).unwrap()) < 1e-12);
     let _ = Parametrization::Chordal;
+}
+
+/// Exact near-interpolation to balls (3.4): KKT (3.5) to 1e-9, the optimum of Clarabel to 1e-8,
+/// and Corollary 3.3 (jmp = 0 at inactive data vertices), open and closed, with some radii 0.
+#[test]
+fn exact_balls_match_clarabel_and_corollary_3_3() {
+    let q = house();
+    for topo in [Topology::Closed, Topology::Open] {
+        for radii in [
+            vec![0.3, 0.05, 0.4, 0.1, 0.25],
+            vec![0.0, 0.5, 0.0, 0.2, 0.6],
+            vec![1.0, 1.0, 0.02, 1.0, 1.0],
+        ] {
+            let c = Constraint::Balls(radii.clone());
+            let r = Problem::new(q.clone())
+                .with_topology(topo)
+                .with_constraint(c.clone())
+                .solve()
+                .unwrap();
+            assert!(
+                r.kkt_residual <= KKT_TOL,
+                "{topo:?} {radii:?}: kkt {}",
+                r.kkt_residual
+            );
+            let reference = clarabel_solve(&r.knots, &q, &r.data_vertex, &c).unwrap();
+            let e_ref = energy::energy(&r.knots, &reference.points).unwrap();
+            assert!(
+                rel(r.energy, e_ref) <= ENERGY_RTOL,
+                "{topo:?} {radii:?}: {} vs clarabel {e_ref}",
+                r.energy
+            );
+            // Feasible, multipliers non-negative, inactive ⇒ w = 0 and jmp = 0.
+            for (i, &eps) in radii.iter().enumerate() {
+                let v = r.data_vertex[i];
+                let g: f64 = (0..2)
+                    .map(|c| (r.points.point(v)[c] - q.point(i)[c]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(g <= eps * (1.0 + 1e-9) + 1e-12);
+                if eps > 0.0 {
+                    assert!(r.multipliers[i][0] >= 0.0);
+                }
+            }
+            if let Some(j) = r.jmp_inactive() {
+                assert!(j <= 1e-9, "Corollary 3.3: relative jmp {j}");
+            }
+        }
+    }
 }

@@ -28,6 +28,24 @@ pub const EXAMPLES: &[Example] = &[
         problem: include_str!("../../examples/data/refine-interpolate-closed.json"),
     },
     Example {
+        name: "refine-balls-closed",
+        command: "refine",
+        title: "near-interpolation to balls of random radii; active balls in red (Kersey Fig. 3.2)",
+        problem: include_str!("../../examples/data/refine-balls-closed.json"),
+    },
+    Example {
+        name: "refine-star-balls",
+        command: "refine",
+        title: "the star with tolerance 0.35 at every point (Kersey Fig. 3.3)",
+        problem: include_str!("../../examples/data/refine-star-balls.json"),
+    },
+    Example {
+        name: "refine-balls-open",
+        command: "refine",
+        title: "open curve, interpolated ends, two loosened tolerances (Kersey Fig. 3.9)",
+        problem: include_str!("../../examples/data/refine-balls-open.json"),
+    },
+    Example {
         name: "refine-smoothing-open",
         command: "refine",
         title: "smoothing of noisy samples, open curve with natural ends (Kersey (3.6), §3.6)",

@@ -42,9 +42,10 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 ///
 /// The relative KKT residual is the largest of: the stationarity residual
 /// ‖Hp + Σ (constraint gradient × multiplier)‖_∞, complementarity |w (slack)| and negative
-/// multipliers, all divided by the force scale ‖H‖_∞ · L; and the constraint violation divided by
+/// multipliers, all divided by the force scale ‖H‖_∞ · L; the constraint violation divided by
 /// the length scale L, the largest coordinate distance of a vertex or data point from the data's
-/// centroid.
+/// centroid; and the duality gap Σ_i ½ w_i(ε_i² − |p_{i_k} − q_i|²) (Σ w_ij·slack_ij for
+/// half-spaces) divided by E, which bounds the relative energy excess over the optimum.
 pub(crate) fn certify(
     stencil: &Stencil,
     p: &Points,
@@ -90,6 +91,7 @@ pub(crate) fn certify(
     let mut comp: f64 = 0.0; // complementarity, forces
     let mut primal: f64 = 0.0; // feasibility violation, lengths
     let mut dual: f64 = 0.0; // negative multipliers, forces
+    let mut gap_sum: f64 = 0.0; // duality gap Σ (multiplier × slack), energies
     let mut active = vec![false; n];
     let mut r = vec![0.0; d];
     for i in 0..n {
@@ -121,6 +123,7 @@ pub(crate) fn certify(
                 primal = primal.max(gap - eps);
                 dual = dual.max(-w * eps.max(gap));
                 comp = comp.max((w * (eps - gap)).abs());
+                gap_sum += (0.5 * w * (eps * eps - gap * gap)).abs();
                 active[i] = gap >= (1.0 - active_tol) * eps;
             }
             Constraint::Smoothing(weights) => {
@@ -142,6 +145,7 @@ pub(crate) fn certify(
                     primal = primal.max(g);
                     dual = dual.max(-w * norm * length);
                     comp = comp.max((w * norm * g).abs());
+                    gap_sum += (w * norm * g).abs();
                     if g >= -active_tol * length {
                         any = true;
                     }
@@ -151,10 +155,14 @@ pub(crate) fn certify(
         }
         stat = r.iter().fold(stat, |a, x| a.max(x.abs()));
     }
+    // The duality gap bounds E(p) − E* for a feasible p; relative to E (or, for E ≈ 0, to the
+    // rounding level of the force scale times the length scale).
+    let gap_rel = gap_sum / pass.energy.max(f64::EPSILON * force * length);
     let kkt = (stat / force)
         .max(comp / force)
         .max(dual / force)
-        .max(primal.max(0.0) / length);
+        .max(primal.max(0.0) / length)
+        .max(gap_rel);
     // Corollary 3.3 / 3.6: jmp = ½Hp vanishes at inactive data vertices.
     let jmp_inactive = (0..n)
         .filter(|&i| !active[i] && !matches!(constraint, Constraint::Smoothing(_)))

@@ -77,6 +77,14 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             _ => {}
         }
     }
+    if has_extra_constraints(fp) {
+        // Derivative constraints (tangents, clamped ends) need the conic solver on 3-vertex
+        // stencils, which this build does not have yet.
+        return Err(Error::Unsupported {
+            field: "tangents",
+            reason: "derivative constraints (tangents, clamped or near-clamped ends) are not supported yet",
+        });
+    }
     super::exact::solve(fp)
 }
 
