@@ -30,6 +30,21 @@ pub enum Error {
         /// Index of the entry.
         index: usize,
     },
+    /// A number whose magnitude exceeds [`crate::MAX_MAGNITUDE`] (its squares and products
+    /// would overflow double precision).
+    #[error("{field}[{index}] exceeds {max:e} in magnitude")]
+    TooLarge {
+        /// The field.
+        field: &'static str,
+        /// Index of the entry.
+        index: usize,
+        /// The limit.
+        max: f64,
+    },
+    /// The computation overflowed (an intermediate or final value is not finite): the data are
+    /// too badly scaled for double precision. Rescale t and y.
+    #[error("numerical overflow: the data are too badly scaled (rescale t and y)")]
+    Overflow,
     /// Data sites not strictly increasing: t\[index\] ≤ t\[index − 1\].
     #[error("t[{index}] is not greater than t[{}]", index - 1)]
     NonIncreasingSites {

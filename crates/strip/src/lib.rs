@@ -80,6 +80,7 @@ pub use qp::{lower_bound_qp, LowerBoundQp};
 pub use solve::{
     solve, Bound, ExtraKnot, KnotKind, Method, Options, Problem, Solution, CONTACT_TOL,
     DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS, FEASIBILITY_TOL,
+    MAX_MAGNITUDE,
 };
 
 #[doc(hidden)]

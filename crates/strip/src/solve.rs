@@ -247,6 +247,13 @@ fn validate(p: &Problem) -> Result<(), Error> {
         if let Some(index) = v.iter().position(|x| !x.is_finite()) {
             return Err(Error::NonFinite { field, index });
         }
+        if let Some(index) = v.iter().position(|x| x.abs() > MAX_MAGNITUDE) {
+            return Err(Error::TooLarge {
+                field,
+                index,
+                max: MAX_MAGNITUDE,
+            });
+        }
     }
     for i in 1..n {
         if p.t[i] <= p.t[i - 1] {
@@ -278,6 +285,16 @@ fn validate(p: &Problem) -> Result<(), Error> {
                 if let Some(index) = c.iter().position(|x| x.iter().any(|v| !v.is_finite())) {
                     return Err(Error::NonFinite { field: name, index });
                 }
+                if let Some(index) = c
+                    .iter()
+                    .position(|x| x.iter().any(|v| v.abs() > MAX_MAGNITUDE))
+                {
+                    return Err(Error::TooLarge {
+                        field: name,
+                        index,
+                        max: MAX_MAGNITUDE,
+                    });
+                }
             }
             Bound::Polyline(v) => {
                 let name = if side == Side::Lower {
@@ -287,6 +304,16 @@ fn validate(p: &Problem) -> Result<(), Error> {
                 };
                 if let Some(index) = v.iter().position(|x| x.iter().any(|c| !c.is_finite())) {
                     return Err(Error::NonFinite { field: name, index });
+                }
+                if let Some(index) = v
+                    .iter()
+                    .position(|x| x.iter().any(|c| c.abs() > MAX_MAGNITUDE))
+                {
+                    return Err(Error::TooLarge {
+                        field: name,
+                        index,
+                        max: MAX_MAGNITUDE,
+                    });
                 }
                 if v.len() < 2 {
                     return Err(Error::PolylineDoesNotCover { side });
@@ -382,7 +409,7 @@ impl Outer {
         for (j, v) in self.sv.iter().enumerate() {
             if let Some(k) = *v {
                 let (lo, hi) = self.boxes[j];
-                x[k] = x[k].clamp(lo, hi);
+                x[k] = clamp_safe(x[k], lo, hi);
             }
         }
         let b = self.var_boxes(x);
@@ -390,7 +417,7 @@ impl Outer {
             if let (Some(kz), Some(_)) = (self.zv[j], self.sv[j]) {
                 if let Some((lo, hi)) = b[kz] {
                     if lo <= hi {
-                        x[kz] = x[kz].clamp(lo, hi);
+                        x[kz] = clamp_safe(x[kz], lo, hi);
                     }
                 }
             }
@@ -545,8 +572,30 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
         problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
     )?;
     sol.newton_decrement = decrement;
+    let finite = sol.energy.is_finite()
+        && sol.slopes.iter().all(|z| z.is_finite())
+        && sol.coefficients.iter().flatten().all(|c| c.is_finite())
+        && sol.breaks.iter().all(|b| b.is_finite());
+    if !finite {
+        return Err(Error::Overflow);
+    }
     Ok(sol)
 }
+
+/// `x` clamped to [lo, hi]; unlike `f64::clamp` never panics: when the bounds are NaN or
+/// crossed (only possible after an overflow) `x` is returned unchanged, and the overflow is
+/// reported by the final finiteness check of [`solve`].
+fn clamp_safe(x: f64, lo: f64, hi: f64) -> f64 {
+    if lo <= hi {
+        x.clamp(lo, hi)
+    } else {
+        x
+    }
+}
+
+/// Largest magnitude accepted for any input number: squares and cubes of differences of such
+/// numbers stay far from overflow, leaving room for badly spaced sites.
+pub const MAX_MAGNITUDE: f64 = 1e100;
 
 /// Φ and ∇Φ at the unknowns `x` (slopes at the data sites without prescribed end slopes, in
 /// order; for polyline bounds also the free grid values, interleaved as (s_j, z_j)), and the
@@ -789,7 +838,7 @@ fn setup(problem: &Problem, opts: &Options) -> Result<Setup, Error> {
             // start strictly inside (every cell is then feasible for any slopes)
             let (lo, hi) = outer.boxes[j];
             let inset = INITIAL_INSET * (hi - lo);
-            x[k] = v.clamp(lo + inset, hi - inset);
+            x[k] = clamp_safe(v, lo + inset, hi - inset);
         }
         if let Some(k) = outer.zv[j] {
             x[k] = match grid[j].1 {

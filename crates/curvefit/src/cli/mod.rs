@@ -112,6 +112,20 @@ fn run_scheme_cmd(
     Ok(())
 }
 
+/// The message on one line: control characters (e.g. a newline inside an unknown field's name)
+/// are escaped, so the error is always exactly one line on stderr.
+fn one_line(s: &str) -> String {
+    s.chars()
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect()
+}
+
 /// Exit code for bad input (and any other refusal): nothing was written.
 pub const EXIT_BAD_INPUT: i32 = 2;
 /// Exit code for an internal error (a bug): nothing was written.
@@ -256,7 +270,7 @@ where
     match result {
         Ok(Ok(())) => 0,
         Ok(Err(f)) => {
-            let _ = writeln!(stderr, "error: {}", f.error);
+            let _ = writeln!(stderr, "error: {}", one_line(&f.error.to_string()));
             f.code
         }
         Err(_) => {

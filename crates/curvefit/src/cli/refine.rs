@@ -7,6 +7,10 @@ use super::InputError;
 /// is refused before any allocation (it would need gigabytes of memory and output).
 pub const MAX_REFINED_COORDS: usize = 50_000_000;
 
+/// Largest `knot_iterations` accepted: Algorithm 4.1's knot updates settle within a few
+/// iterations (the seed uses "a few"); more is almost certainly a mistake and would only burn time.
+pub const MAX_KNOT_ITERATIONS: usize = 100;
+
 /// Number of vertices after a `k`-level split of `n` data points (open or closed), or `None` on
 /// overflow.
 pub fn split_count(n: usize, k: usize, closed: bool) -> Option<usize> {
@@ -133,6 +137,15 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     }
     if p.k == 0 {
         return Err(InputError::new("k", "must be at least 1"));
+    }
+    if p.knot_iterations > MAX_KNOT_ITERATIONS {
+        return Err(InputError::new(
+            "knot_iterations",
+            format!(
+                "must be at most {MAX_KNOT_ITERATIONS}, got {}",
+                p.knot_iterations
+            ),
+        ));
     }
     if p.level_k == 0 {
         return Err(InputError::new("level_k", "must be at least 1"));

@@ -122,7 +122,9 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
     match e {
         E::TooFewPoints { .. } => InputError::new("t", e),
         E::LengthMismatch { field, .. } => InputError::new(*field, e),
-        E::NonFinite { field, index } => InputError::new(format!("{field}[{index}]"), e),
+        E::NonFinite { field, index } | E::TooLarge { field, index, .. } => {
+            InputError::new(format!("{field}[{index}]"), e)
+        }
         E::NonIncreasingSites { index } => InputError::new(format!("t[{index}]"), e),
         E::NonIncreasingPolyline { side, index } => {
             InputError::new(format!("{}.polyline[{index}]", side_name(*side)), e)
