@@ -17,6 +17,10 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+thread_local! {
+    static LAST_PANIC: std::cell::RefCell<String> = const { std::cell::RefCell::new(String::new()) };
+}
+
 /// xorshift64*: a small deterministic generator (reproducible runs from `--seed`).
 struct Rng(u64);
 
@@ -202,6 +206,20 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
             other => anyhow::bail!("unknown argument {other}"),
         }
     }
+    // Record each panic's location and message instead of printing a backtrace per crash.
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        let loc = info
+            .location()
+            .map(|l| format!("{}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        LAST_PANIC.with(|p| *p.borrow_mut() = format!("{loc}: {msg}"));
+    }));
     let root = PathBuf::from("tests/fuzz-corpus");
     let mut seeds = load_corpus(&root)?;
     anyhow::ensure!(!seeds.is_empty(), "no seeds in {}", root.display());

@@ -277,10 +277,16 @@ impl System {
             for &(b, _) in stencil {
                 let (i, j) = if a >= b { (a, b) } else { (b, a) };
                 if j < env.first(i) || (self.topology == Topology::Open && i - j > 2) {
-                    return Err(Error::StencilTooWide { first: a, second: b });
+                    return Err(Error::StencilTooWide {
+                        first: a,
+                        second: b,
+                    });
                 }
                 if self.topology == Topology::Closed && i - j > 2 && n - (i - j) > 2 {
-                    return Err(Error::StencilTooWide { first: a, second: b });
+                    return Err(Error::StencilTooWide {
+                        first: a,
+                        second: b,
+                    });
                 }
             }
         }
@@ -333,7 +339,11 @@ impl System {
                 if v == 0.0 {
                     continue;
                 }
-                let k = if j + step >= n { j + step - n } else { j + step };
+                let k = if j + step >= n {
+                    j + step - n
+                } else {
+                    j + step
+                };
                 for c in 0..d {
                     y[j * d + c] += v * xs[k * d + c];
                     y[k * d + c] += v * xs[j * d + c];

@@ -8,6 +8,160 @@ pub enum Error {
     /// A linear-algebra failure (from `energy`).
     #[error(transparent)]
     Energy(#[from] energy::Error),
+    /// A subdivision-scheme parameter is out of its valid range (e.g. an odd number of stencil
+    /// points, arity 1, a grid with one row).
+    #[error("{field} = {value} is invalid: {reason}")]
+    SchemeParameter {
+        /// The parameter (e.g. `"points"`, `"arity"`, `"rows"`).
+        field: &'static str,
+        /// The value given.
+        value: usize,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// The requested result would exceed a documented size limit (or overflow `usize`).
+    #[error("{field}: the result would exceed the limit of {limit}")]
+    TooLarge {
+        /// What would grow too large (e.g. `"levels"`).
+        field: &'static str,
+        /// The limit that would be exceeded.
+        limit: usize,
+    },
+    /// A quad mesh can be written as OBJ only for points in R^2 or R^3.
+    #[error("OBJ output needs points in R^2 or R^3, got dimension {dim}")]
+    ObjDimension {
+        /// The dimension of the grid's points.
+        dim: usize,
+    },
+    /// An exact linear system of a rule derivation turned out singular (pivot `index`).
+    #[error("exact rule derivation: singular system at pivot {index}")]
+    SingularExactSystem {
+        /// The pivot (row) at which elimination failed.
+        index: usize,
+    },
+    /// Too few data points for the curve's topology (`needed` is the smallest valid n).
+    #[error("points: {topology} curve needs at least {needed} data points, got {got}")]
+    TooFewPoints {
+        /// `"open"` or `"closed"`.
+        topology: &'static str,
+        /// The smallest valid number of data points.
+        needed: usize,
+        /// The number given.
+        got: usize,
+    },
+    /// Two consecutive data points coincide (the span from `index` to `next` has zero length;
+    /// `next` wraps to 0 for the closing span of a closed curve).
+    #[error("points[{index}] and points[{next}] coincide (consecutive data points must differ)")]
+    CoincidentPoints {
+        /// The first point of the span.
+        index: usize,
+        /// The second point of the span.
+        next: usize,
+    },
+    /// A field that must have one entry per data point (or per knot) has the wrong length.
+    #[error("{field} has length {got}, expected {expected}")]
+    WrongLength {
+        /// The field, e.g. `"radii"`.
+        field: &'static str,
+        /// The expected length.
+        expected: usize,
+        /// The given length.
+        got: usize,
+    },
+    /// A vector has the wrong number of coordinates (`index` is the data point it belongs to,
+    /// or the half-space within the set for nested fields).
+    #[error("{field}[{index}] has {got} coordinates, expected {expected}")]
+    WrongDimension {
+        /// The field, e.g. `"tangents.center"`.
+        field: &'static str,
+        /// The index of the offending entry.
+        index: usize,
+        /// The dimension of the data points.
+        expected: usize,
+        /// The dimension given.
+        got: usize,
+    },
+    /// A per-point value is out of its valid range (negative or NaN radius, weight, angle …).
+    #[error("{field}[{index}] = {value} is invalid: {reason}")]
+    InvalidValue {
+        /// The field, e.g. `"radii"`.
+        field: &'static str,
+        /// The index of the offending entry.
+        index: usize,
+        /// The value given.
+        value: f64,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// A scalar parameter is out of range (e.g. `k = 0`).
+    #[error("{field} = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// The field, e.g. `"k"`.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// A half-space of a constraint set is invalid (`point` is the data point, `index` the
+    /// half-space within its set).
+    #[error("{field}[{point}][{index}] is invalid: {reason}")]
+    InvalidHalfSpace {
+        /// The field, `"sets"` or `"tangents.halfspaces"`.
+        field: &'static str,
+        /// The data point the set belongs to.
+        point: usize,
+        /// The half-space within the set.
+        index: usize,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// The data knots are not strictly increasing (or not finite) at `index`.
+    #[error("knots[{index}] is invalid: {reason}")]
+    InvalidKnots {
+        /// The index of the first offending knot.
+        index: usize,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// Smoothing weights do not pin the curve down: the kernel of H (constants for closed
+    /// curves, linear polynomials for open ones) needs `needed` positive weights.
+    #[error("weights: at least {needed} weights must be positive, got {got}")]
+    TooFewWeights {
+        /// The number of positive weights needed.
+        needed: usize,
+        /// The number of positive weights given.
+        got: usize,
+    },
+    /// A knot update met two coincident refined vertices, so the span between them would have
+    /// zero parameter length (`stage` 0 is the near-interpolatory step, `stage` ≥ 1 the levels).
+    #[error("stage {stage}: refined vertices {index} and {next} coincide; the knot update would give a zero-length span")]
+    DegenerateRefinedSpan {
+        /// The stage of Algorithm 4.1 (0 = part 1, l ≥ 1 = level l of part 2).
+        stage: usize,
+        /// The first vertex of the span.
+        index: usize,
+        /// The second vertex of the span.
+        next: usize,
+    },
+    /// The requested combination is not supported (names the field and what is missing).
+    #[error("{field}: {reason}")]
+    Unsupported {
+        /// The field, e.g. `"solver"`.
+        field: &'static str,
+        /// What is not supported.
+        reason: &'static str,
+    },
+    /// An iterative solver did not reach its tolerance within its iteration limit.
+    #[error("{solver} did not converge in {iterations} iterations (residual {residual:e})")]
+    NotConverged {
+        /// The solver.
+        solver: &'static str,
+        /// Iterations taken.
+        iterations: usize,
+        /// The residual reached.
+        residual: f64,
+    },
     /// A vertex index is out of range (conic problems).
     #[error("{field} vertex {index} is out of range (N = {len})")]
     VertexOutOfRange {
@@ -17,18 +171,6 @@ pub enum Error {
         index: usize,
         /// The number of vertices.
         len: usize,
-    },
-    /// A vector has the wrong number of coordinates (conic problems).
-    #[error("{field}[{index}] has {got} coordinates, expected {expected}")]
-    WrongDimension {
-        /// The field.
-        field: &'static str,
-        /// The vertex or constraint index.
-        index: usize,
-        /// The expected size.
-        expected: usize,
-        /// The given size.
-        got: usize,
     },
     /// A value is NaN or infinite (conic problems).
     #[error("{field}[{index}] is not finite")]
@@ -53,13 +195,5 @@ pub enum Error {
     Infeasible {
         /// The constraint index.
         constraint: usize,
-    },
-    /// The exact solver did not reach the accepted KKT residual within its iteration limit.
-    #[error("not converged after {iterations} iterations (best relative KKT residual {best_residual:e})")]
-    NotConverged {
-        /// Iterations performed.
-        iterations: usize,
-        /// The best relative KKT residual reached.
-        best_residual: f64,
     },
 }

@@ -7,6 +7,10 @@ use super::InputError;
 /// is refused before any allocation (it would need gigabytes of memory and output).
 pub const MAX_REFINED_COORDS: usize = 50_000_000;
 
+/// Largest `knot_iterations` accepted: Algorithm 4.1's knot updates settle within a few
+/// iterations (the seed uses "a few"); more is almost certainly a mistake and would only burn time.
+pub const MAX_KNOT_ITERATIONS: usize = 100;
+
 /// Number of vertices after a `k`-level split of `n` data points (open or closed), or `None` on
 /// overflow.
 pub fn split_count(n: usize, k: usize, closed: bool) -> Option<usize> {
@@ -134,6 +138,15 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     if p.k == 0 {
         return Err(InputError::new("k", "must be at least 1"));
     }
+    if p.knot_iterations > MAX_KNOT_ITERATIONS {
+        return Err(InputError::new(
+            "knot_iterations",
+            format!(
+                "must be at most {MAX_KNOT_ITERATIONS}, got {}",
+                p.knot_iterations
+            ),
+        ));
+    }
     if p.level_k == 0 {
         return Err(InputError::new("level_k", "must be at least 1"));
     }
@@ -231,66 +244,111 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     Ok(d)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn problem(json: &str) -> RefineProblem {
-        serde_json::from_str(json).unwrap()
+/// Builds the library problem from the (validated) JSON problem.
+///
+/// # Errors
+/// An [`InputError`] for points the library rejects.
+pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
+    use divdiff::{DerivativeRule, Parametrization, Points, Topology};
+    let points = Points::from_rows(&p.points).map_err(|e| InputError::new("", e))?;
+    let hs = |h: &HalfSpaceSpec| refine::HalfSpace {
+        normal: h.normal.clone(),
+        offset: h.offset,
+    };
+    let mut prob = refine::Problem::new(points)
+        .with_topology(if p.closed {
+            Topology::Closed
+        } else {
+            Topology::Open
+        })
+        .with_parametrization(match p.parametrization {
+            ParamSpec::Uniform => Parametrization::Uniform,
+            ParamSpec::Centripetal => Parametrization::Centripetal,
+            ParamSpec::Chordal => Parametrization::Chordal,
+            ParamSpec::Exponent(e) => Parametrization::Exponent(e),
+        })
+        .with_k(p.k)
+        .with_knot_iterations(p.knot_iterations)
+        .with_levels(p.levels, p.level_k)
+        .with_constraint(match &p.constraint {
+            ConstraintSpec::Interpolate => refine::Constraint::Interpolate,
+            ConstraintSpec::Balls { radii } => refine::Constraint::Balls(radii.clone()),
+            ConstraintSpec::Smoothing { weights } => refine::Constraint::Smoothing(weights.clone()),
+            ConstraintSpec::Halfspaces { sets } => refine::Constraint::HalfSpaces(
+                sets.iter()
+                    .map(|set| set.iter().map(hs).collect())
+                    .collect(),
+            ),
+        })
+        .with_derivative(match p.derivative {
+            DerivativeSpec::Average => DerivativeRule::Average,
+            DerivativeSpec::Bessel => DerivativeRule::Bessel,
+        })
+        .with_boundary(match &p.boundary {
+            BoundarySpec::Natural => refine::Boundary::Natural,
+            BoundarySpec::Clamped { start, end } => refine::Boundary::Clamped {
+                start: start.clone(),
+                end: end.clone(),
+            },
+            BoundarySpec::NearClamped { start, end, radius } => refine::Boundary::NearClamped {
+                start: start.clone(),
+                end: end.clone(),
+                radius: *radius,
+            },
+        })
+        .with_solver(match p.solver {
+            SolverSpec::Exact => refine::Solver::Exact,
+            SolverSpec::Paper => refine::Solver::Paper,
+        });
+    if let Some(t) = &p.knots {
+        prob = prob.with_knots(t.clone());
     }
-
-    #[test]
-    fn split_counts_match_3_1() {
-        assert_eq!(split_count(5, 3, true), Some(20));
-        assert_eq!(split_count(5, 3, false), Some(17));
-        assert_eq!(split_count(usize::MAX, 3, true), None);
-    }
-
-    #[test]
-    fn validation_names_fields_and_indices() {
-        let cases = [
-            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
-            (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
-            (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
-                "knots[2]",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
-                "knots",
-            ),
-            (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,-1,1]}}"#,
-                "constraint.radii[1]",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,1]}}"#,
-                "constraint.radii",
-            ),
-            (r#"{"points": [[0,0],[1,0],[0,1]], "levels": 40}"#, "levels"),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "tangents": [null, {"type": "wedge", "direction": [0,0], "half_angle": 0.1}, null]}"#,
-                "tangents[1].direction",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
-                "boundary",
-            ),
-            (
-                r#"{"points": [[0,0],[1,0],[0,1]], "closed": false, "boundary": {"type": "clamped", "start": [1], "end": [1,0]}}"#,
-                "boundary.start",
-            ),
-        ];
-        for (json, field) in cases {
-            let e = validate(&problem(json)).unwrap_err();
-            assert_eq!(e.field, field, "{json}: {e}");
-        }
-        assert_eq!(
-            validate(&problem(r#"{"points": [[0,0],[1,0],[0,1]]}"#)),
-            Ok(2)
+    if let Some(tangents) = &p.tangents {
+        prob = prob.with_tangents(
+            tangents
+                .iter()
+                .map(|t| {
+                    t.as_ref().map(|t| match t {
+                        TangentSpec::Ball { center, radius } => refine::Tangent::Ball {
+                            center: center.clone(),
+                            radius: *radius,
+                        },
+                        TangentSpec::Wedge {
+                            direction,
+                            half_angle,
+                        } => refine::Tangent::Wedge {
+                            direction: direction.clone(),
+                            half_angle: *half_angle,
+                        },
+                        TangentSpec::Tension { radius } => {
+                            refine::Tangent::Tension { radius: *radius }
+                        }
+                        TangentSpec::Halfspaces { halfspaces } => {
+                            refine::Tangent::HalfSpaces(halfspaces.iter().map(hs).collect())
+                        }
+                    })
+                })
+                .collect(),
         );
+    }
+    Ok(prob)
+}
+
+/// Converts the library's refinement into the JSON result.
+pub fn to_result(r: &refine::Refinement) -> RefineResult {
+    RefineResult {
+        points: r.points.to_rows(),
+        knots: r.knots.values().to_vec(),
+        data_vertex: r.data_vertex.clone(),
+        energy: r.energy,
+        multipliers: serde_json::json!(r.multipliers),
+        active: r.active.clone(),
+        kkt_residual: r.kkt_residual,
+        iterations: serde_json::json!({
+            "solves": r.iterations.solves,
+            "knot_updates": r.iterations.knot_updates,
+            "solver": r.iterations.solver,
+        }),
     }
 }
 
@@ -303,14 +361,13 @@ impl super::Command for RefineCmd {
 
     fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
         validate(problem)?;
-        Err(InputError::new(
-            "",
-            "the refine solver is not wired into this build yet",
-        ))
+        let prob = to_library(problem)?;
+        let r = prob.solve().map_err(|e| InputError::new("", e))?;
+        Ok(to_result(&r))
     }
 
-    fn svg(_: &RefineProblem, _: &RefineResult) -> Option<String> {
-        None
+    fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
+        Some(picture(problem, solution))
     }
 }
 
@@ -463,4 +520,67 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         r.active.len()
     ));
     fig.to_svg()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn problem(json: &str) -> RefineProblem {
+        serde_json::from_str(json).unwrap()
+    }
+
+    #[test]
+    fn split_counts_match_3_1() {
+        assert_eq!(split_count(5, 3, true), Some(20));
+        assert_eq!(split_count(5, 3, false), Some(17));
+        assert_eq!(split_count(usize::MAX, 3, true), None);
+    }
+
+    #[test]
+    fn validation_names_fields_and_indices() {
+        let cases = [
+            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
+            (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
+            (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
+                "knots[2]",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
+                "knots",
+            ),
+            (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,-1,1]}}"#,
+                "constraint.radii[1]",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "constraint": {"type": "balls", "radii": [1,1]}}"#,
+                "constraint.radii",
+            ),
+            (r#"{"points": [[0,0],[1,0],[0,1]], "levels": 40}"#, "levels"),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "tangents": [null, {"type": "wedge", "direction": [0,0], "half_angle": 0.1}, null]}"#,
+                "tangents[1].direction",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
+                "boundary",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": false, "boundary": {"type": "clamped", "start": [1], "end": [1,0]}}"#,
+                "boundary.start",
+            ),
+        ];
+        for (json, field) in cases {
+            let e = validate(&problem(json)).unwrap_err();
+            assert_eq!(e.field, field, "{json}: {e}");
+        }
+        assert_eq!(
+            validate(&problem(r#"{"points": [[0,0],[1,0],[0,1]]}"#)),
+            Ok(2)
+        );
+    }
 }

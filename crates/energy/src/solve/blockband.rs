@@ -240,7 +240,11 @@ impl<const D: usize> BlockBand<D> {
                 let mut g = [zero::<D>(); 2];
                 for (r, rv) in [r0, r1].into_iter().enumerate() {
                     let cyc = i.abs_diff(rv).min(n - i.abs_diff(rv));
-                    let mut e = if cyc <= 2 { coupling(rv, i) } else { zero::<D>() };
+                    let mut e = if cyc <= 2 {
+                        coupling(rv, i)
+                    } else {
+                        zero::<D>()
+                    };
                     sub_assign(&mut e, &mul_t(&g_prev[r], &l1));
                     sub_assign(&mut e, &mul_t(&g_prev2[r], &l2));
                     g[r] = right_solve_t(&e, &lii);

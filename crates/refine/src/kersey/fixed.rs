@@ -1,0 +1,171 @@
+//! The fixed-knot problems of one stage: the exact optimum and the paper's multiplier iteration.
+
+use divdiff::{Knots, Points};
+use energy::{Hessian, System};
+
+use super::algorithm::{FixedProblem, FixedSolution};
+use super::operator::{self, Stencil};
+use super::problem::{Boundary, Constraint};
+use crate::Error;
+
+/// Relative floor of the paper iteration's weights: w_i ≥ PAPER_WEIGHT_FLOOR · mean(H_jj).
+/// Inactive constraints drive their weights to zero geometrically; without a floor a curve
+/// whose constraints all turn inactive (collinear data in balls) would make H + W singular.
+pub const PAPER_WEIGHT_FLOOR: f64 = 1e-10;
+
+/// The system H ⊗ I_d on the given knots.
+pub(crate) fn hessian_system(knots: &Knots, dim: usize) -> Result<System, Error> {
+    let h = Hessian::new(knots);
+    let (d0, d1, d2) = h.bands();
+    Ok(System::from_bands(
+        knots.topology(),
+        d0.to_vec(),
+        d1.to_vec(),
+        d2.to_vec(),
+        dim,
+    )?)
+}
+
+fn has_extra_constraints(fp: &FixedProblem<'_>) -> bool {
+    fp.problem
+        .tangents
+        .as_ref()
+        .is_some_and(|t| t.iter().any(Option::is_some))
+        || fp.problem.boundary != Boundary::Natural
+}
+
+/// Interpolation at the data vertices whose `fixed` flag is set, plus weights `w` (0 = none) at
+/// the others: (H + W)p = W q̃ with p_v = q_i at fixed data vertices (3.3), (3.5), (3.6).
+fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result<Points, Error> {
+    let n_vert = fp.knots.vertex_count();
+    let d = fp.q.dim();
+    let mut sys = hessian_system(fp.knots, d)?;
+    let mut rhs = vec![0.0; n_vert * d];
+    for (i, &v) in fp.data_vertex.iter().enumerate() {
+        let qi = fp.q.point(i);
+        if fixed[i] {
+            sys.fix(v)?;
+            rhs[v * d..(v + 1) * d].copy_from_slice(qi);
+        } else if w[i] > 0.0 {
+            sys.add_weight(v, w[i])?;
+            for c in 0..d {
+                rhs[v * d + c] = w[i] * qi[c];
+            }
+        }
+    }
+    let f = sys.factor()?;
+    f.solve_flat(&mut rhs)?;
+    Ok(Points::new(d, rhs)?)
+}
+
+/// The exact optimum of the fixed-knot problem.
+pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    let n = fp.q.len();
+    if !has_extra_constraints(fp) {
+        match fp.constraint {
+            Constraint::Interpolate => return interpolate(fp),
+            Constraint::Balls(r) if r.iter().all(|&e| e == 0.0) => return interpolate(fp),
+            Constraint::Smoothing(w) => {
+                let p = linear(fp, &vec![false; n], w)?;
+                return Ok(FixedSolution {
+                    points: p,
+                    multipliers: Some(w.iter().map(|&x| vec![x]).collect()),
+                    iterations: 1,
+                    stencil: None,
+                });
+            }
+            _ => {}
+        }
+    }
+    if has_extra_constraints(fp) {
+        // Derivative constraints (tangents, clamped ends) need the conic solver on 3-vertex
+        // stencils, which this build does not have yet.
+        return Err(Error::Unsupported {
+            field: "tangents",
+            reason: "derivative constraints (tangents, clamped or near-clamped ends) are not supported yet",
+        });
+    }
+    super::exact::solve(fp)
+}
+
+/// Interpolation (3.3) at every data vertex: the fused banded solver of [`super::fast`].
+fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    let stencil = Stencil::new(fp.knots);
+    let p = super::fast::interpolate(fp.knots, &stencil, fp.q, fp.stride)?;
+    Ok(FixedSolution {
+        points: p,
+        multipliers: None,
+        iterations: 1,
+        stencil: Some(stencil),
+    })
+}
+
+/// Kersey's multiplier iteration, Algorithm 4.1 (iii): start from w_i = 1, solve
+/// (H + W)p = W q̃ (radius-0 points interpolated), update w_i := w_i |p_{i_k} − q_i| / ε_i, and
+/// repeat `paper_iterations` times. The reported multipliers are the weights of the last solve,
+/// so (H + W)p = W q̃ holds to rounding and the KKT residual measures the complementarity the
+/// iteration has not reached.
+pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    if has_extra_constraints(fp) {
+        return Err(Error::Unsupported {
+            field: "solver",
+            reason: "the paper's iteration handles data constraints only; use the exact solver for tangents and end conditions",
+        });
+    }
+    let n = fp.q.len();
+    match fp.constraint {
+        Constraint::Interpolate | Constraint::Smoothing(_) => exact(fp),
+        Constraint::Balls(r) => {
+            let fixed: Vec<bool> = r.iter().map(|&e| e == 0.0).collect();
+            if fixed.iter().all(|&f| f) {
+                return interpolate(fp);
+            }
+            let h = Hessian::new(fp.knots);
+            let floor = PAPER_WEIGHT_FLOOR * h.bands().0.iter().sum::<f64>() / h.len() as f64;
+            let mut w: Vec<f64> = fixed.iter().map(|&f| if f { 0.0 } else { 1.0 }).collect();
+            let d = fp.q.dim();
+            let iters = fp.problem.paper_iterations.max(1);
+            let mut p = linear(fp, &fixed, &w)?;
+            for _ in 1..iters {
+                for i in 0..n {
+                    if !fixed[i] {
+                        let v = fp.data_vertex[i];
+                        let gap = dist(p.point(v), fp.q.point(i));
+                        w[i] = (w[i] * gap / r[i]).max(floor);
+                    }
+                }
+                p = linear(fp, &fixed, &w)?;
+            }
+            let hp = operator::apply_h(fp.knots, &p);
+            let multipliers = (0..n)
+                .map(|i| {
+                    let v = fp.data_vertex[i];
+                    if fixed[i] {
+                        hp[v * d..(v + 1) * d].iter().map(|x| -x).collect()
+                    } else {
+                        vec![w[i]]
+                    }
+                })
+                .collect();
+            Ok(FixedSolution {
+                points: p,
+                multipliers: Some(multipliers),
+                iterations: iters,
+                stencil: None,
+            })
+        }
+        Constraint::HalfSpaces(_) => Err(Error::Unsupported {
+            field: "solver",
+            reason:
+                "the paper's slot iteration (Fig. 4.1) is not implemented; use the exact solver",
+        }),
+    }
+}
+
+pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}

@@ -1,0 +1,164 @@
+//! An independent reference: the fixed-knot refinement problems of Kersey §3 posed as conic
+//! programs for Clarabel (interior point, sparse LDLᵀ), shared by the tests and `cargo xtask`.
+//!
+//! minimize ½ xᵀ (H ⊗ I_d + W) x − (W q̃)ᵀx  s.t.  A x + s = b, s ∈ K, with x = p vertex-major:
+//! interpolation rows in the zero cone, balls as second-order cones (ε_i, q_i − p_{i_k}),
+//! half-spaces in the non-negative cone (c − n·p).
+#![allow(dead_code)]
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use divdiff::{Knots, Points};
+use refine::Constraint;
+
+/// Clarabel's answer.
+pub struct Reference {
+    /// The optimal vertices.
+    pub points: Points,
+    /// ½pᵀHp (+ ½Σ w|p − q|² for smoothing).
+    pub objective: f64,
+    /// Interior-point iterations.
+    pub iterations: u32,
+}
+
+/// Gap and feasibility tolerances handed to Clarabel: its defaults (1e-8) are as loose as the
+/// 1e-8 relative energy agreement we check; 1e-12 often ends in `AlmostSolved` (reduced
+/// accuracy, seen 1e-7 inside active balls), so 1e-10 with status `Solved` required.
+pub const CLARABEL_TOL: f64 = 1e-10;
+
+/// Solves the fixed-knot problem with Clarabel.
+pub fn clarabel_solve(
+    knots: &Knots,
+    q: &Points,
+    data_vertex: &[usize],
+    constraint: &Constraint,
+) -> Result<Reference, String> {
+    let nv = knots.vertex_count();
+    let d = q.dim();
+    let nx = nv * d;
+    let h = energy::Hessian::new(knots);
+    let (d0, d1, d2) = h.bands();
+    let closed = knots.is_closed();
+    // Upper triangle of H ⊗ I_d (+ W), triplets (duplicates add, which also handles the
+    // aliasing bands of tiny closed curves).
+    let (mut pi, mut pj, mut pv) = (Vec::new(), Vec::new(), Vec::new());
+    let mut push = |a: usize, b: usize, v: f64| {
+        if v == 0.0 {
+            return;
+        }
+        for c in 0..d {
+            let (r, s) = (a * d + c, b * d + c);
+            let (r, s) = if r <= s { (r, s) } else { (s, r) };
+            pi.push(r);
+            pj.push(s);
+            // An off-diagonal entry pair (a, b) and (b, a) is represented once in the upper
+            // triangle; when a and b alias to the same vertex it lands on the diagonal twice.
+            pv.push(v);
+        }
+    };
+    for j in 0..nv {
+        push(j, j, d0[j]);
+        for (band, step) in [(d1, 1), (d2, 2)] {
+            if !closed && j + step >= nv {
+                continue;
+            }
+            let k = (j + step) % nv;
+            if k == j {
+                push(j, j, 2.0 * band[j]);
+            } else {
+                push(j, k, band[j]);
+            }
+        }
+    }
+    let mut lin = vec![0.0; nx];
+    let (mut ai, mut aj, mut av, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut cones = Vec::new();
+    let mut constant = 0.0;
+    for (i, &v) in data_vertex.iter().enumerate() {
+        let qi = q.point(i);
+        let equality =
+            |ai: &mut Vec<usize>, aj: &mut Vec<usize>, av: &mut Vec<f64>, b: &mut Vec<f64>| {
+                for (c, &qc) in qi.iter().enumerate() {
+                    ai.push(b.len());
+                    aj.push(v * d + c);
+                    av.push(1.0);
+                    b.push(qc);
+                }
+            };
+        match constraint {
+            Constraint::Interpolate => {
+                equality(&mut ai, &mut aj, &mut av, &mut b);
+                cones.push(SupportedConeT::ZeroConeT(d));
+            }
+            Constraint::Balls(r) if r[i] == 0.0 => {
+                equality(&mut ai, &mut aj, &mut av, &mut b);
+                cones.push(SupportedConeT::ZeroConeT(d));
+            }
+            Constraint::Balls(r) => {
+                b.push(r[i]);
+                for (c, &qc) in qi.iter().enumerate() {
+                    ai.push(b.len());
+                    aj.push(v * d + c);
+                    av.push(1.0);
+                    b.push(qc);
+                }
+                cones.push(SupportedConeT::SecondOrderConeT(d + 1));
+            }
+            Constraint::Smoothing(w) => {
+                for (c, &qc) in qi.iter().enumerate() {
+                    pi.push(v * d + c);
+                    pj.push(v * d + c);
+                    pv.push(w[i]);
+                    lin[v * d + c] -= w[i] * qc;
+                    constant += 0.5 * w[i] * qc * qc;
+                }
+            }
+            Constraint::HalfSpaces(sets) => {
+                for hs in &sets[i] {
+                    for (c, &nc) in hs.normal.iter().enumerate() {
+                        ai.push(b.len());
+                        aj.push(v * d + c);
+                        av.push(nc);
+                    }
+                    b.push(hs.offset);
+                }
+                if !sets[i].is_empty() {
+                    cones.push(SupportedConeT::NonnegativeConeT(sets[i].len()));
+                }
+            }
+        }
+    }
+    let m = b.len();
+    let p_mat = CscMatrix::new_from_triplets(nx, nx, pi, pj, pv);
+    let a_mat = CscMatrix::new_from_triplets(m, nx, ai, aj, av);
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(200)
+        .tol_gap_abs(CLARABEL_TOL)
+        .tol_gap_rel(CLARABEL_TOL)
+        .tol_feas(CLARABEL_TOL)
+        .tol_ktratio(1e-10)
+        .build()
+        .map_err(|e| format!("{e:?}"))?;
+    let mut solver = DefaultSolver::new(&p_mat, &lin, &a_mat, &b, &cones, settings)
+        .map_err(|e| format!("{e:?}"))?;
+    solver.solve();
+    let sol = &solver.solution;
+    match sol.status {
+        SolverStatus::Solved => {}
+        s => {
+            return Err(format!(
+                "clarabel status {s:?} after {} iterations",
+                sol.iterations
+            ))
+        }
+    }
+    let points = Points::new(d, sol.x.clone()).map_err(|e| e.to_string())?;
+    Ok(Reference {
+        points,
+        objective: sol.obj_val + constant,
+        iterations: sol.iterations,
+    })
+}
