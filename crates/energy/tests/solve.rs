@@ -221,9 +221,9 @@ fn check(p: &Problem, d: usize, seed: u64) -> (f64, f64) {
     let mut b = DVector::zeros(free.len());
     for (a, &r) in free.iter().enumerate() {
         b[a] = rhs[r];
-        for c in 0..n * d {
+        for (c, rc) in rhs.iter().enumerate() {
             if p.fixed[c / d] {
-                b[a] -= p.dense[(r, c)] * rhs[c];
+                b[a] -= p.dense[(r, c)] * rc;
             }
         }
         for (e, &c) in free.iter().enumerate() {

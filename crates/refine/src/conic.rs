@@ -39,6 +39,9 @@
 //! - total: the largest of the three. The solver stops when total ≤ [`ConicOptions::tolerance`]
 //!   and fails with [`Error::NotConverged`] if it cannot reach [`CONIC_ACCEPT`].
 
+// The cone algebra and block kernels index several small arrays by the same row/column.
+#![allow(clippy::needless_range_loop)]
+
 use crate::Error;
 use divdiff::{Points, Topology};
 use energy::{Factor, Hessian, System};
@@ -92,7 +95,7 @@ pub enum ConvexSet {
 
 /// A constraint L p ∈ K on a stencil L = Σ_k c_k e_{v_k}ᵀ.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Constraint {
+pub struct ConicConstraint {
     /// The stencil [(v_k, c_k)]: at most three vertices within two steps of each other
     /// (cyclically for closed curves).
     pub stencil: Vec<(usize, f64)>,
@@ -177,7 +180,7 @@ pub struct ConicProblem {
     off2: Vec<f64>,
     fixed: Vec<Option<Vec<f64>>>,
     smoothing: Vec<Smoothing>,
-    constraints: Vec<Constraint>,
+    constraints: Vec<ConicConstraint>,
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -244,7 +247,7 @@ impl ConicProblem {
     }
 
     /// The constraints added so far, in index order.
-    pub fn constraints(&self) -> &[Constraint] {
+    pub fn constraints(&self) -> &[ConicConstraint] {
         &self.constraints
     }
 
@@ -393,7 +396,7 @@ impl ConicProblem {
             }
             ConvexSet::Point(v) => self.check_vec("point", index, v)?,
         }
-        self.constraints.push(Constraint {
+        self.constraints.push(ConicConstraint {
             stencil: stencil.to_vec(),
             set,
         });
@@ -513,7 +516,7 @@ struct Prepared {
     d: usize,
     /// Fixed value per vertex.
     fixed: Vec<Option<Vec<f64>>>,
-    /// Constraint that fixed a vertex (for its reaction force): (constraint, coefficient).
+    /// The constraint that fixed a vertex (for its reaction force): (constraint, coefficient).
     owner: Vec<Option<(usize, f64)>>,
     /// H + smoothing weights, with fixed vertices marked.
     base: System,
@@ -898,11 +901,10 @@ fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
 fn max_step(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
     match kind {
         Kind::Zero => cap,
-        Kind::Nonneg => {
-            u.iter()
-                .zip(du)
-                .fold(cap, |a, (x, dx)| if *dx < 0.0 { a.min(-x / dx) } else { a })
-        }
+        Kind::Nonneg => u
+            .iter()
+            .zip(du)
+            .fold(cap, |a, (x, dx)| if *dx < 0.0 { a.min(-x / dx) } else { a }),
         Kind::Soc => {
             // q(α) = J(u + α du) = a α² + b α + c, c = J(u) > 0; first positive root.
             let a = soc_j(du);
@@ -1155,7 +1157,7 @@ impl Prepared {
         let mut tmp = vec![0.0; 16];
         let mut tmp2 = vec![0.0; 16];
         let mut wbuf = vec![0.0; 16];
-        let mut best_state: Option<(f64, Vec<f64>, Vec<f64>, Vec<f64>)> = None;
+        let mut best_state: Option<(f64, State)> = None;
         let mut polish_tried = false;
         let mut rx = vec![0.0; n * d];
         let mut rs = vec![0.0; tm];
@@ -1219,7 +1221,14 @@ impl Prepared {
                 .max(gap.abs() / (sden * xs));
             best_primal = best_primal.min(primal);
             if best_state.as_ref().is_none_or(|b| cheap < b.0) {
-                best_state = Some((cheap, st.x.clone(), st.s.clone(), st.z.clone()));
+                best_state = Some((
+                    cheap,
+                    State {
+                        x: st.x.clone(),
+                        s: st.s.clone(),
+                        z: st.z.clone(),
+                    },
+                ));
             }
             if cheap <= POLISH_FROM || iterations >= opts.max_iterations {
                 let sol = self.certificate(problem, &st, iterations);
@@ -1401,8 +1410,7 @@ impl Prepared {
             }
         }
         // Not at the target: accept the best iterate if its certificate is within CONIC_ACCEPT.
-        if let Some((_, x, s, z)) = best_state {
-            let bst = State { x, s, z };
+        if let Some((_, bst)) = best_state {
             let sol = self.certificate(problem, &bst, iterations);
             best = best.min(sol.kkt.total);
             if sol.kkt.total <= CONIC_ACCEPT {
@@ -1559,7 +1567,7 @@ impl Prepared {
                 socs.push((row.block, blk));
             }
             let gn: Vec<f64> = grads.iter().map(|g| norm(g)).collect();
-            if gn.iter().any(|&v| !(v > 0.0)) {
+            if gn.iter().any(|&v| v.is_nan() || v <= 0.0) {
                 return best;
             }
             let mut delta = Vec::with_capacity(rows.len());
@@ -1737,7 +1745,7 @@ impl Prepared {
         worst
     }
 
-    fn constraint_value(&self, con: &Constraint, x: &[f64]) -> Vec<f64> {
+    fn constraint_value(&self, con: &ConicConstraint, x: &[f64]) -> Vec<f64> {
         let d = self.d;
         let mut y = vec![0.0; d];
         for &(v, c) in &con.stencil {

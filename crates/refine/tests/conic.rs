@@ -4,6 +4,8 @@
 //! Hessian, fixed vertices as zero cones, balls and wedges as second-order cones, half-spaces as
 //! the nonnegative orthant), without any code of the solver under test.
 #![allow(non_snake_case)]
+// Assembling rows coordinate by coordinate reads more clearly with index loops.
+#![allow(clippy::needless_range_loop)]
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{

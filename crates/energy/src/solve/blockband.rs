@@ -6,6 +6,9 @@
 //! it stays symmetric and accurate even when diagonal blocks are very ill-conditioned (barrier
 //! terms of interior-point methods); no block is ever inverted explicitly.
 
+// Dense d×d kernels index several arrays by the same row/column: index loops are clearer.
+#![allow(clippy::needless_range_loop)]
+
 use super::{Envelope, Parts};
 use crate::Error;
 use divdiff::Topology;
