@@ -161,6 +161,10 @@ pub struct ConicSolution {
     pub kkt: Kkt,
     /// Interior-point iterations.
     pub iterations: usize,
+    /// Whether the active-set polish produced this result. Then z_c = w_c (L_c p − center)
+    /// holds exactly for balls; otherwise the forces are the interior-point duals (projected
+    /// onto the dual cones), which satisfy it only up to O(√gap).
+    pub polished: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -1234,7 +1238,7 @@ impl Prepared {
                 let sol = self.certificate(problem, &st, iterations);
                 let total = sol.kkt.total;
                 best = best.min(total);
-                if total <= opts.tolerance || !polish_tried {
+                if !polish_tried {
                     polish_tried = true;
                     let pol = self.polish(problem, &st, iterations);
                     if let Some(p) = pol {
@@ -1469,8 +1473,9 @@ impl Prepared {
                     }
                 }
                 Kind::Nonneg => {
+                    let scale = norm(s).max(f64::MIN_POSITIVE);
                     for r in 0..b.m {
-                        if z[r] >= omega * s[r] {
+                        if z[r] >= omega * s[r] || s[r] <= POLISH_ACTIVE_RTOL * scale {
                             rows.push(Row {
                                 block: bi,
                                 comp: r,
@@ -1480,8 +1485,12 @@ impl Prepared {
                     }
                 }
                 Kind::Soc => {
+                    // Both on the boundary and J-orthogonal (active): sᵀz ≪ |s||z|; inactive
+                    // blocks on the central path have z ∝ J s, so sᵀz is comparable to |s||z|.
                     let ds = s[0] - norm(&s[1..]);
-                    if z[0] >= omega * ds {
+                    if norm(s) * norm(z) >= POLISH_SOC_RATIO * dot(s, z)
+                        || ds <= POLISH_ACTIVE_RTOL * s[0]
+                    {
                         if !b.ball || norm(s) <= 1e-9 * self.scale_x.max(f64::MIN_POSITIVE) {
                             // An active wedge has an indefinite curvature term, and at the apex
                             // J s = 0 carries no direction: the interior-point result stands.
@@ -1646,7 +1655,8 @@ impl Prepared {
                     ps.z[b.off + row.comp] = row.mult;
                 }
             }
-            let cert = self.certificate(problem, &ps, iterations);
+            let mut cert = self.certificate(problem, &ps, iterations);
+            cert.polished = true;
             let better = best.as_ref().is_none_or(|b| cert.kkt.total < b.kkt.total);
             let done = cert.kkt.total <= CONIC_TOLERANCE;
             if better {
@@ -1926,6 +1936,7 @@ impl Prepared {
             objective,
             kkt,
             iterations,
+            polished: false,
         }
     }
 }
@@ -2153,6 +2164,11 @@ impl NewtonCtx<'_> {
 
 /// Newton steps of the active-set polish.
 pub const POLISH_STEPS: usize = 3;
+/// The polish also treats a constraint as active when its slack is below this times its size
+/// (weakly active constraints: zero multiplier on the boundary).
+pub const POLISH_ACTIVE_RTOL: f64 = 1e-6;
+/// A second-order-cone block counts as active in the polish when |s||z| ≥ this × sᵀz.
+pub const POLISH_SOC_RATIO: f64 = 100.0;
 /// The polish is first tried when the interior-point iterate's relative KKT residual is below this.
 pub const POLISH_FROM: f64 = 1e-8;
 
