@@ -11,10 +11,12 @@
 //! - **scalar fast path** (no coupling blocks): one scalar pentadiagonal LDLᵀ shared by all d
 //!   coordinate columns. For closed curves the two last rows are a dense *border* (the wrap-around
 //!   couplings fill them in), stored as two length-N vectors.
-//! - **block path**: a block Cholesky factorization on the block *envelope* of K — rows
-//!   0..N−3 span their band, the last two block rows of a closed curve span everything (border).
-//!   For closed curves with N ≤ 4 the bands alias (entries add up) and the envelope is simply the
-//!   whole lower triangle.
+//! - **block band path** (coupling blocks, d ≤ 4): a block LDLᵀ with d×d blocks fixed at compile
+//!   time, rows with two block subdiagonals and, for closed curves, a two-block-row border.
+//! - **envelope path** (d > 4, or closed curves with N ≤ 4 where the bands alias and entries add
+//!   up): a block Cholesky factorization on the block *envelope* of K — rows 0..N−3 span their
+//!   band, the last two block rows of a closed curve span everything (border); for N ≤ 4 the
+//!   envelope is the whole lower triangle.
 //!
 //! A pivot is accepted only if it exceeds [`PIVOT_RTOL`] times the diagonal entry of the same row
 //! of K (the pivot of a positive semidefinite matrix never exceeds it), so the test is relative to
@@ -22,6 +24,7 @@
 
 mod band;
 mod block;
+mod blockband;
 
 use crate::{Error, Hessian};
 use divdiff::{Points, Topology};
@@ -336,7 +339,11 @@ impl System {
                 if v == 0.0 {
                     continue;
                 }
-                let k = (j + step) % n;
+                let k = if j + step >= n {
+                    j + step - n
+                } else {
+                    j + step
+                };
                 for c in 0..d {
                     y[j * d + c] += v * xs[k * d + c];
                     y[k * d + c] += v * xs[j * d + c];
@@ -345,9 +352,16 @@ impl System {
         }
         if let Some(blocks) = &self.blocks {
             let env = Envelope::new(self.topology, n);
+            // Envelope entries are stored row by row, columns first(i)..=i consecutively.
+            let mut blocks_iter = blocks.chunks_exact(d * d);
             for i in 0..n {
                 for j in env.first(i)..=i {
-                    let b = &blocks[env.index(i, j) * d * d..][..d * d];
+                    let Some(b) = blocks_iter.next() else {
+                        break;
+                    };
+                    if b.iter().all(|&v| v == 0.0) {
+                        continue;
+                    }
                     for r in 0..d {
                         for c in 0..d {
                             y[i * d + r] += b[r * d + c] * xs[j * d + c];
@@ -386,11 +400,27 @@ impl System {
     /// [`Error::Singular`] naming the vertex of the first pivot that is not above
     /// [`PIVOT_RTOL`] times its diagonal entry (or not finite).
     pub fn factor(&self) -> Result<Factor, Error> {
-        let scalar = self.blocks.is_none() && (self.topology == Topology::Open || self.n >= 5);
-        let inner = if scalar {
-            Inner::Band(band::BandFactor::new(&self.parts())?)
-        } else {
-            Inner::Block(block::BlockFactor::new(&self.parts())?)
+        self.factor_with_tolerance(PIVOT_RTOL)
+    }
+
+    /// [`factor`](System::factor) with a caller-chosen relative pivot tolerance instead of
+    /// [`PIVOT_RTOL`]: for matrices known to be positive definite whose pivots may legitimately
+    /// be tiny relative to their diagonal (interior-point Newton systems, where barrier terms
+    /// grow without bound on some rows).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] naming the vertex of the first pivot that is not above
+    /// `pivot_rtol` times its diagonal entry (or not finite).
+    pub fn factor_with_tolerance(&self, pivot_rtol: f64) -> Result<Factor, Error> {
+        let banded = self.topology == Topology::Open || self.n >= 5;
+        let parts = self.parts(pivot_rtol);
+        let inner = match (banded, self.blocks.is_some(), self.dim) {
+            (true, false, _) => Inner::Band(band::BandFactor::new(&parts)?),
+            (true, true, 1) => Inner::Bb1(blockband::BlockBand::new(&parts)?),
+            (true, true, 2) => Inner::Bb2(blockband::BlockBand::new(&parts)?),
+            (true, true, 3) => Inner::Bb3(blockband::BlockBand::new(&parts)?),
+            (true, true, 4) => Inner::Bb4(blockband::BlockBand::new(&parts)?),
+            _ => Inner::Block(block::BlockFactor::new(&parts)?),
         };
         Ok(Factor {
             n: self.n,
@@ -399,8 +429,9 @@ impl System {
         })
     }
 
-    pub(crate) fn parts(&self) -> Parts<'_> {
+    pub(crate) fn parts(&self, rtol: f64) -> Parts<'_> {
         Parts {
+            rtol,
             topology: self.topology,
             n: self.n,
             dim: self.dim,
@@ -415,6 +446,7 @@ impl System {
 
 /// Borrowed view of a system for the factorizations.
 pub(crate) struct Parts<'a> {
+    pub(crate) rtol: f64,
     pub(crate) topology: Topology,
     pub(crate) n: usize,
     pub(crate) dim: usize,
@@ -436,6 +468,10 @@ pub struct Factor {
 #[derive(Clone, Debug)]
 enum Inner {
     Band(band::BandFactor),
+    Bb1(blockband::BlockBand<1>),
+    Bb2(blockband::BlockBand<2>),
+    Bb3(blockband::BlockBand<3>),
+    Bb4(blockband::BlockBand<4>),
     Block(block::BlockFactor),
 }
 
@@ -472,6 +508,10 @@ impl Factor {
         debug_assert_eq!(x.len(), self.n * self.dim);
         match &self.inner {
             Inner::Band(f) => f.solve(x),
+            Inner::Bb1(f) => f.solve(x),
+            Inner::Bb2(f) => f.solve(x),
+            Inner::Bb3(f) => f.solve(x),
+            Inner::Bb4(f) => f.solve(x),
             Inner::Block(f) => f.solve(x),
         }
     }

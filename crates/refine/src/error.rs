@@ -162,4 +162,38 @@ pub enum Error {
         /// The residual reached.
         residual: f64,
     },
+    /// A vertex index is out of range (conic problems).
+    #[error("{field} vertex {index} is out of range (N = {len})")]
+    VertexOutOfRange {
+        /// The field.
+        field: &'static str,
+        /// The index given.
+        index: usize,
+        /// The number of vertices.
+        len: usize,
+    },
+    /// A value is NaN or infinite (conic problems).
+    #[error("{field}[{index}] is not finite")]
+    NonFiniteInput {
+        /// The field.
+        field: &'static str,
+        /// The vertex or constraint index.
+        index: usize,
+    },
+    /// A constraint is malformed (negative radius, zero normal, non-unit axis, bad stencil …).
+    #[error("constraint {constraint}: {reason}")]
+    InvalidConstraint {
+        /// The constraint index.
+        constraint: usize,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The constraints cannot be met: an empty polytope, a constraint contradicting fixed
+    /// vertices, or (when the interior-point method finds no feasible point) the most violated
+    /// constraint.
+    #[error("constraint {constraint} cannot be satisfied")]
+    Infeasible {
+        /// The constraint index.
+        constraint: usize,
+    },
 }

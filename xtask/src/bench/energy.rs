@@ -7,6 +7,7 @@ use super::{time_median, Opts};
 use divdiff::{Points, Topology};
 use energy::System;
 use nalgebra::{DMatrix, DVector};
+use refine::{ConicOptions, ConicProblem, ConvexSet};
 
 /// Bands of Kersey's H = AᵀA (math.md §1) on knots with spans 1 + 0.5 sin(j).
 fn bands(top: Topology, n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -145,5 +146,163 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         );
     }
     println!();
+    conic(opts)?;
     Ok(())
+}
+
+/// Issue 3's balls problem: n data points on a noisy closed curve, k = 3 (N = 4n vertices),
+/// d = 2, centripetal data knots split uniformly, a ball of random radius about every data point.
+fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
+    let k = 3;
+    let q: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            let wobble = 1.0 + 0.2 * (7.0 * a).sin() + 0.01 * ((i * 7919 % 97) as f64 / 97.0 - 0.5);
+            [wobble * a.cos(), 0.7 * wobble * a.sin()]
+        })
+        .collect();
+    let mut t = vec![0.0];
+    for i in 0..n {
+        let (a, b) = (q[i], q[(i + 1) % n]);
+        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2))
+            .sqrt()
+            .sqrt();
+        let t0 = *t.last().unwrap_or(&0.0);
+        for j in 1..=k + 1 {
+            t.push(t0 + span * j as f64 / (k + 1) as f64);
+        }
+    }
+    let knots = divdiff::Knots::closed(t)?;
+    let h = energy::Hessian::new(&knots);
+    let mut p = ConicProblem::new(&h, 2)?;
+    let spacing = std::f64::consts::TAU / n as f64;
+    for (i, c) in q.iter().enumerate() {
+        let r = spacing * (0.05 + 0.5 * ((i * 31 % 101) as f64 / 101.0));
+        p.add_constraint(
+            &[((k + 1) * i, 1.0)],
+            ConvexSet::Ball {
+                center: c.to_vec(),
+                radius: r,
+            },
+        )?;
+    }
+    Ok(p)
+}
+
+/// The exact conic solver (refine::conic) on issue 3's balls problem, against Clarabel on the
+/// same SOCP (built from the dense-free banded H: P = H ⊗ I as CSC).
+fn conic(opts: Opts) -> anyhow::Result<()> {
+    println!("## refine::conic — exact balls problem (closed, k = 3, d = 2), vs Clarabel");
+    println!();
+    println!("| n | N | conic time | iterations | KKT | Clarabel time | Clarabel objective | rel. diff | ratio |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let sizes: &[usize] = if opts.quick {
+        &[1_000]
+    } else {
+        &[1_000, 10_000, 100_000]
+    };
+    for &n in sizes {
+        let p = balls_problem(n)?;
+        let reps = if n >= 100_000 { 3 } else { 7 };
+        let t = time_median(reps, || p.solve(&ConicOptions::default()));
+        let sol = p.solve(&ConicOptions::default())?;
+        let (tc, obj) = if n <= 10_000 {
+            let (tc, obj) = clarabel_balls(n)?;
+            (Some(tc), Some(obj))
+        } else {
+            (None, None)
+        };
+        let fmt_ms = |d: std::time::Duration| format!("{:.2} ms", d.as_secs_f64() * 1e3);
+        println!(
+            "| {n} | {} | {} | {} | {:.1e} | {} | {} | {} | {} |",
+            4 * n,
+            fmt_ms(t),
+            sol.iterations,
+            sol.kkt.total,
+            tc.map(fmt_ms).unwrap_or_else(|| "—".into()),
+            obj.map(|o| format!("{o:.10e}"))
+                .unwrap_or_else(|| "—".into()),
+            obj.map(|o| format!("{:.1e}", (o - sol.objective).abs() / sol.objective.abs()))
+                .unwrap_or_else(|| "—".into()),
+            tc.map(|c| format!("{:.0}×", c.as_secs_f64() / t.as_secs_f64()))
+                .unwrap_or_else(|| "—".into()),
+        );
+    }
+    println!();
+    Ok(())
+}
+
+/// Clarabel's solve time (one run, setup excluded) and objective for `balls_problem(n)`.
+fn clarabel_balls(n: usize) -> anyhow::Result<(std::time::Duration, f64)> {
+    use clarabel::algebra::CscMatrix;
+    use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
+    let p = balls_problem(n)?;
+    let nv = p.len();
+    let d = 2;
+    // Rebuild H from the same knots through the problem's own definition: ½ pᵀ H p.
+    let k = 3;
+    let q: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            let wobble = 1.0 + 0.2 * (7.0 * a).sin() + 0.01 * ((i * 7919 % 97) as f64 / 97.0 - 0.5);
+            [wobble * a.cos(), 0.7 * wobble * a.sin()]
+        })
+        .collect();
+    let mut t = vec![0.0];
+    for i in 0..n {
+        let (a, b) = (q[i], q[(i + 1) % n]);
+        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2))
+            .sqrt()
+            .sqrt();
+        let t0 = *t.last().unwrap_or(&0.0);
+        for j in 1..=k + 1 {
+            t.push(t0 + span * j as f64 / (k + 1) as f64);
+        }
+    }
+    let h = energy::Hessian::new(&divdiff::Knots::closed(t)?);
+    let (dg, o1, o2) = h.bands();
+    let (mut pi, mut pj, mut pv) = (vec![], vec![], vec![]);
+    let mut push = |a: usize, b: usize, v: f64| {
+        for c in 0..d {
+            let (r, s) = (a * d + c, b * d + c);
+            pi.push(r.min(s));
+            pj.push(r.max(s));
+            pv.push(v);
+        }
+    };
+    for j in 0..nv {
+        push(j, j, dg[j]);
+        push(j, (j + 1) % nv, o1[j]);
+        push(j, (j + 2) % nv, o2[j]);
+    }
+    let pm = CscMatrix::new_from_triplets(nv * d, nv * d, pi, pj, pv);
+    let (mut ai, mut aj, mut av, mut b) = (vec![], vec![], vec![], vec![]);
+    let mut cones = vec![];
+    let mut row = 0;
+    for (c, con) in p.constraints().iter().enumerate() {
+        let ConvexSet::Ball { center, radius } = &con.set else {
+            anyhow::bail!("constraint {c} is not a ball");
+        };
+        b.push(*radius);
+        row += 1;
+        for (comp, cc) in center.iter().enumerate() {
+            ai.push(row);
+            aj.push(con.stencil[0].0 * d + comp);
+            av.push(1.0);
+            b.push(*cc);
+            row += 1;
+        }
+        cones.push(SupportedConeT::SecondOrderConeT(d + 1));
+    }
+    let am = CscMatrix::new_from_triplets(row, nv * d, ai, aj, av);
+    let qv = vec![0.0; nv * d];
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .build()
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings)
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let start = std::time::Instant::now();
+    solver.solve();
+    Ok((start.elapsed(), solver.solution.obj_val))
 }

@@ -5,7 +5,7 @@
 //! couplings fill them in completely, stored as `g0`, `g1` (length m), plus the 2×2 tail.
 //! Factorization and both triangular solves are single fused passes with rolling state.
 
-use super::{Parts, PIVOT_RTOL};
+use super::Parts;
 use crate::Error;
 use divdiff::Topology;
 
@@ -25,8 +25,8 @@ pub(crate) struct BandFactor {
 }
 
 #[inline(always)]
-fn pivot_ok(p: f64, kii: f64) -> bool {
-    p.is_finite() && p > PIVOT_RTOL * kii
+fn pivot_ok(p: f64, kii: f64, rtol: f64) -> bool {
+    p.is_finite() && p > rtol * kii
 }
 
 impl BandFactor {
@@ -109,7 +109,7 @@ impl BandFactor {
             let a1 = (k1 - a2 * dm2 * l1m1) * im1;
             let kii = kd(i);
             let p = kii - a1 * a1 * dm1 - a2 * a2 * dm2;
-            if !pivot_ok(p, kii) {
+            if !pivot_ok(p, kii, s.rtol) {
                 return Err(Error::Singular { vertex: i });
             }
             let inv = 1.0 / p;
@@ -141,13 +141,13 @@ impl BandFactor {
         if closed {
             let k0 = kd(r0);
             let q0 = k0 - p0;
-            if !pivot_ok(q0, k0) {
+            if !pivot_ok(q0, k0, s.rtol) {
                 return Err(Error::Singular { vertex: r0 });
             }
             let l10 = (cpl(r1, r0, s.off1[n - 2]) - c10) / q0;
             let k1 = kd(r1);
             let q1 = k1 - p1 - l10 * l10 * q0;
-            if !pivot_ok(q1, k1) {
+            if !pivot_ok(q1, k1, s.rtol) {
                 return Err(Error::Singular { vertex: r1 });
             }
             tail = [l10, 1.0 / q0, 1.0 / q1];

@@ -1,6 +1,6 @@
 //! Block Cholesky K = L Lᵀ on the block envelope (d×d blocks, lower triangular diagonal blocks).
 
-use super::{Envelope, Parts, PIVOT_RTOL};
+use super::{Envelope, Parts};
 use crate::Error;
 use divdiff::Topology;
 
@@ -84,11 +84,11 @@ impl BlockFactor {
             })
             .collect();
         match d {
-            1 => cholesky::<1>(&env, &mut a, &diag_ref, 1)?,
-            2 => cholesky::<2>(&env, &mut a, &diag_ref, 2)?,
-            3 => cholesky::<3>(&env, &mut a, &diag_ref, 3)?,
-            4 => cholesky::<4>(&env, &mut a, &diag_ref, 4)?,
-            _ => cholesky::<0>(&env, &mut a, &diag_ref, d)?,
+            1 => cholesky::<1>(&env, &mut a, &diag_ref, 1, s.rtol)?,
+            2 => cholesky::<2>(&env, &mut a, &diag_ref, 2, s.rtol)?,
+            3 => cholesky::<3>(&env, &mut a, &diag_ref, 3, s.rtol)?,
+            4 => cholesky::<4>(&env, &mut a, &diag_ref, 4, s.rtol)?,
+            _ => cholesky::<0>(&env, &mut a, &diag_ref, d, s.rtol)?,
         }
         Ok(BlockFactor {
             n,
@@ -180,6 +180,7 @@ fn cholesky<const D: usize>(
     a: &mut [f64],
     diag_ref: &[f64],
     dyn_d: usize,
+    rtol: f64,
 ) -> Result<(), Error> {
     let d = if D == 0 { dyn_d } else { D };
     let dd = d * d;
@@ -225,7 +226,7 @@ fn cholesky<const D: usize>(
                         p -= s[c * d + q] * s[c * d + q];
                     }
                     let kref = diag_ref[i * d + c];
-                    if !(p.is_finite() && p > PIVOT_RTOL * kref) {
+                    if !(p.is_finite() && p > rtol * kref) {
                         return Err(Error::Singular { vertex: i });
                     }
                     let lcc = p.sqrt();
