@@ -40,4 +40,10 @@ pub enum Error {
         /// Another stencil vertex.
         second: usize,
     },
+    /// A vertex is fixed twice.
+    #[error("fixed vertex {index} is given twice")]
+    DuplicateFixed {
+        /// The vertex.
+        index: usize,
+    },
 }

@@ -11,10 +11,12 @@
 //! - **scalar fast path** (no coupling blocks): one scalar pentadiagonal LDLᵀ shared by all d
 //!   coordinate columns. For closed curves the two last rows are a dense *border* (the wrap-around
 //!   couplings fill them in), stored as two length-N vectors.
-//! - **block path**: a block Cholesky factorization on the block *envelope* of K — rows
-//!   0..N−3 span their band, the last two block rows of a closed curve span everything (border).
-//!   For closed curves with N ≤ 4 the bands alias (entries add up) and the envelope is simply the
-//!   whole lower triangle.
+//! - **block band path** (coupling blocks, d ≤ 4): a block LDLᵀ with d×d blocks fixed at compile
+//!   time, rows with two block subdiagonals and, for closed curves, a two-block-row border.
+//! - **envelope path** (d > 4, or closed curves with N ≤ 4 where the bands alias and entries add
+//!   up): a block Cholesky factorization on the block *envelope* of K — rows 0..N−3 span their
+//!   band, the last two block rows of a closed curve span everything (border); for N ≤ 4 the
+//!   envelope is the whole lower triangle.
 //!
 //! A pivot is accepted only if it exceeds [`PIVOT_RTOL`] times the diagonal entry of the same row
 //! of K (the pivot of a positive semidefinite matrix never exceeds it), so the test is relative to
@@ -22,8 +24,9 @@
 
 mod band;
 mod block;
+mod blockband;
 
-use crate::Error;
+use crate::{Error, Hessian};
 use divdiff::{Points, Topology};
 
 /// Relative pivot tolerance: a pivot `p` of row `i` is accepted only if `p > PIVOT_RTOL * K_ii`.
@@ -52,45 +55,73 @@ pub struct System {
     fixed: Vec<bool>,
 }
 
-/// The envelope pattern of the lower block triangle: row `i` holds columns `first[i]..=i`.
-#[derive(Clone, Debug)]
+/// The envelope pattern of the lower block triangle: row `i` holds columns `first(i)..=i`.
+/// Open: the band (first(i) = i − 2). Closed, N ≥ 5: the band, and the last two rows are full
+/// (the border). Closed, N ≤ 4: the whole lower triangle.
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Envelope {
-    pub(crate) first: Vec<usize>,
-    pub(crate) offset: Vec<usize>,
-    pub(crate) total: usize,
+    n: usize,
+    full: bool,
+    closed: bool,
 }
 
 impl Envelope {
     pub(crate) fn new(topology: Topology, n: usize) -> Self {
-        let first: Vec<usize> = (0..n)
-            .map(|i| match topology {
-                Topology::Open => i.saturating_sub(2),
-                Topology::Closed if n <= 4 || i + 2 >= n => 0,
-                Topology::Closed => i.saturating_sub(2),
-            })
-            .collect();
-        let mut offset = Vec::with_capacity(n);
-        let mut total = 0;
-        for (i, f) in first.iter().enumerate() {
-            offset.push(total);
-            total += i - f + 1;
-        }
+        let closed = topology == Topology::Closed;
         Envelope {
-            first,
-            offset,
-            total,
+            n,
+            full: closed && n <= 4,
+            closed,
         }
+    }
+
+    /// First column of row `i`.
+    #[inline]
+    pub(crate) fn first(&self, i: usize) -> usize {
+        if self.full || (self.closed && i + 2 >= self.n) {
+            0
+        } else {
+            i.saturating_sub(2)
+        }
+    }
+
+    /// Offset (in blocks) of row `i`.
+    #[inline]
+    pub(crate) fn offset(&self, i: usize) -> usize {
+        if self.full {
+            return i * (i + 1) / 2;
+        }
+        let band = |i: usize| if i < 2 { i * (i + 1) / 2 } else { 3 * i - 3 };
+        if self.closed && i == self.n - 1 {
+            band(self.n - 2) + (self.n - 1)
+        } else {
+            band(i)
+        }
+    }
+
+    /// Total number of blocks.
+    pub(crate) fn total(&self) -> usize {
+        self.offset(self.n - 1) + (self.n - 1 - self.first(self.n - 1)) + 1
     }
 
     /// Index (in blocks) of the lower entry (i, j), i ≥ j, which must lie in the envelope.
     #[inline]
     pub(crate) fn index(&self, i: usize, j: usize) -> usize {
-        debug_assert!(j <= i && j >= self.first[i]);
-        self.offset[i] + (j - self.first[i])
+        debug_assert!(j <= i && j >= self.first(i));
+        self.offset(i) + (j - self.first(i))
     }
 }
 
 impl System {
+    /// K = H ⊗ I_dim for the energy Hessian `h` (no weights, nothing fixed yet).
+    ///
+    /// # Errors
+    /// [`Error::SizeMismatch`] for `dim` = 0 or a closed curve with fewer than 3 vertices.
+    pub fn new(h: &Hessian, dim: usize) -> Result<System, Error> {
+        let (d, o1, o2) = h.bands();
+        System::from_bands(h.topology(), d.to_vec(), o1.to_vec(), o2.to_vec(), dim)
+    }
+
     /// K = H ⊗ I_dim from the three bands of the (cyclic) pentadiagonal H (see the crate docs
     /// for the band convention: `off1[j]` couples vertices j and j+1, `off2[j]` couples j and
     /// j+2, indices mod N for closed curves — where for N = 3, 4 aliasing entries add up; for
@@ -198,7 +229,7 @@ impl System {
     }
 
     fn blocks_mut(&mut self) -> &mut Vec<f64> {
-        let total = Envelope::new(self.topology, self.n).total * self.dim * self.dim;
+        let total = Envelope::new(self.topology, self.n).total() * self.dim * self.dim;
         self.blocks.get_or_insert_with(|| vec![0.0; total])
     }
 
@@ -245,7 +276,7 @@ impl System {
         for &(a, _) in stencil {
             for &(b, _) in stencil {
                 let (i, j) = if a >= b { (a, b) } else { (b, a) };
-                if j < env.first[i] || (self.topology == Topology::Open && i - j > 2) {
+                if j < env.first(i) || (self.topology == Topology::Open && i - j > 2) {
                     return Err(Error::StencilTooWide { first: a, second: b });
                 }
                 if self.topology == Topology::Closed && i - j > 2 && n - (i - j) > 2 {
@@ -312,7 +343,7 @@ impl System {
         if let Some(blocks) = &self.blocks {
             let env = Envelope::new(self.topology, n);
             for i in 0..n {
-                for j in env.first[i]..=i {
+                for j in env.first(i)..=i {
                     let b = &blocks[env.index(i, j) * d * d..][..d * d];
                     for r in 0..d {
                         for c in 0..d {
@@ -352,22 +383,38 @@ impl System {
     /// [`Error::Singular`] naming the vertex of the first pivot that is not above
     /// [`PIVOT_RTOL`] times its diagonal entry (or not finite).
     pub fn factor(&self) -> Result<Factor, Error> {
-        let scalar = self.blocks.is_none() && (self.topology == Topology::Open || self.n >= 5);
-        let inner = if scalar {
-            Inner::Band(band::BandFactor::new(&self.parts())?)
-        } else {
-            Inner::Block(block::BlockFactor::new(&self.parts())?)
+        self.factor_with_tolerance(PIVOT_RTOL)
+    }
+
+    /// [`factor`](System::factor) with a caller-chosen relative pivot tolerance instead of
+    /// [`PIVOT_RTOL`]: for matrices known to be positive definite whose pivots may legitimately
+    /// be tiny relative to their diagonal (interior-point Newton systems, where barrier terms
+    /// grow without bound on some rows).
+    ///
+    /// # Errors
+    /// [`Error::Singular`] naming the vertex of the first pivot that is not above
+    /// `pivot_rtol` times its diagonal entry (or not finite).
+    pub fn factor_with_tolerance(&self, pivot_rtol: f64) -> Result<Factor, Error> {
+        let banded = self.topology == Topology::Open || self.n >= 5;
+        let parts = self.parts(pivot_rtol);
+        let inner = match (banded, self.blocks.is_some(), self.dim) {
+            (true, false, _) => Inner::Band(band::BandFactor::new(&parts)?),
+            (true, true, 1) => Inner::Bb1(blockband::BlockBand::new(&parts)?),
+            (true, true, 2) => Inner::Bb2(blockband::BlockBand::new(&parts)?),
+            (true, true, 3) => Inner::Bb3(blockband::BlockBand::new(&parts)?),
+            (true, true, 4) => Inner::Bb4(blockband::BlockBand::new(&parts)?),
+            _ => Inner::Block(block::BlockFactor::new(&parts)?),
         };
         Ok(Factor {
             n: self.n,
             dim: self.dim,
-            fixed: self.fixed.clone(),
             inner,
         })
     }
 
-    pub(crate) fn parts(&self) -> Parts<'_> {
+    pub(crate) fn parts(&self, rtol: f64) -> Parts<'_> {
         Parts {
+            rtol,
             topology: self.topology,
             n: self.n,
             dim: self.dim,
@@ -382,6 +429,7 @@ impl System {
 
 /// Borrowed view of a system for the factorizations.
 pub(crate) struct Parts<'a> {
+    pub(crate) rtol: f64,
     pub(crate) topology: Topology,
     pub(crate) n: usize,
     pub(crate) dim: usize,
@@ -397,13 +445,16 @@ pub(crate) struct Parts<'a> {
 pub struct Factor {
     n: usize,
     dim: usize,
-    fixed: Vec<bool>,
     inner: Inner,
 }
 
 #[derive(Clone, Debug)]
 enum Inner {
     Band(band::BandFactor),
+    Bb1(blockband::BlockBand<1>),
+    Bb2(blockband::BlockBand<2>),
+    Bb3(blockband::BlockBand<3>),
+    Bb4(blockband::BlockBand<4>),
     Block(block::BlockFactor),
 }
 
@@ -439,8 +490,12 @@ impl Factor {
     pub(crate) fn solve_slice(&self, x: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n * self.dim);
         match &self.inner {
-            Inner::Band(f) => f.solve(x, &self.fixed),
-            Inner::Block(f) => f.solve(x, &self.fixed),
+            Inner::Band(f) => f.solve(x),
+            Inner::Bb1(f) => f.solve(x),
+            Inner::Bb2(f) => f.solve(x),
+            Inner::Bb3(f) => f.solve(x),
+            Inner::Bb4(f) => f.solve(x),
+            Inner::Block(f) => f.solve(x),
         }
     }
 
@@ -459,4 +514,50 @@ impl Factor {
         self.solve_slice(x);
         Ok(())
     }
+}
+
+/// Interpolatory refinement (Kersey (3.2)/(3.3)): the curve p with p_j = `values[k]` at the
+/// vertices j = `fixed[k]` and (Hp)_j = 0 at every free vertex j — the minimizer of the energy
+/// under the interpolation constraints. One banded factorization, O(N) for all d coordinates.
+///
+/// ```
+/// use divdiff::{Knots, Points};
+/// use energy::{solve_interpolatory, Hessian};
+/// // Closed uniform curve with 8 vertices, every other one fixed on the unit square's corners…
+/// let knots = Knots::closed((0..=8).map(f64::from).collect()).unwrap();
+/// let h = Hessian::new(&knots);
+/// let q = Points::from_rows(&[[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]).unwrap();
+/// let p = solve_interpolatory(&h, &[0, 2, 4, 6], &q).unwrap();
+/// assert_eq!(p.point(2), &[0.0, 1.0]);
+/// // …the free vertices satisfy (Hp)_j = 0.
+/// let hp = h.apply(&p);
+/// assert!(hp.point(1).iter().all(|v| v.abs() < 1e-12));
+/// ```
+///
+/// # Errors
+/// [`Error::SizeMismatch`] if `values` does not have one point per fixed index,
+/// [`Error::IndexOutOfRange`] for an index ≥ N, [`Error::DuplicateFixed`] for an index given
+/// twice, [`Error::Singular`] if the fixed set does not determine the curve (a closed curve with
+/// nothing fixed, an open curve with fewer than two fixed vertices).
+pub fn solve_interpolatory(h: &Hessian, fixed: &[usize], values: &Points) -> Result<Points, Error> {
+    if values.len() != fixed.len() {
+        return Err(Error::SizeMismatch {
+            field: "values",
+            expected: fixed.len(),
+            got: values.len(),
+        });
+    }
+    let d = values.dim();
+    let mut sys = System::new(h, d)?;
+    let mut rhs = Points::zeros(sys.len(), d);
+    for (k, &j) in fixed.iter().enumerate() {
+        if sys.is_fixed(j) {
+            return Err(Error::DuplicateFixed { index: j });
+        }
+        sys.fix(j)?;
+        rhs.point_mut(j).copy_from_slice(values.point(k));
+    }
+    let f = sys.factor()?;
+    f.solve_in_place(&mut rhs)?;
+    Ok(rhs)
 }

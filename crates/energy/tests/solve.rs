@@ -392,3 +392,21 @@ fn large_closed_solve_has_small_residual() {
     let bn: f64 = b.coords().iter().map(|v| v * v).sum::<f64>().sqrt();
     assert!(r <= 1e-9 * bn, "residual {r} vs {bn}");
 }
+
+#[test]
+fn wide_dimensions_and_tiny_closed_curves_use_the_envelope_path() {
+    // d > 4 (and closed N ≤ 4) take the general block-envelope Cholesky.
+    for top in [Topology::Open, Topology::Closed] {
+        for n in [3, 4, 6, 9] {
+            for d in [5, 6] {
+                for coupling in [false, true] {
+                    let seed = (n * 100 + d * 10) as u64 + u64::from(coupling);
+                    let p = random_problem(top, n, d, coupling, seed);
+                    let (res, diff) = check(&p, d, seed);
+                    assert!(res <= 1e-13, "{top:?} n={n} d={d}: residual {res}");
+                    assert!(diff <= 1e-8, "{top:?} n={n} d={d}: difference {diff}");
+                }
+            }
+        }
+    }
+}

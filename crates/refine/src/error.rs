@@ -113,6 +113,16 @@ pub enum Error {
         /// The second vertex of the span.
         next: usize,
     },
+    /// A data point's constraint cannot be met (an empty half-space set, or a derivative
+    /// constraint that contradicts the others); `field` is `"sets"`, `"tangents"` or
+    /// `"boundary"` and `point` the data point (for `"boundary"`: 0 = start, 1 = end).
+    #[error("{field}[{point}] cannot be satisfied")]
+    InfeasibleConstraint {
+        /// The field.
+        field: &'static str,
+        /// The data point (or end).
+        point: usize,
+    },
     /// The requested combination is not supported (names the field and what is missing).
     #[error("{field}: {reason}")]
     Unsupported {
@@ -121,14 +131,46 @@ pub enum Error {
         /// What is not supported.
         reason: &'static str,
     },
-    /// An iterative solver did not reach its tolerance within its iteration limit.
-    #[error("{solver} did not converge in {iterations} iterations (residual {residual:e})")]
+    /// A vertex index is out of range (conic problems).
+    #[error("{field} vertex {index} is out of range (N = {len})")]
+    VertexOutOfRange {
+        /// The field.
+        field: &'static str,
+        /// The index given.
+        index: usize,
+        /// The number of vertices.
+        len: usize,
+    },
+    /// A value is NaN or infinite (conic problems).
+    #[error("{field}[{index}] is not finite")]
+    NonFiniteInput {
+        /// The field.
+        field: &'static str,
+        /// The vertex or constraint index.
+        index: usize,
+    },
+    /// A constraint is malformed (negative radius, zero normal, non-unit axis, bad stencil …).
+    #[error("constraint {constraint}: {reason}")]
+    InvalidConstraint {
+        /// The constraint index.
+        constraint: usize,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The constraints cannot be met: an empty polytope, a constraint contradicting fixed
+    /// vertices, or (when the interior-point method finds no feasible point) the most violated
+    /// constraint.
+    #[error("constraint {constraint} cannot be satisfied")]
+    Infeasible {
+        /// The constraint index.
+        constraint: usize,
+    },
+    /// The exact solver did not reach the accepted KKT residual within its iteration limit.
+    #[error("not converged after {iterations} iterations (best relative KKT residual {best_residual:e})")]
     NotConverged {
-        /// The solver.
-        solver: &'static str,
-        /// Iterations taken.
+        /// Iterations performed.
         iterations: usize,
-        /// The residual reached.
-        residual: f64,
+        /// The best relative KKT residual reached.
+        best_residual: f64,
     },
 }

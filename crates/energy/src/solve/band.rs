@@ -3,8 +3,9 @@
 //! Rows 0..m−1 (m = N for open curves, N − 2 for closed ones) are banded: L has two
 //! subdiagonals `l1`, `l2`. For closed curves the rows N−2 and N−1 are a border: the wrap-around
 //! couplings fill them in completely, stored as `g0`, `g1` (length m), plus the 2×2 tail.
+//! Factorization and both triangular solves are single fused passes with rolling state.
 
-use super::{Parts, PIVOT_RTOL};
+use super::Parts;
 use crate::Error;
 use divdiff::Topology;
 
@@ -13,22 +14,19 @@ pub(crate) struct BandFactor {
     n: usize,
     dim: usize,
     m: usize,
-    /// 1 / D_i.
-    dinv: Vec<f64>,
-    /// L[i][i−1] (0 for i = 0), padded with two zeros.
-    l1: Vec<f64>,
-    /// L[i][i−2] (0 for i < 2), padded with two zeros.
-    l2: Vec<f64>,
-    /// Border rows of a closed curve: L[N−2][j], L[N−1][j] for j < m, and L[N−1][N−2].
-    g0: Vec<f64>,
-    g1: Vec<f64>,
-    l10: f64,
+    /// Per band row: [L[i][i−1], L[i][i−2], 1/D_i].
+    rows: Vec<[f64; 3]>,
+    /// Closed curves: per band row [L[N−2][j], L[N−1][j]].
+    border: Vec<[f64; 2]>,
+    /// Closed curves: L[N−1][N−2], 1/D_{N−2}, 1/D_{N−1}.
+    tail: [f64; 3],
     /// Couplings between a free and a fixed vertex: (free, fixed, K_free,fixed).
     fixed_couplings: Vec<(usize, usize, f64)>,
 }
 
-fn pivot_ok(p: f64, kii: f64) -> bool {
-    p.is_finite() && p > PIVOT_RTOL * kii
+#[inline(always)]
+fn pivot_ok(p: f64, kii: f64, rtol: f64) -> bool {
+    p.is_finite() && p > rtol * kii
 }
 
 impl BandFactor {
@@ -38,221 +36,241 @@ impl BandFactor {
         debug_assert!(!closed || n >= 5);
         let m = if closed { n - 2 } else { n };
         let fx = s.fixed;
+        let any_fixed = fx.iter().any(|&f| f);
+        // Every off-diagonal coupling as (i, j, v) with i > j in the band/border pattern.
         let mut fixed_couplings = Vec::new();
-        // A coupling K_ij (i ≠ j), with fixed vertices eliminated.
-        let mut coupling = |i: usize, j: usize, v: f64| -> f64 {
-            match (fx[i], fx[j]) {
-                (false, false) => v,
-                (true, true) => 0.0,
-                (false, true) => {
-                    if v != 0.0 {
+        if any_fixed {
+            let mut push = |i: usize, j: usize, v: f64| {
+                if v != 0.0 && fx[i] != fx[j] {
+                    if fx[j] {
                         fixed_couplings.push((i, j, v));
-                    }
-                    0.0
-                }
-                (true, false) => {
-                    if v != 0.0 {
+                    } else {
                         fixed_couplings.push((j, i, v));
                     }
-                    0.0
+                }
+            };
+            for j in 0..n {
+                if j + 1 < n || closed {
+                    push((j + 1) % n, j, s.off1[j]);
+                }
+                if j + 2 < n || closed {
+                    push((j + 2) % n, j, s.off2[j]);
                 }
             }
+        }
+        // A coupling K_ij with fixed vertices eliminated.
+        let cpl = |i: usize, j: usize, v: f64| -> f64 {
+            if any_fixed && (fx[i] || fx[j]) {
+                0.0
+            } else {
+                v
+            }
         };
-        let kd = |i: usize| if fx[i] { 1.0 } else { s.diag[i] };
+        let kd = |i: usize| if any_fixed && fx[i] { 1.0 } else { s.diag[i] };
 
-        let mut dinv = vec![0.0; n];
-        let mut l1 = vec![0.0; m + 2];
-        let mut l2 = vec![0.0; m + 2];
-        let mut dd = vec![0.0; m];
+        let mut rows = Vec::with_capacity(m);
+        let mut border = Vec::with_capacity(if closed { m } else { 0 });
+        // Border couplings K[N−2][j], K[N−1][j] (j < m) are nonzero only at j ∈ {0, 1, n−4, n−3}.
+        let (r0, r1) = (n.wrapping_sub(2), n.wrapping_sub(1));
+        let border_k = |j: usize| -> [f64; 2] {
+            let mut k = [0.0; 2];
+            if j == n - 4 {
+                k[0] += cpl(r0, j, s.off2[n - 4]);
+            }
+            if j == n - 3 {
+                k[0] += cpl(r0, j, s.off1[n - 3]);
+                k[1] += cpl(r1, j, s.off2[n - 3]);
+            }
+            if j == 0 {
+                k[0] += cpl(r0, 0, s.off2[n - 2]);
+                k[1] += cpl(r1, 0, s.off1[n - 1]);
+            }
+            if j == 1 {
+                k[1] += cpl(r1, 1, s.off2[n - 1]);
+            }
+            k
+        };
+        // Rolling state: D, 1/D, L[i−1][i−2] of the two previous rows; border entries.
+        let (mut dm1, mut dm2, mut im1, mut im2, mut l1m1) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut gm1, mut gm2) = ([0.0f64; 2], [0.0f64; 2]);
+        let (mut p0, mut c10, mut p1) = (0.0, 0.0, 0.0);
         for i in 0..m {
             let k2 = if i >= 2 {
-                coupling(i, i - 2, s.off2[i - 2])
+                cpl(i, i - 2, s.off2[i - 2])
             } else {
                 0.0
             };
             let k1 = if i >= 1 {
-                coupling(i, i - 1, s.off1[i - 1])
+                cpl(i, i - 1, s.off1[i - 1])
             } else {
                 0.0
             };
-            let a2 = if i >= 2 { k2 * dinv[i - 2] } else { 0.0 };
-            let a1 = if i >= 1 {
-                let t = if i >= 2 { a2 * dd[i - 2] * l1[i - 1] } else { 0.0 };
-                (k1 - t) * dinv[i - 1]
-            } else {
-                0.0
-            };
-            let mut p = kd(i);
-            if i >= 1 {
-                p -= a1 * a1 * dd[i - 1];
-            }
-            if i >= 2 {
-                p -= a2 * a2 * dd[i - 2];
-            }
-            if !pivot_ok(p, kd(i)) {
+            let a2 = k2 * im2;
+            let a1 = (k1 - a2 * dm2 * l1m1) * im1;
+            let kii = kd(i);
+            let p = kii - a1 * a1 * dm1 - a2 * a2 * dm2;
+            if !pivot_ok(p, kii, s.rtol) {
                 return Err(Error::Singular { vertex: i });
             }
-            dd[i] = p;
-            dinv[i] = 1.0 / p;
-            l1[i] = a1;
-            l2[i] = a2;
-        }
-        let (mut g0, mut g1, mut l10) = (Vec::new(), Vec::new(), 0.0);
-        if closed {
-            let (r0, r1) = (n - 2, n - 1);
-            // Original border entries K[r][j], j < m.
-            let mut k0 = vec![0.0; m];
-            let mut k1 = vec![0.0; m];
-            k0[n - 4] += coupling(r0, n - 4, s.off2[n - 4]);
-            k0[n - 3] += coupling(r0, n - 3, s.off1[n - 3]);
-            k0[0] += coupling(r0, 0, s.off2[n - 2]);
-            k1[n - 3] += coupling(r1, n - 3, s.off2[n - 3]);
-            k1[0] += coupling(r1, 0, s.off1[n - 1]);
-            k1[1] += coupling(r1, 1, s.off2[n - 1]);
-            let k10 = coupling(r1, r0, s.off1[n - 2]);
-            let border = |k: &[f64]| -> Vec<f64> {
-                let mut g = vec![0.0; m];
-                for j in 0..m {
-                    let mut v = k[j];
-                    if j >= 1 {
-                        v -= g[j - 1] * dd[j - 1] * l1[j];
-                    }
-                    if j >= 2 {
-                        v -= g[j - 2] * dd[j - 2] * l2[j];
-                    }
-                    g[j] = v * dinv[j];
+            let inv = 1.0 / p;
+            rows.push([a1, a2, inv]);
+            if closed {
+                let k = if i <= 1 || i + 4 >= n {
+                    border_k(i)
+                } else {
+                    [0.0; 2]
+                };
+                let mut g = [0.0; 2];
+                for r in 0..2 {
+                    g[r] = (k[r] - gm1[r] * dm1 * a1 - gm2[r] * dm2 * a2) * inv;
                 }
-                g
-            };
-            g0 = border(&k0);
-            g1 = border(&k1);
-            let mut p0 = kd(r0);
-            let mut c10 = k10;
-            let mut p1 = kd(r1);
-            for j in 0..m {
-                p0 -= g0[j] * g0[j] * dd[j];
-                c10 -= g1[j] * g0[j] * dd[j];
-                p1 -= g1[j] * g1[j] * dd[j];
+                p0 += g[0] * g[0] * p;
+                c10 += g[1] * g[0] * p;
+                p1 += g[1] * g[1] * p;
+                border.push(g);
+                gm2 = gm1;
+                gm1 = g;
             }
-            if !pivot_ok(p0, kd(r0)) {
+            dm2 = dm1;
+            dm1 = p;
+            im2 = im1;
+            im1 = inv;
+            l1m1 = a1;
+        }
+        let mut tail = [0.0; 3];
+        if closed {
+            let k0 = kd(r0);
+            let q0 = k0 - p0;
+            if !pivot_ok(q0, k0, s.rtol) {
                 return Err(Error::Singular { vertex: r0 });
             }
-            l10 = c10 / p0;
-            p1 -= l10 * l10 * p0;
-            if !pivot_ok(p1, kd(r1)) {
+            let l10 = (cpl(r1, r0, s.off1[n - 2]) - c10) / q0;
+            let k1 = kd(r1);
+            let q1 = k1 - p1 - l10 * l10 * q0;
+            if !pivot_ok(q1, k1, s.rtol) {
                 return Err(Error::Singular { vertex: r1 });
             }
-            dinv[r0] = 1.0 / p0;
-            dinv[r1] = 1.0 / p1;
+            tail = [l10, 1.0 / q0, 1.0 / q1];
         }
         Ok(BandFactor {
             n,
             dim: s.dim,
             m,
-            dinv,
-            l1,
-            l2,
-            g0,
-            g1,
-            l10,
+            rows,
+            border,
+            tail,
             fixed_couplings,
         })
     }
 
-    pub(crate) fn solve(&self, x: &mut [f64], fixed: &[bool]) {
+    pub(crate) fn solve(&self, x: &mut [f64]) {
         let d = self.dim;
         for &(i, j, v) in &self.fixed_couplings {
             for c in 0..d {
                 x[i * d + c] -= v * x[j * d + c];
             }
         }
-        let _ = fixed;
         match d {
-            1 => self.solve_d::<1>(x, 1),
-            2 => self.solve_d::<2>(x, 2),
-            3 => self.solve_d::<3>(x, 3),
-            4 => self.solve_d::<4>(x, 4),
-            _ => self.solve_d::<0>(x, d),
+            1 => self.kernel::<1>(x, 1, 0),
+            2 => self.kernel::<2>(x, 2, 0),
+            3 => self.kernel::<3>(x, 3, 0),
+            4 => self.kernel::<4>(x, 4, 0),
+            _ => {
+                for c in 0..d {
+                    self.kernel::<1>(x, d, c);
+                }
+            }
         }
     }
 
+    /// Solves for the W columns c0..c0+W of the vertex-major array x with row stride `stride`.
     #[inline(always)]
-    fn solve_d<const D: usize>(&self, x: &mut [f64], dyn_d: usize) {
-        let d = if D == 0 { dyn_d } else { D };
+    fn kernel<const W: usize>(&self, x: &mut [f64], stride: usize, c0: usize) {
         let (n, m) = (self.n, self.m);
-        let (l1, l2, dinv) = (&self.l1[..m + 2], &self.l2[..m + 2], &self.dinv[..n]);
-        // Forward: z_i = b_i − l1_i z_{i−1} − l2_i z_{i−2}.
-        if m >= 2 {
-            for c in 0..d {
-                x[d + c] -= l1[1] * x[c];
-            }
-        }
-        for i in 2..m {
-            let (a1, a2) = (l1[i], l2[i]);
-            let (head, tail) = x.split_at_mut(i * d);
-            let zi = &mut tail[..d];
-            let z1 = &head[(i - 1) * d..i * d];
-            let z2 = &head[(i - 2) * d..(i - 1) * d];
-            for c in 0..d {
-                zi[c] -= a1 * z1[c] + a2 * z2[c];
-            }
-        }
+        let rows = &self.rows[..m];
         let closed = m < n;
+        let at = |i: usize| i * stride + c0;
+        // Forward: z_i = b_i − l1_i z_{i−1} − l2_i z_{i−2}; border sums.
+        let (mut z1, mut z2) = ([0.0f64; W], [0.0f64; W]);
+        let (mut s0, mut s1) = ([0.0f64; W], [0.0f64; W]);
         if closed {
-            let (r0, r1) = (n - 2, n - 1);
-            for c in 0..d {
-                let (mut s0, mut s1) = (0.0, 0.0);
-                for j in 0..m {
-                    s0 += self.g0[j] * x[j * d + c];
-                    s1 += self.g1[j] * x[j * d + c];
+            let border = &self.border[..m];
+            for i in 0..m {
+                let [a1, a2, _] = rows[i];
+                let [g0, g1] = border[i];
+                let xi = &mut x[at(i)..at(i) + W];
+                let mut z = [0.0; W];
+                for c in 0..W {
+                    z[c] = xi[c] - a1 * z1[c] - a2 * z2[c];
+                    xi[c] = z[c];
+                    s0[c] += g0 * z[c];
+                    s1[c] += g1 * z[c];
                 }
-                x[r0 * d + c] -= s0;
-                x[r1 * d + c] -= s1 + self.l10 * x[r0 * d + c];
+                z2 = z1;
+                z1 = z;
             }
-        }
-        // Diagonal.
-        for (i, xi) in x.chunks_exact_mut(d).enumerate() {
-            let s = dinv[i];
-            for v in xi.iter_mut().take(d) {
-                *v *= s;
-            }
-        }
-        // Backward: x_j = y_j − l1_{j+1} x_{j+1} − l2_{j+2} x_{j+2} (− border terms).
-        let mut xr = [0.0; 8];
-        let mut xr_dyn = Vec::new();
-        let xr: &mut [f64] = if 2 * d <= 8 {
-            &mut xr[..2 * d]
         } else {
-            xr_dyn.resize(2 * d, 0.0);
-            &mut xr_dyn
-        };
-        if closed {
-            let (r0, r1) = (n - 2, n - 1);
-            for c in 0..d {
-                x[r0 * d + c] -= self.l10 * x[r1 * d + c];
-                xr[c] = x[r0 * d + c];
-                xr[d + c] = x[r1 * d + c];
-            }
-            for j in (0..m).rev() {
-                let (g0, g1) = (self.g0[j], self.g1[j]);
-                for c in 0..d {
-                    x[j * d + c] -= g0 * xr[c] + g1 * xr[d + c];
+            for i in 0..m {
+                let [a1, a2, _] = rows[i];
+                let xi = &mut x[at(i)..at(i) + W];
+                let mut z = [0.0; W];
+                for c in 0..W {
+                    z[c] = xi[c] - a1 * z1[c] - a2 * z2[c];
+                    xi[c] = z[c];
                 }
+                z2 = z1;
+                z1 = z;
             }
         }
-        if m >= 2 {
-            for c in 0..d {
-                x[(m - 2) * d + c] -= l1[m - 1] * x[(m - 1) * d + c];
+        // Backward: x_j = z_j / D_j − l1_{j+1} x_{j+1} − l2_{j+2} x_{j+2} (− border terms).
+        let (mut x1, mut x2) = ([0.0f64; W], [0.0f64; W]);
+        let (mut a1n, mut a2n, mut a2nn) = (0.0, 0.0, 0.0);
+        if closed {
+            let [l10, i0, i1] = self.tail;
+            let (r0, r1) = (n - 2, n - 1);
+            let (mut xr0, mut xr1) = ([0.0f64; W], [0.0f64; W]);
+            for c in 0..W {
+                let z0 = x[at(r0) + c] - s0[c];
+                let zr1 = x[at(r1) + c] - s1[c] - l10 * z0;
+                xr1[c] = zr1 * i1;
+                xr0[c] = z0 * i0 - l10 * xr1[c];
+                x[at(r0) + c] = xr0[c];
+                x[at(r1) + c] = xr1[c];
             }
-        }
-        for j in (0..m.saturating_sub(2)).rev() {
-            let (a1, a2) = (l1[j + 1], l2[j + 2]);
-            let (head, tail) = x.split_at_mut((j + 1) * d);
-            let xj = &mut head[j * d..];
-            let x1 = &tail[..d];
-            let x2 = &tail[d..2 * d];
-            for c in 0..d {
-                xj[c] -= a1 * x1[c] + a2 * x2[c];
+            let border = &self.border[..m];
+            for j in (0..m).rev() {
+                let [a1, a2, inv] = rows[j];
+                let [g0, g1] = border[j];
+                let xj = &mut x[at(j)..at(j) + W];
+                let mut v = [0.0; W];
+                for c in 0..W {
+                    v[c] = xj[c] * inv
+                        - a1n * x1[c]
+                        - a2nn * x2[c]
+                        - g0 * xr0[c]
+                        - g1 * xr1[c];
+                    xj[c] = v[c];
+                }
+                x2 = x1;
+                x1 = v;
+                a2nn = a2n;
+                a1n = a1;
+                a2n = a2;
+            }
+        } else {
+            for j in (0..m).rev() {
+                let [a1, a2, inv] = rows[j];
+                let xj = &mut x[at(j)..at(j) + W];
+                let mut v = [0.0; W];
+                for c in 0..W {
+                    v[c] = xj[c] * inv - a1n * x1[c] - a2nn * x2[c];
+                    xj[c] = v[c];
+                }
+                x2 = x1;
+                x1 = v;
+                a2nn = a2n;
+                a1n = a1;
+                a2n = a2;
             }
         }
     }

@@ -1,6 +1,6 @@
 //! Block Cholesky K = L Lᵀ on the block envelope (d×d blocks, lower triangular diagonal blocks).
 
-use super::{Envelope, Parts, PIVOT_RTOL};
+use super::{Envelope, Parts};
 use crate::Error;
 use divdiff::Topology;
 
@@ -23,7 +23,7 @@ impl BlockFactor {
         let env = Envelope::new(s.topology, n);
         let mut a = match s.blocks {
             Some(b) => b.to_vec(),
-            None => vec![0.0; env.total * dd],
+            None => vec![0.0; env.total() * dd],
         };
         // Scalar part ⊗ I_d (aliasing entries add up).
         let mut add_scalar = |i: usize, j: usize, v: f64| {
@@ -46,7 +46,7 @@ impl BlockFactor {
         let mut fixed_couplings = Vec::new();
         let mut fc = Vec::new();
         for i in 0..n {
-            for j in env.first[i]..=i {
+            for j in env.first(i)..=i {
                 let base = env.index(i, j) * dd;
                 let blk = &mut a[base..base + dd];
                 match (s.fixed[i], s.fixed[j]) {
@@ -84,11 +84,11 @@ impl BlockFactor {
             })
             .collect();
         match d {
-            1 => cholesky::<1>(&env, &mut a, &diag_ref, 1)?,
-            2 => cholesky::<2>(&env, &mut a, &diag_ref, 2)?,
-            3 => cholesky::<3>(&env, &mut a, &diag_ref, 3)?,
-            4 => cholesky::<4>(&env, &mut a, &diag_ref, 4)?,
-            _ => cholesky::<0>(&env, &mut a, &diag_ref, d)?,
+            1 => cholesky::<1>(&env, &mut a, &diag_ref, 1, s.rtol)?,
+            2 => cholesky::<2>(&env, &mut a, &diag_ref, 2, s.rtol)?,
+            3 => cholesky::<3>(&env, &mut a, &diag_ref, 3, s.rtol)?,
+            4 => cholesky::<4>(&env, &mut a, &diag_ref, 4, s.rtol)?,
+            _ => cholesky::<0>(&env, &mut a, &diag_ref, d, s.rtol)?,
         }
         Ok(BlockFactor {
             n,
@@ -100,10 +100,9 @@ impl BlockFactor {
         })
     }
 
-    pub(crate) fn solve(&self, x: &mut [f64], fixed: &[bool]) {
+    pub(crate) fn solve(&self, x: &mut [f64]) {
         let d = self.dim;
         let dd = d * d;
-        let _ = fixed;
         for (k, &(i, j)) in self.fixed_couplings.iter().enumerate() {
             let b = &self.fc[k * dd..(k + 1) * dd];
             for r in 0..d {
@@ -130,7 +129,7 @@ impl BlockFactor {
         let (n, env, l) = (self.n, &self.env, &self.l);
         // Forward: L z = b.
         for i in 0..n {
-            for j in env.first[i]..i {
+            for j in env.first(i)..i {
                 let b = &l[env.index(i, j) * dd..][..dd];
                 for r in 0..d {
                     let mut s = 0.0;
@@ -159,7 +158,7 @@ impl BlockFactor {
                 }
                 x[i * d + r] = s / b[r * d + r];
             }
-            for j in env.first[i]..i {
+            for j in env.first(i)..i {
                 let b = &l[env.index(i, j) * dd..][..dd];
                 for c in 0..d {
                     let mut s = 0.0;
@@ -181,16 +180,17 @@ fn cholesky<const D: usize>(
     a: &mut [f64],
     diag_ref: &[f64],
     dyn_d: usize,
+    rtol: f64,
 ) -> Result<(), Error> {
     let d = if D == 0 { dyn_d } else { D };
     let dd = d * d;
-    let n = env.first.len();
+    let n = diag_ref.len() / d;
     let mut s = vec![0.0; dd];
     for i in 0..n {
-        for j in env.first[i]..=i {
+        for j in env.first(i)..=i {
             let ij = env.index(i, j) * dd;
             s.copy_from_slice(&a[ij..ij + dd]);
-            let k0 = env.first[i].max(env.first[j]);
+            let k0 = env.first(i).max(env.first(j));
             for k in k0..j {
                 let ik = env.index(i, k) * dd;
                 let jk = env.index(j, k) * dd;
@@ -226,7 +226,7 @@ fn cholesky<const D: usize>(
                         p -= s[c * d + q] * s[c * d + q];
                     }
                     let kref = diag_ref[i * d + c];
-                    if !(p.is_finite() && p > PIVOT_RTOL * kref) {
+                    if !(p.is_finite() && p > rtol * kref) {
                         return Err(Error::Singular { vertex: i });
                     }
                     let lcc = p.sqrt();
