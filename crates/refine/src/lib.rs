@@ -67,10 +67,13 @@
 
 mod conic;
 mod error;
+mod freeknots;
 mod kersey;
 mod schemes;
 
 pub use conic::*;
 pub use error::Error;
+#[allow(unused_imports)] // filled by the free-knot work
+pub use freeknots::*;
 pub use kersey::*;
 pub use schemes::*;
