@@ -61,6 +61,13 @@ snap!(
 );
 snap!(refine_balls_closed, "refine", "refine-balls-closed.json");
 snap!(refine_balls_open, "refine", "refine-balls-open.json");
+snap!(
+    refine_halfspaces_closed,
+    "refine",
+    "refine-halfspaces-closed.json"
+);
+snap!(refine_tangents_open, "refine", "refine-tangents-open.json");
+snap!(refine_clamped_open, "refine", "refine-clamped-open.json");
 snap!(strip_small, "strip", "strip-small.json");
 snap!(strip_end_slopes, "strip", "strip-end-slopes.json");
 snap!(strip_polyline, "strip", "strip-polyline.json");

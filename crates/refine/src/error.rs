@@ -144,6 +144,16 @@ pub enum Error {
         /// The second vertex of the span.
         next: usize,
     },
+    /// A data point's constraint cannot be met (an empty half-space set, or a derivative
+    /// constraint that contradicts the others); `field` is `"sets"`, `"tangents"` or
+    /// `"boundary"` and `point` the data point (for `"boundary"`: 0 = start, 1 = end).
+    #[error("{field}[{point}] cannot be satisfied")]
+    InfeasibleConstraint {
+        /// The field.
+        field: &'static str,
+        /// The data point (or end).
+        point: usize,
+    },
     /// The requested combination is not supported (names the field and what is missing).
     #[error("{field}: {reason}")]
     Unsupported {
@@ -151,16 +161,6 @@ pub enum Error {
         field: &'static str,
         /// What is not supported.
         reason: &'static str,
-    },
-    /// An iterative solver did not reach its tolerance within its iteration limit.
-    #[error("{solver} did not converge in {iterations} iterations (residual {residual:e})")]
-    NotConverged {
-        /// The solver.
-        solver: &'static str,
-        /// Iterations taken.
-        iterations: usize,
-        /// The residual reached.
-        residual: f64,
     },
     /// A vertex index is out of range (conic problems).
     #[error("{field} vertex {index} is out of range (N = {len})")]
@@ -195,5 +195,16 @@ pub enum Error {
     Infeasible {
         /// The constraint index.
         constraint: usize,
+    },
+    /// An iterative solver did not reach its tolerance within its iteration limit; `residual` is
+    /// the best (relative KKT) residual it reached.
+    #[error("{solver} did not converge in {iterations} iterations (best residual {residual:e})")]
+    NotConverged {
+        /// The solver.
+        solver: &'static str,
+        /// Iterations taken.
+        iterations: usize,
+        /// The best residual reached.
+        residual: f64,
     },
 }

@@ -14,10 +14,6 @@ pub use algorithm::{Iterations, Refinement, Stage};
 pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
 pub use degenerate::{COMMON_POINT_SWEEPS, COMMON_POINT_TOL, STAGNATION};
 pub use divdiff::{DerivativeRule, Parametrization};
-pub use exact::{
-    BARRIER_GROWTH, EXACT_KKT_ACCEPT, EXACT_KKT_TARGET, MAX_CENTRINGS, MAX_NEWTON_STEPS,
-    NEWTON_DECREMENT_TOL,
-};
 pub use fixed::PAPER_WEIGHT_FLOOR;
 pub use problem::{
     Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,

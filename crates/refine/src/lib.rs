@@ -30,11 +30,10 @@
 //!   further interpolatory `level_k`-level steps, each re-initialized from the previous result.
 //!
 //! Two fixed-knot solvers ([`Solver`]): **exact** (the default; linear solves for interpolation
-//! and smoothing, a log-barrier Newton method on the O(N) block-banded system for balls, stopped
-//! by the certificate at [`EXACT_KKT_TARGET`]) and the **paper's multiplier iteration**
-//! (w_i := w_i |p_{i_k} − q_i| / ε_i from w_i = 1), kept to reproduce the seed's figures.
-//! Half-space sets, tangents and clamped ends (issue 4's constraint kinds) are part of the data
-//! model and validated, but solving them returns [`Error::Unsupported`] in this build.
+//! and smoothing, the interior-point solver [`ConicProblem`] for balls, half-space sets,
+//! derivative constraints and clamped ends, which become constraints L p ∈ K on stencils of at
+//! most three vertices) and the **paper's multiplier iteration** (w_i := w_i |p_{i_k} − q_i| / ε_i
+//! from w_i = 1), kept to reproduce the seed's figures (balls only).
 //!
 //! Every [`Refinement`] carries its certificate, recomputed from the points independently of the
 //! solver: the energy, the multipliers, the active set, and a **relative KKT residual** — the
@@ -68,12 +67,13 @@
 
 mod conic;
 mod error;
+mod freeknots;
 mod kersey;
 mod schemes;
 
-#[allow(unused_imports)] // empty until the conic solver lands
 pub use conic::*;
 pub use error::Error;
+#[allow(unused_imports)] // filled by the free-knot work
+pub use freeknots::*;
 pub use kersey::*;
-#[allow(unused_imports)] // empty until the schemes land
 pub use schemes::*;

@@ -450,3 +450,115 @@ fn exact_balls_match_clarabel_and_corollary_3_3() {
         }
     }
 }
+
+/// Issue 4's constraint kinds through the same exact solver: half-space sets (3.7) against
+/// Clarabel, an empty set named by its point, and derivative constraints (3.9)/(3.10) and
+/// clamped ends (§3.6) satisfied at the optimum with a certified KKT residual.
+#[test]
+fn halfspaces_tangents_and_clamped_ends() {
+    use refine::{Boundary, DerivativeRule, HalfSpace, Tangent};
+    let q = house();
+    // A square of half-width 0.2 about every data point (axis-aligned normals, scaled).
+    let square = |c: &[f64]| {
+        vec![
+            HalfSpace {
+                normal: vec![2.0, 0.0],
+                offset: 2.0 * (c[0] + 0.2),
+            },
+            HalfSpace {
+                normal: vec![-1.0, 0.0],
+                offset: -(c[0] - 0.2),
+            },
+            HalfSpace {
+                normal: vec![0.0, 1.0],
+                offset: c[1] + 0.2,
+            },
+            HalfSpace {
+                normal: vec![0.0, -1.0],
+                offset: -(c[1] - 0.2),
+            },
+        ]
+    };
+    let sets: Vec<Vec<HalfSpace>> = q.iter().map(square).collect();
+    let c = Constraint::HalfSpaces(sets.clone());
+    let r = Problem::new(q.clone())
+        .with_constraint(c.clone())
+        .solve()
+        .unwrap();
+    assert!(r.kkt_residual <= KKT_TOL, "kkt {}", r.kkt_residual);
+    let reference = clarabel_solve(&r.knots, &q, &r.data_vertex, &c).unwrap();
+    let e_ref = energy::energy(&r.knots, &reference.points).unwrap();
+    assert!(
+        rel(r.energy, e_ref) <= ENERGY_RTOL,
+        "{} vs {e_ref}",
+        r.energy
+    );
+    assert!(r.multipliers.iter().flatten().all(|&w| w >= 0.0));
+
+    // An empty set at point 2 (x ≤ 0 and x ≥ 1) is a typed error naming the point.
+    let mut bad = sets;
+    bad[2] = vec![
+        HalfSpace {
+            normal: vec![1.0, 0.0],
+            offset: 0.0,
+        },
+        HalfSpace {
+            normal: vec![-1.0, 0.0],
+            offset: -1.0,
+        },
+    ];
+    let err = Problem::new(q.clone())
+        .with_constraint(Constraint::HalfSpaces(bad))
+        .solve()
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            Error::InfeasibleConstraint {
+                field: "sets",
+                point: 2
+            }
+        ),
+        "{err:?}"
+    );
+
+    // Tension (|Df| ≤ 0.5) at point 1, interpolation elsewhere; Bessel derivative.
+    let mut tangents = vec![None; 5];
+    tangents[1] = Some(Tangent::Tension { radius: 0.5 });
+    let r = Problem::new(q.clone())
+        .with_tangents(tangents)
+        .with_knot_iterations(0)
+        .solve()
+        .unwrap();
+    assert!(r.kkt_residual <= KKT_TOL, "kkt {}", r.kkt_residual);
+    let st =
+        divdiff::derivative_stencil(&r.knots, r.data_vertex[1], DerivativeRule::Bessel).unwrap();
+    let df: Vec<f64> = (0..2)
+        .map(|c| st.iter().map(|&(v, w)| w * r.points.point(v)[c]).sum())
+        .collect();
+    assert!((df[0] * df[0] + df[1] * df[1]).sqrt() <= 0.5 * (1.0 + 1e-8));
+
+    // Clamped open curve: the end derivatives equal the prescribed vectors.
+    let (start, end) = (vec![1.0, -0.5], vec![-1.0, -1.0]);
+    let r = Problem::new(q.clone())
+        .with_topology(Topology::Open)
+        .with_knot_iterations(0)
+        .with_boundary(Boundary::Clamped {
+            start: start.clone(),
+            end: end.clone(),
+        })
+        .solve()
+        .unwrap();
+    assert!(r.kkt_residual <= KKT_TOL, "kkt {}", r.kkt_residual);
+    let last = r.points.len() - 1;
+    for (v, want) in [(0, &start), (last, &end)] {
+        let st = divdiff::derivative_stencil(&r.knots, v, DerivativeRule::Bessel).unwrap();
+        for (c, &wc) in want.iter().enumerate() {
+            let df: f64 = st.iter().map(|&(u, w)| w * r.points.point(u)[c]).sum();
+            assert!(
+                (df - wc).abs() <= 1e-8 * (1.0 + wc.abs()),
+                "end {v}: {df} vs {wc}"
+            );
+        }
+    }
+}

@@ -104,8 +104,11 @@ proptest! {
         let r = Problem::new(q.clone()).with_topology(topo).with_k(k)
             .with_knot_iterations(1).with_constraint(c.clone()).solve().unwrap();
         prop_assert!(r.kkt_residual <= 1e-9, "kkt {}", r.kkt_residual);
-        let reference = clarabel_solve(&r.knots, &q, &r.data_vertex, &c).unwrap();
-        let e = energy::energy(&r.knots, &reference.points).unwrap();
+        // Cases where Clarabel itself does not reach status `Solved` have no reference and are
+        // discarded (proptest counts them as rejects, and fails if there are too many).
+        let reference = clarabel_solve(&r.knots, &q, &r.data_vertex, &c);
+        prop_assume!(reference.is_ok());
+        let e = energy::energy(&r.knots, &reference.unwrap().points).unwrap();
         prop_assert!(rel(r.energy, e) <= 1e-8 || (r.energy - e).abs() <= 1e-12, "{} vs {}", r.energy, e);
         if let Some(j) = r.jmp_inactive() {
             prop_assert!(j <= 1e-9, "Corollary 3.3: {}", j);

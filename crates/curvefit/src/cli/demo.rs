@@ -46,6 +46,24 @@ pub const EXAMPLES: &[Example] = &[
         problem: include_str!("../../examples/data/refine-balls-open.json"),
     },
     Example {
+        name: "refine-halfspaces-closed",
+        command: "refine",
+        title: "each point confined to a square or triangle: corner, edge and interior contacts (Kersey Fig. 3.4)",
+        problem: include_str!("../../examples/data/refine-halfspaces-closed.json"),
+    },
+    Example {
+        name: "refine-tangent-wedges",
+        command: "refine",
+        title: "direction-only tangent wedges tilted by 0.6 rad, half-angle 0.1 (Kersey Figs. 3.5b, 3.7)",
+        problem: include_str!("../../examples/data/refine-tangent-wedges.json"),
+    },
+    Example {
+        name: "refine-clamped-open",
+        command: "refine",
+        title: "open curve with clamped end derivatives (Bessel end quadratics; Kersey §3.6, Fig. 3.9)",
+        problem: include_str!("../../examples/data/refine-clamped-open.json"),
+    },
+    Example {
         name: "refine-smoothing-open",
         command: "refine",
         title: "smoothing of noisy samples, open curve with natural ends (Kersey (3.6), §3.6)",

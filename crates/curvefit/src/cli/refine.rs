@@ -371,6 +371,76 @@ impl super::Command for RefineCmd {
     }
 }
 
+/// Draws each tangent constraint at its data vertex: the derivative of the refined curve there
+/// (central difference of the neighbours) as a solid arrow, the wedge's bounding rays dashed and
+/// the ball of a ball/tension constraint around the vertex, all scaled to a common length.
+fn draw_tangents(
+    fig: &mut crate::plot::Figure,
+    tangents: &[Option<TangentSpec>],
+    r: &RefineResult,
+) {
+    use crate::plot::{palette, Style};
+    let n = r.points.len();
+    if n < 3 {
+        return;
+    }
+    let closed_len = r.knots.len() > n;
+    let span: f64 =
+        r.knots.last().copied().unwrap_or(1.0) - r.knots.first().copied().unwrap_or(0.0);
+    let extent = r
+        .points
+        .iter()
+        .flat_map(|v| v.iter().take(2))
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(1e-300);
+    let len = 0.12 * extent;
+    for (i, t) in tangents.iter().enumerate() {
+        let (Some(t), Some(&j)) = (t, r.data_vertex.get(i)) else {
+            continue;
+        };
+        let (a, b) = if closed_len {
+            ((j + n - 1) % n, (j + 1) % n)
+        } else {
+            (j.saturating_sub(1), (j + 1).min(n - 1))
+        };
+        let dt = if b > a {
+            r.knots[b] - r.knots[a]
+        } else {
+            r.knots[b] + span - r.knots[a]
+        };
+        // Knots are strictly increasing, so dt > 0; guard anyway (a picture never fails).
+        let dt = if dt > 0.0 { dt } else { 1.0 };
+        let df = [
+            (r.points[b][0] - r.points[a][0]) / dt,
+            (r.points[b][1] - r.points[a][1]) / dt,
+        ];
+        let p0 = [r.points[j][0], r.points[j][1]];
+        let norm = (df[0] * df[0] + df[1] * df[1]).sqrt().max(1e-300);
+        let arrow = [p0[0] + len * df[0] / norm, p0[1] + len * df[1] / norm];
+        fig.segment(p0, arrow, Style::stroke(palette::SECOND, 2.0));
+        if let TangentSpec::Wedge {
+            direction,
+            half_angle,
+        } = t
+        {
+            let u = (direction[0].hypot(direction[1])).max(1e-300);
+            for s in [-1.0, 1.0] {
+                let (c, sn) = ((s * half_angle).cos(), (s * half_angle).sin());
+                let v = [
+                    (c * direction[0] - sn * direction[1]) / u,
+                    (sn * direction[0] + c * direction[1]) / u,
+                ];
+                fig.segment(
+                    p0,
+                    [p0[0] + 1.4 * len * v[0], p0[1] + 1.4 * len * v[1]],
+                    Style::stroke(palette::THIRD, 1.0).dashed("3 2"),
+                );
+            }
+        }
+    }
+    fig.legend("Df at vertex", Style::stroke(palette::SECOND, 2.0));
+}
+
 /// Clips a big box by the half-planes `n · x ≤ c` (Sutherland–Hodgman); the polygon of a 2-D set.
 pub fn halfplane_polygon(
     halfspaces: &[HalfSpaceSpec],
@@ -424,12 +494,12 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
     };
     let kind = match &p.constraint {
         ConstraintSpec::Interpolate => "interpolation",
-        ConstraintSpec::Balls { .. } => "near-interpolation to balls",
+        ConstraintSpec::Balls { .. } => "balls",
         ConstraintSpec::Smoothing { .. } => "smoothing",
-        ConstraintSpec::Halfspaces { .. } => "near-interpolation to convex polygons",
+        ConstraintSpec::Halfspaces { .. } => "convex polygons",
     };
     let mut fig = Figure::new(&format!(
-        "Variational refinement: {kind} ({}, {} points → {} vertices)",
+        "Refinement: {kind} ({}, {} → {} vertices)",
         if p.closed { "closed" } else { "open" },
         p.points.len(),
         r.points.len()
@@ -454,13 +524,20 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
             }
         }
         ConstraintSpec::Halfspaces { sets } if d == 2 => {
-            let scale = p
-                .points
-                .iter()
-                .flat_map(|q| q.iter().map(|x| x.abs()))
-                .fold(1.0f64, f64::max);
-            for (i, (q, set)) in p.points.iter().zip(sets).enumerate() {
-                let poly = halfplane_polygon(set, [q[0], q[1]], 4.0 * scale);
+            // Unbounded sets are clipped to a box around the data (a quarter of its size beyond it).
+            let (lo, hi) = p.points.iter().fold(
+                ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+                |(lo, hi), q| {
+                    (
+                        [lo[0].min(q[0]), lo[1].min(q[1])],
+                        [hi[0].max(q[0]), hi[1].max(q[1])],
+                    )
+                },
+            );
+            let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300);
+            let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+            for (i, (_q, set)) in p.points.iter().zip(sets).enumerate() {
+                let poly = halfplane_polygon(set, centre, 0.75 * size);
                 let st = if r.active.get(i).copied().unwrap_or(false) {
                     &active_style
                 } else {
@@ -483,6 +560,9 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         fig.polygon(&curve, Style::stroke(palette::CURVE, 1.6));
     } else {
         fig.polyline(&curve, Style::stroke(palette::CURVE, 1.6));
+    }
+    if let (Some(tangents), true) = (&p.tangents, d >= 2) {
+        draw_tangents(&mut fig, tangents, r);
     }
     let attached: Vec<[f64; 2]> = r
         .data_vertex

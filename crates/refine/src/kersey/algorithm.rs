@@ -84,6 +84,11 @@ pub(crate) struct FixedSolution {
     pub iterations: usize,
     /// The α-stencil of the knots, when the solver built it (reused by the certificate).
     pub stencil: Option<Stencil>,
+    /// Derivative-constraint forces (stencil, z_c) for the certificate's stationarity.
+    pub extra: super::exact::StencilForces,
+    /// The conic solver's own relative KKT residual, when it ran (its primal and
+    /// complementarity parts cover the derivative constraints).
+    pub solver_kkt: Option<f64>,
 }
 
 /// One fixed-knot problem: data `q` attached at `data_vertex` of a curve with `knots`.
@@ -132,6 +137,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
             &problem.constraint,
             Some(mult),
             ACTIVE_REL_TOL,
+            &[],
         );
         iterations.solves += 1;
         (pts, mult, cert)
@@ -168,6 +174,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
                 &Constraint::Interpolate,
                 None,
                 ACTIVE_REL_TOL,
+                &[],
             );
             iterations.solves += 1;
             (np, mult, cert)
@@ -287,7 +294,7 @@ fn stage_loop(
         Solver::Exact => ACTIVE_REL_TOL,
         Solver::Paper => PAPER_ACTIVE_REL_TOL,
     };
-    let (cert, mult) = certify(
+    let (mut cert, mult) = certify(
         &stencil,
         &s.points,
         q,
@@ -295,6 +302,10 @@ fn stage_loop(
         constraint,
         s.multipliers,
         tol,
+        &s.extra,
     );
+    if let Some(k) = s.solver_kkt {
+        cert.kkt_residual = cert.kkt_residual.max(k);
+    }
     Ok((s.points, mult, cert))
 }

@@ -16,6 +16,10 @@ pub const ACTIVE_REL_TOL: f64 = 1e-7;
 /// iteration's accuracy (oscillating about it as the weights settle).
 pub const PAPER_ACTIVE_REL_TOL: f64 = 1e-3;
 
+/// A derivative-constraint force: the stencil L_c and the force z_c (Σ_c L_cᵀ z_c enters
+/// the stationarity condition).
+pub(crate) type StencilForce = (Vec<(usize, f64)>, Vec<f64>);
+
 /// What one fixed-knot stage certifies.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Certificate {
@@ -46,6 +50,8 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// the length scale L, the largest coordinate distance of a vertex or data point from the data's
 /// centroid; and the duality gap Σ_i ½ w_i(ε_i² − |p_{i_k} − q_i|²) (Σ w_ij·slack_ij for
 /// half-spaces) divided by E, which bounds the relative energy excess over the optimum.
+// Eight inputs, each a distinct part of the claim being certified.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn certify(
     stencil: &Stencil,
     p: &Points,
@@ -54,6 +60,7 @@ pub(crate) fn certify(
     constraint: &Constraint,
     multipliers: Option<Vec<Vec<f64>>>,
     active_tol: f64,
+    extra: &[StencilForce],
 ) -> (Certificate, Vec<Vec<f64>>) {
     let d = p.dim();
     let n = q.len();
@@ -86,8 +93,34 @@ pub(crate) fn certify(
             .map(|i| hp[i * d..(i + 1) * d].iter().map(|x| -x).collect())
             .collect()
     });
+    // Derivative constraints add Σ_c L_cᵀ z_c on their stencils (data and free vertices):
+    // then stationarity needs the full Hp rather than the pass's summary.
+    let extra_at: Option<(Vec<f64>, Vec<f64>)> = (!extra.is_empty()).then(|| {
+        let mut e = vec![0.0; p.len() * d];
+        for (st, z) in extra {
+            for &(v, c) in st {
+                for (k, zk) in z.iter().enumerate() {
+                    e[v * d + k] += c * zk;
+                }
+            }
+        }
+        (stencil.apply_h(p).0, e)
+    });
     // Stationarity at the data vertices: r = (Hp)_v + Σ (constraint gradient × multiplier).
-    let mut stat = pass.free_gradient;
+    let mut stat = match &extra_at {
+        None => pass.free_gradient,
+        Some((full, e)) => {
+            let mut m: f64 = 0.0;
+            for j in 0..p.len() {
+                if j % stride != 0 {
+                    for k in 0..d {
+                        m = m.max((full[j * d + k] + e[j * d + k]).abs());
+                    }
+                }
+            }
+            m
+        }
+    };
     let mut comp: f64 = 0.0; // complementarity, forces
     let mut primal: f64 = 0.0; // feasibility violation, lengths
     let mut dual: f64 = 0.0; // negative multipliers, forces
@@ -99,6 +132,11 @@ pub(crate) fn certify(
         let (pv, qi) = (p.point(v), q.point(i));
         let m = &multipliers[i];
         r.copy_from_slice(&hp[i * d..(i + 1) * d]);
+        if let Some((_, e)) = &extra_at {
+            for (rk, ek) in r.iter_mut().zip(&e[v * d..(v + 1) * d]) {
+                *rk += ek;
+            }
+        }
         match constraint {
             Constraint::Interpolate => {
                 // The multiplier of p_v = q_i is the reaction λ_i = −(Hp)_v.

@@ -72,20 +72,17 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                     multipliers: Some(w.iter().map(|&x| vec![x]).collect()),
                     iterations: 1,
                     stencil: None,
+                    extra: Vec::new(),
+                    solver_kkt: None,
                 });
             }
             _ => {}
         }
     }
-    if has_extra_constraints(fp) {
-        // Derivative constraints (tangents, clamped ends) need the conic solver on 3-vertex
-        // stencils, which this build does not have yet.
-        return Err(Error::Unsupported {
-            field: "tangents",
-            reason: "derivative constraints (tangents, clamped or near-clamped ends) are not supported yet",
-        });
-    }
-    super::exact::solve(fp)
+    let (mut sol, extra, kkt) = super::exact::solve(fp)?;
+    sol.extra = extra;
+    sol.solver_kkt = Some(kkt);
+    Ok(sol)
 }
 
 /// Interpolation (3.3) at every data vertex: the fused banded solver of [`super::fast`].
@@ -97,6 +94,8 @@ fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         multipliers: None,
         iterations: 1,
         stencil: Some(stencil),
+        extra: Vec::new(),
+        solver_kkt: None,
     })
 }
 
@@ -152,6 +151,8 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 multipliers: Some(multipliers),
                 iterations: iters,
                 stencil: None,
+                extra: Vec::new(),
+                solver_kkt: None,
             })
         }
         Constraint::HalfSpaces(_) => Err(Error::Unsupported {

@@ -28,12 +28,34 @@ pub struct Reference {
 /// accuracy, seen 1e-7 inside active balls), so 1e-10 with status `Solved` required.
 pub const CLARABEL_TOL: f64 = 1e-10;
 
-/// Solves the fixed-knot problem with Clarabel.
+/// Solves the fixed-knot problem with Clarabel, requiring status `Solved`; tolerances are tried
+/// in the order of [`CLARABEL_LADDER`] (Clarabel sometimes stops at `AlmostSolved` for one
+/// tolerance and solves at a neighbouring one). `Err` when no tolerance gives `Solved`.
 pub fn clarabel_solve(
     knots: &Knots,
     q: &Points,
     data_vertex: &[usize],
     constraint: &Constraint,
+) -> Result<Reference, String> {
+    let mut last = String::new();
+    for tol in CLARABEL_LADDER {
+        match clarabel_solve_tol(knots, q, data_vertex, constraint, tol) {
+            Ok(r) => return Ok(r),
+            Err(e) => last = e,
+        }
+    }
+    Err(last)
+}
+
+/// The tolerances tried by [`clarabel_solve`], most accurate useful first.
+pub const CLARABEL_LADDER: [f64; 3] = [CLARABEL_TOL, 1e-11, 1e-9];
+
+fn clarabel_solve_tol(
+    knots: &Knots,
+    q: &Points,
+    data_vertex: &[usize],
+    constraint: &Constraint,
+    tol: f64,
 ) -> Result<Reference, String> {
     let nv = knots.vertex_count();
     let d = q.dim();
@@ -136,9 +158,9 @@ pub fn clarabel_solve(
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .max_iter(200)
-        .tol_gap_abs(CLARABEL_TOL)
-        .tol_gap_rel(CLARABEL_TOL)
-        .tol_feas(CLARABEL_TOL)
+        .tol_gap_abs(tol)
+        .tol_gap_rel(tol)
+        .tol_feas(tol)
         .tol_ktratio(1e-10)
         .build()
         .map_err(|e| format!("{e:?}"))?;
