@@ -327,12 +327,53 @@ impl System {
     /// [`Error::SizeMismatch`] if `x` is not N points of dimension d.
     pub fn apply(&self, x: &Points) -> Result<Points, Error> {
         self.check_points("x", x)?;
-        let (n, d) = (self.n, self.dim);
-        let xs = x.coords();
-        let mut y = vec![0.0; n * d];
+        let mut y = vec![0.0; self.n * self.dim];
+        self.apply_slice(x.coords(), &mut y);
+        Ok(Points::new(self.dim, y)?)
+    }
+
+    /// [`apply`](System::apply) on flat vertex-major slices of length N·d: y = K x (y is
+    /// overwritten), without allocating.
+    ///
+    /// # Errors
+    /// [`Error::SizeMismatch`] if `x` or `y` does not have N·d entries.
+    pub fn apply_flat(&self, x: &[f64], y: &mut [f64]) -> Result<(), Error> {
+        let len = self.n * self.dim;
+        for (field, got) in [("x", x.len()), ("y", y.len())] {
+            if got != len {
+                return Err(Error::SizeMismatch {
+                    field,
+                    expected: len,
+                    got,
+                });
+            }
+        }
+        y.fill(0.0);
+        self.apply_slice(x, y);
+        Ok(())
+    }
+
+    /// y += K x on flat slices of length N·d (checked by the callers).
+    fn apply_slice(&self, xs: &[f64], y: &mut [f64]) {
+        match self.dim {
+            1 => self.apply_scalar::<1>(xs, y, 1),
+            2 => self.apply_scalar::<2>(xs, y, 2),
+            3 => self.apply_scalar::<3>(xs, y, 3),
+            4 => self.apply_scalar::<4>(xs, y, 4),
+            d => self.apply_scalar::<0>(xs, y, d),
+        }
+        self.apply_blocks(xs, y);
+    }
+
+    /// y += (H ⊗ I_d + weights) x with the dimension fixed at compile time (`D` = 0: `dyn_d`).
+    #[inline(always)]
+    fn apply_scalar<const D: usize>(&self, xs: &[f64], y: &mut [f64], dyn_d: usize) {
+        let d = if D == 0 { dyn_d } else { D };
+        let n = self.n;
         for j in 0..n {
+            let dj = self.diag[j];
             for c in 0..d {
-                y[j * d + c] += self.diag[j] * xs[j * d + c];
+                y[j * d + c] += dj * xs[j * d + c];
             }
             for (band, step) in [(&self.off1, 1), (&self.off2, 2)] {
                 let v = band[j];
@@ -350,6 +391,11 @@ impl System {
                 }
             }
         }
+    }
+
+    /// y += (coupling blocks and stencil terms) x.
+    fn apply_blocks(&self, xs: &[f64], y: &mut [f64]) {
+        let (n, d) = (self.n, self.dim);
         if let Some(blocks) = &self.blocks {
             let env = Envelope::new(self.topology, n);
             // Envelope entries are stored row by row, columns first(i)..=i consecutively.
@@ -373,7 +419,14 @@ impl System {
                 }
             }
         }
-        Ok(Points::new(d, y)?)
+    }
+
+    /// Removes every coupling block and stencil term (K = H ⊗ I_d + weights again, fixed vertices
+    /// kept) but keeps their storage, so a system rebuilt every iteration does not reallocate.
+    pub fn clear_blocks(&mut self) {
+        if let Some(b) = self.blocks.as_mut() {
+            b.fill(0.0);
+        }
     }
 
     fn check_points(&self, field: &'static str, x: &Points) -> Result<(), Error> {

@@ -122,7 +122,11 @@ pub(crate) struct BlockBand<const D: usize> {
     m: usize,
     /// Per band row: L[i][i−1], L[i][i−2], L[i][i] (lower triangular).
     rows: Vec<[Blk<D>; 3]>,
-    /// Closed: per band row, L[N−2][j] and L[N−1][j].
+    /// Closed: the band rows j whose border blocks are not zero, increasing. The border decays
+    /// geometrically away from the ends and is flushed to zero (see [`BORDER_FLUSH`]), so only a
+    /// few rows near the ends are stored and visited by the solves.
+    border_rows: Vec<usize>,
+    /// Closed: for each row in `border_rows`, L[N−2][j] and L[N−1][j].
     border: Vec<[Blk<D>; 2]>,
     /// Closed: L[N−1][N−2] and the diagonal factors of the two border rows.
     tail: [Blk<D>; 3],
@@ -217,7 +221,8 @@ impl<const D: usize> BlockBand<D> {
         };
 
         let mut rows: Vec<[Blk<D>; 3]> = Vec::with_capacity(m);
-        let mut border: Vec<[Blk<D>; 2]> = Vec::with_capacity(if closed { m } else { 0 });
+        let mut border_rows: Vec<usize> = Vec::new();
+        let mut border: Vec<[Blk<D>; 2]> = Vec::new();
         let (r0, r1) = (n.wrapping_sub(2), n.wrapping_sub(1));
         let (mut g_prev, mut g_prev2) = ([zero::<D>(); 2], [zero::<D>(); 2]);
         // Σ G0 G0ᵀ, Σ G1 G0ᵀ, Σ G1 G1ᵀ.
@@ -266,6 +271,8 @@ impl<const D: usize> BlockBand<D> {
                     }
                 }
                 if g != [zero::<D>(); 2] {
+                    border_rows.push(i);
+                    border.push(g);
                     let t00 = mul_t(&g[0], &g[0]);
                     let t10 = mul_t(&g[1], &g[0]);
                     let t11 = mul_t(&g[1], &g[1]);
@@ -277,7 +284,6 @@ impl<const D: usize> BlockBand<D> {
                         }
                     }
                 }
-                border.push(g);
                 g_prev2 = g_prev;
                 g_prev = g;
             }
@@ -301,6 +307,7 @@ impl<const D: usize> BlockBand<D> {
             n,
             m,
             rows,
+            border_rows,
             border,
             tail,
             fixed_couplings,
@@ -345,6 +352,7 @@ impl<const D: usize> BlockBand<D> {
         // Forward: z_i = L_ii⁻¹ (b_i − L1 z_{i−1} − L2 z_{i−2}); border sums Σ G z.
         let (mut z1, mut z2) = ([0.0; D], [0.0; D]);
         let (mut s0, mut s1) = ([0.0; D], [0.0; D]);
+        let mut next_border = 0;
         for i in 0..m {
             let [l1, l2, lii] = &self.rows[i];
             let mut z = load(x, i);
@@ -355,8 +363,9 @@ impl<const D: usize> BlockBand<D> {
             }
             lsolve(lii, &mut z);
             x[i * D..(i + 1) * D].copy_from_slice(&z);
-            if closed {
-                let [g0, g1] = &self.border[i];
+            if self.border_rows.get(next_border) == Some(&i) {
+                let [g0, g1] = &self.border[next_border];
+                next_border += 1;
                 let u0 = mv(g0, &z);
                 let u1 = mv(g1, &z);
                 for c in 0..D {
@@ -398,6 +407,7 @@ impl<const D: usize> BlockBand<D> {
         let mut l1n = zero::<D>();
         let mut l2n = zero::<D>();
         let mut l2nn = zero::<D>();
+        let mut prev_border = self.border_rows.len();
         for j in (0..m).rev() {
             let [l1, l2, ljj] = &self.rows[j];
             let mut v = load(x, j);
@@ -406,8 +416,9 @@ impl<const D: usize> BlockBand<D> {
             for c in 0..D {
                 v[c] -= u[c] + w[c];
             }
-            if closed {
-                let [g0, g1] = &self.border[j];
+            if prev_border > 0 && self.border_rows[prev_border - 1] == j {
+                prev_border -= 1;
+                let [g0, g1] = &self.border[prev_border];
                 let u0 = mtv(g0, &xr0);
                 let u1 = mtv(g1, &xr1);
                 for c in 0..D {
