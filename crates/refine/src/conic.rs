@@ -524,6 +524,10 @@ struct Prepared {
     owner: Vec<Option<(usize, f64)>>,
     /// H + smoothing weights, with fixed vertices marked.
     base: System,
+    /// H + smoothing weights, nothing fixed (gradient of the certificate).
+    full: System,
+    /// H alone (energy of the certificate).
+    hess: System,
     /// Linear term c (N·d), zero at fixed vertices.
     c: Vec<f64>,
     blocks: Vec<Block>,
@@ -622,6 +626,7 @@ impl Prepared {
             p.off2.clone(),
             d,
         )?;
+        let hess = base.clone();
         let mut c = vec![0.0; n * d];
         for s in &p.smoothing {
             base.add_weight(s.vertex, s.weight)?;
@@ -629,6 +634,7 @@ impl Prepared {
                 c[s.vertex * d + k] -= s.weight * s.target[k];
             }
         }
+        let full = base.clone();
         for (v, f) in fixed.iter().enumerate() {
             if f.is_some() {
                 base.fix(v)?;
@@ -746,26 +752,15 @@ impl Prepared {
                 off += m;
             }
         }
-        let pdiag: Vec<f64> = (0..n)
-            .map(|v| {
-                p.diag[v]
-                    + p.smoothing
-                        .iter()
-                        .filter(|s| s.vertex == v)
-                        .map(|s| s.weight)
-                        .sum::<f64>()
-            })
-            .collect();
+        // Smoothing weight per vertex, summed in the order of the terms (one pass, O(N + terms)).
+        let mut wsum = vec![0.0; n];
+        for sm in &p.smoothing {
+            wsum[sm.vertex] += sm.weight;
+        }
+        let pdiag: Vec<f64> = (0..n).map(|v| p.diag[v] + wsum[v]).collect();
         let scale_p = (0..n)
             .filter(|&v| fixed[v].is_none())
-            .map(|v| {
-                p.diag[v]
-                    + p.smoothing
-                        .iter()
-                        .filter(|s| s.vertex == v)
-                        .map(|s| s.weight)
-                        .sum::<f64>()
-            })
+            .map(|v| pdiag[v])
             .fold(0.0, f64::max);
         Ok(Prepared {
             n,
@@ -773,6 +768,8 @@ impl Prepared {
             fixed,
             owner,
             base,
+            full,
+            hess,
             c,
             blocks,
             total_m: off,
@@ -1029,11 +1026,16 @@ impl Prepared {
 
     /// (H ⊗ I + W) x at free vertices (x zero at fixed vertices is not assumed).
     fn apply_p(&self, x: &[f64]) -> Vec<f64> {
-        let pts = Points::new(self.d, x.to_vec()).unwrap_or_else(|_| Points::zeros(self.n, self.d));
-        self.base
-            .apply(&pts)
-            .map(Points::into_coords)
-            .unwrap_or_else(|_| vec![0.0; x.len()])
+        let mut y = vec![0.0; x.len()];
+        self.apply_p_into(x, &mut y);
+        y
+    }
+
+    /// [`apply_p`](Self::apply_p) into `y` (length N·d; zero if the sizes do not match).
+    fn apply_p_into(&self, x: &[f64], y: &mut [f64]) {
+        if self.base.apply_flat(x, y).is_err() {
+            y.fill(0.0);
+        }
     }
 
     fn is_free(&self, v: usize) -> bool {
@@ -1172,9 +1174,15 @@ impl Prepared {
         let mut polish_tried = false;
         let mut rx = vec![0.0; n * d];
         let mut rs = vec![0.0; tm];
+        // Buffers reused across iterations: the Newton matrix (its coupling blocks are cleared and
+        // re-added every iteration), P x, Σ LᵀFᵀz and the local diagonal scale.
+        let mut sys = self.base.clone();
+        let mut g = vec![0.0; n * d];
+        let mut zsum = vec![0.0; n * d];
+        let mut local = self.pdiag.clone();
         loop {
             // Residuals: r_x = Px + c − Σ LᵀFᵀz (free rows), r_s = s − h − F L x.
-            let g = self.apply_p(&st.x);
+            self.apply_p_into(&st.x, &mut g);
             let mut gn: f64 = 0.0;
             for v in 0..n {
                 if self.is_free(v) {
@@ -1187,7 +1195,7 @@ impl Prepared {
                     rx[v * d..(v + 1) * d].fill(0.0);
                 }
             }
-            let mut zsum = vec![0.0; n * d];
+            zsum.fill(0.0);
             for b in &self.blocks {
                 wbuf.clear();
                 wbuf.extend(st.z[b.off..b.off + b.m].iter().map(|v| -v));
@@ -1265,10 +1273,10 @@ impl Prepared {
             iterations += 1;
 
             // Scalings, λ, Newton matrix.
-            let mut sys = self.base.clone();
+            sys.clear_blocks();
             let mut theta = vec![0.0; d * d];
             let mut vf = vec![0.0; 16];
-            let mut local = self.pdiag.clone();
+            local.copy_from_slice(&self.pdiag);
             let mut eq_blocks = Vec::new();
             for (bi, b) in self.blocks.iter().enumerate() {
                 let (s, z) = (&st.s[b.off..b.off + b.m], &st.z[b.off..b.off + b.m]);
@@ -1513,6 +1521,10 @@ impl Prepared {
                 }
             }
         }
+        let mut in_rows = vec![false; problem.constraints.len()];
+        for row in &rows {
+            in_rows[self.blocks[row.block].constraint] = true;
+        }
         let mut x = st.x.clone();
         let mut sv = vec![0.0; 16];
         let mut best: Option<ConicSolution> = None;
@@ -1667,10 +1679,32 @@ impl Prepared {
             cert.polished = true;
             let better = best.as_ref().is_none_or(|b| cert.kkt.total < b.kkt.total);
             let done = cert.kkt.total <= CONIC_TOLERANCE;
+            // A constraint treated as inactive that is violated by far more than the residuals
+            // of the active-set system: the active set is wrong, and the remaining Newton steps
+            // (whose displacements are of the size of those residuals) cannot repair it.
+            let hopeless = {
+                let (mut inactive, mut active) = (0.0f64, cert.kkt.stationarity);
+                for (ci, con) in problem.constraints.iter().enumerate() {
+                    let y = self.constraint_value(con, &x);
+                    let (dist, scale) = set_distance(&con.set, &y);
+                    let den = scale.max(norm(&y));
+                    let rel = if dist > 0.0 && den > 0.0 {
+                        dist / den
+                    } else {
+                        0.0
+                    };
+                    if in_rows[ci] {
+                        active = active.max(rel);
+                    } else {
+                        inactive = inactive.max(rel);
+                    }
+                }
+                inactive > CONIC_ACCEPT && inactive > POLISH_ABANDON_RATIO * active
+            };
             if better {
                 best = Some(cert);
             }
-            if done {
+            if done || hopeless {
                 break;
             }
         }
@@ -1780,25 +1814,10 @@ impl Prepared {
         let nc = problem.constraints.len();
         let x = &st.x;
         // g = (H⊗I + W) x + c at all vertices (c is zero at fixed ones: recompute fully).
-        let hx = {
-            let pts = Points::new(d, x.clone()).unwrap_or_else(|_| Points::zeros(n, d));
-            let mut s = System::from_bands(
-                problem.topology,
-                problem.diag.clone(),
-                problem.off1.clone(),
-                problem.off2.clone(),
-                d,
-            )
-            .ok();
-            if let Some(s) = s.as_mut() {
-                for sm in &problem.smoothing {
-                    let _ = s.add_weight(sm.vertex, sm.weight);
-                }
-            }
-            s.and_then(|s| s.apply(&pts).ok())
-                .map(Points::into_coords)
-                .unwrap_or_else(|| vec![0.0; n * d])
-        };
+        let mut hx = vec![0.0; n * d];
+        if self.full.apply_flat(x, &mut hx).is_err() {
+            hx.fill(0.0);
+        }
         let mut g = hx;
         for sm in &problem.smoothing {
             for k in 0..d {
@@ -1906,20 +1925,10 @@ impl Prepared {
             total: stationarity.max(primal).max(complementarity),
         };
         // Energy.
-        let hxe = {
-            let pts = Points::new(d, x.clone()).unwrap_or_else(|_| Points::zeros(n, d));
-            System::from_bands(
-                problem.topology,
-                problem.diag.clone(),
-                problem.off1.clone(),
-                problem.off2.clone(),
-                d,
-            )
-            .ok()
-            .and_then(|s| s.apply(&pts).ok())
-            .map(Points::into_coords)
-            .unwrap_or_else(|| vec![0.0; n * d])
-        };
+        let mut hxe = vec![0.0; n * d];
+        if self.hess.apply_flat(x, &mut hxe).is_err() {
+            hxe.fill(0.0);
+        }
         let energy = 0.5 * dot(x, &hxe);
         let objective = energy
             + problem
@@ -2175,6 +2184,11 @@ pub const POLISH_STEPS: usize = 3;
 pub const POLISH_ACTIVE_RTOL: f64 = 1e-6;
 /// A second-order-cone block counts as active in the polish when |s||z| ≥ this × sᵀz.
 pub const POLISH_SOC_RATIO: f64 = 100.0;
+/// The polish gives up after a Newton step that leaves a constraint outside its active set
+/// violated (relative distance above [`CONIC_ACCEPT`]) by more than this times the residuals of
+/// the active-set system (stationarity, active constraints): the active set is wrong, and the
+/// remaining steps, whose displacements are of the size of those residuals, cannot repair it.
+pub const POLISH_ABANDON_RATIO: f64 = 1e3;
 /// The polish is first tried when the interior-point iterate's relative KKT residual is below this.
 pub const POLISH_FROM: f64 = 1e-8;
 

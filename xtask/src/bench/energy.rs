@@ -68,6 +68,10 @@ fn rhs(n: usize, d: usize) -> anyhow::Result<Points> {
 
 /// Runs this group and prints its table.
 pub fn run(opts: Opts) -> anyhow::Result<()> {
+    // Profiling hook: `CONIC_ONLY=n[,reps]` times only the conic balls problem of size n.
+    if let Ok(spec) = std::env::var("CONIC_ONLY") {
+        return conic_only(&spec);
+    }
     println!("## energy: O(N) solves of (H ⊗ I_d + M) x = b (factor + solve, median)");
     println!();
     println!("| path | topology | N | d | time | ns / unknown |");
@@ -229,6 +233,39 @@ fn conic(opts: Opts) -> anyhow::Result<()> {
         );
     }
     println!();
+    Ok(())
+}
+
+/// `CONIC_ONLY=n[,reps]`: the conic solver alone on `balls_problem(n)` (for profilers).
+fn conic_only(spec: &str) -> anyhow::Result<()> {
+    let mut it = spec.split(',');
+    let n: usize = it.next().unwrap_or("10000").trim().parse()?;
+    let reps: usize = it
+        .next()
+        .map(|r| r.trim().parse())
+        .transpose()?
+        .unwrap_or(5);
+    let p = balls_problem(n)?;
+    let t = time_median(reps, || p.solve(&ConicOptions::default()));
+    // The minimum is the robust statistic on a loaded machine.
+    let tmin = (0..reps.max(1))
+        .map(|_| {
+            let t0 = std::time::Instant::now();
+            std::hint::black_box(p.solve(&ConicOptions::default()).is_ok());
+            t0.elapsed()
+        })
+        .min()
+        .unwrap_or_default();
+    let sol = p.solve(&ConicOptions::default())?;
+    println!(
+        "conic balls n = {n}: median {:.3} ms, min {:.3} ms, {} iterations, KKT {:.2e}, polished {}, objective {:.15e}",
+        t.as_secs_f64() * 1e3,
+        tmin.as_secs_f64() * 1e3,
+        sol.iterations,
+        sol.kkt.total,
+        sol.polished,
+        sol.objective
+    );
     Ok(())
 }
 
