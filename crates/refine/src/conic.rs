@@ -808,14 +808,14 @@ fn scaling(kind: Kind, s: &[f64], z: &[f64], out: &mut Vec<f64>) {
             let js = soc_j(s).max(f64::MIN_POSITIVE);
             let jz = soc_j(z).max(f64::MIN_POSITIVE);
             let (rs, rz) = (js.sqrt(), jz.sqrt());
-            let sb: Vec<f64> = s.iter().map(|x| x / rs).collect();
-            let zb: Vec<f64> = z.iter().map(|x| x / rz).collect();
-            let gamma = ((1.0 + dot(&sb, &zb)) / 2.0).max(0.0).sqrt();
+            // s̄ = s/√J(s), z̄ = z/√J(z), formed entry by entry (no allocation per block).
+            let sbzb: f64 = s.iter().zip(z).map(|(a, b)| (a / rs) * (b / rz)).sum();
+            let gamma = ((1.0 + sbzb) / 2.0).max(0.0).sqrt();
             let eta = (js / jz).sqrt().sqrt();
             out.push(eta);
-            out.push((sb[0] + zb[0]) / (2.0 * gamma));
+            out.push((s[0] / rs + z[0] / rz) / (2.0 * gamma));
             for k in 1..s.len() {
-                out.push((sb[k] - zb[k]) / (2.0 * gamma));
+                out.push((s[k] / rs - z[k] / rz) / (2.0 * gamma));
             }
         }
     }

@@ -51,7 +51,9 @@ fn sub_assign<const D: usize>(a: &mut Blk<D>, b: &Blk<D>) {
 }
 
 /// Lower Cholesky factor of the symmetric `s` (lower triangle read), with the relative pivot
-/// test against `kref` (the diagonal of K in this block row).
+/// test against `kref` (the diagonal of K in this block row). The factor's diagonal is stored
+/// *inverted* (1/l_cc): every use of it is a division, and the solves' recurrences are
+/// latency-bound, so they multiply instead.
 #[inline(always)]
 fn chol<const D: usize>(s: &Blk<D>, kref: &[f64; D], rtol: f64) -> Option<Blk<D>> {
     let mut l = zero::<D>();
@@ -63,20 +65,21 @@ fn chol<const D: usize>(s: &Blk<D>, kref: &[f64; D], rtol: f64) -> Option<Blk<D>
         if !(p.is_finite() && p > rtol * kref[c]) {
             return None;
         }
-        let lcc = p.sqrt();
-        l[c][c] = lcc;
+        let inv = 1.0 / p.sqrt();
+        l[c][c] = inv;
         for r in c + 1..D {
             let mut t = s[r][c];
             for q in 0..c {
                 t -= l[r][q] * l[c][q];
             }
-            l[r][c] = t / lcc;
+            l[r][c] = t * inv;
         }
     }
     Some(l)
 }
 
-/// X = S L^{-T} for lower triangular L (each row x of X solves L xᵀ = row of S).
+/// X = S L^{-T} for lower triangular L with inverted diagonal (each row x of X solves
+/// L xᵀ = row of S).
 #[inline(always)]
 fn right_solve_t<const D: usize>(s: &Blk<D>, l: &Blk<D>) -> Blk<D> {
     let mut x = *s;
@@ -86,13 +89,13 @@ fn right_solve_t<const D: usize>(s: &Blk<D>, l: &Blk<D>) -> Blk<D> {
             for q in 0..c {
                 t -= x[r][q] * l[c][q];
             }
-            x[r][c] = t / l[c][c];
+            x[r][c] = t * l[c][c];
         }
     }
     x
 }
 
-/// v ← L⁻¹ v.
+/// v ← L⁻¹ v (L with inverted diagonal).
 #[inline(always)]
 fn lsolve<const D: usize>(l: &Blk<D>, v: &mut [f64; D]) {
     for r in 0..D {
@@ -100,11 +103,11 @@ fn lsolve<const D: usize>(l: &Blk<D>, v: &mut [f64; D]) {
         for c in 0..r {
             t -= l[r][c] * v[c];
         }
-        v[r] = t / l[r][r];
+        v[r] = t * l[r][r];
     }
 }
 
-/// v ← L⁻ᵀ v.
+/// v ← L⁻ᵀ v (L with inverted diagonal).
 #[inline(always)]
 fn ltsolve<const D: usize>(l: &Blk<D>, v: &mut [f64; D]) {
     for r in (0..D).rev() {
@@ -112,7 +115,7 @@ fn ltsolve<const D: usize>(l: &Blk<D>, v: &mut [f64; D]) {
         for c in r + 1..D {
             t -= l[c][r] * v[c];
         }
-        v[r] = t / l[r][r];
+        v[r] = t * l[r][r];
     }
 }
 
@@ -120,7 +123,7 @@ fn ltsolve<const D: usize>(l: &Blk<D>, v: &mut [f64; D]) {
 pub(crate) struct BlockBand<const D: usize> {
     n: usize,
     m: usize,
-    /// Per band row: L[i][i−1], L[i][i−2], L[i][i] (lower triangular).
+    /// Per band row: L[i][i−1], L[i][i−2], L[i][i] (lower triangular, diagonal stored inverted).
     rows: Vec<[Blk<D>; 3]>,
     /// Closed: the band rows j whose border blocks are not zero, increasing. The border decays
     /// geometrically away from the ends and is flushed to zero (see [`BORDER_FLUSH`]), so only a
