@@ -73,7 +73,6 @@ mod schemes;
 
 pub use conic::*;
 pub use error::Error;
-#[allow(unused_imports)] // filled by the free-knot work
 pub use freeknots::*;
 pub use kersey::*;
 pub use schemes::*;
