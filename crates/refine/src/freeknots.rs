@@ -102,7 +102,10 @@ pub struct FreeKnotOptions {
 pub enum FreeKnots {
     /// The data knots u_i (one per data point, n + 1 for a closed curve, the ends of an open
     /// curve and T fixed); every data span is split into k + 1 equal sub-spans as in (3.1).
-    /// Well posed: a data span of length → 0 between distinct interpolated points costs E → ∞.
+    /// Well posed for interpolation: a data span of length → 0 between distinct interpolated
+    /// points costs E → ∞. (With balls or half-space sets, if the sets of two consecutive data
+    /// points intersect, p_{i_k} = p_{(i+1)_k} is feasible and that data span may shrink to 0:
+    /// the infimum is then not attained and the iteration ends with `converged = false`.)
     /// The start is the split of the problem's data parametrization (Algorithm 4.1 with no knot
     /// update). At a free vertex (Hp)_i = 0, and with equal sub-spans on both sides the exact
     /// ∂E/∂t_i then vanishes identically (∂E/∂t_i = |J|²(h_{i−1} + h_i)(h_i − h_{i−1}) with J the common third
