@@ -6,9 +6,12 @@
 //! For the near-interpolatory k-level step of a [`Problem`] (stage 0 of Algorithm 4.1) with
 //! refined knots t, let p*(t) be the exact fixed-knot optimum (the problem layer's exact solve)
 //! and F(t) = E(p*(t), t) — for smoothing, F(t) = E + ½Σ w_i |p*_{i_k} − q_i|². The variational
-//! ("free-knot") parametrization minimizes F over all refined knots with fixed total length
-//! T = t_last − t_first (E is homogeneous of degree −3 in the knots, so without the length
-//! constraint the infimum is 0 at T → ∞).
+//! ("free-knot") parametrization minimizes F over the free knots with the total length
+//! T = t_last − t_first fixed (E is homogeneous of degree −3 in the knots, so without the length
+//! constraint the infimum is 0 at T → ∞). The free knots ([`FreeKnots`]) are by default the data
+//! knots u_i, each data span being split into k + 1 equal sub-spans as in (3.1); freeing every
+//! refined knot, as Kersey's Theorems 3.1–3.2 do (i = 1:nk), turns out to be degenerate (the
+//! sub-spans next to the data points collapse, see [`FreeKnots::All`]).
 //!
 //! **Envelope theorem.** The constraints (interpolation, balls, half-spaces, smoothing
 //! penalties) act on the positions p_{i_k} only and do not depend on t, and p*(t) is the
@@ -17,37 +20,41 @@
 //! derivative of p* needed. **Tangent constraints and clamped ends do depend on t** (the
 //! approximate derivative Df(t_i) is a knot-dependent stencil, Kersey §3.5: "one cannot vary t_i
 //! freely with p_i fixed"), so the envelope formula would be wrong for them: they are rejected
-//! with [`Error::Unsupported`].
+//! with [`Error::Unsupported`]. The gradient is as accurate as p*: conic fixed-knot solves
+//! (balls, half-spaces) carry their interior-point tolerance into it.
 //!
-//! **Parametrization.** The spans are h = T·softmax(θ), θ ∈ R^S (S spans), so they stay
-//! positive and sum to T for every θ; the knots are t_0 + cumulative sums of h. With
-//! g_j = ∂F/∂h_j (from ∂E/∂t_k = g_{k−1} − g_k, so g_j = −Σ_{k≤j} ∂E/∂t_k), the chain rule gives
-//! ∂F/∂θ_k = h_k (g_k − ḡ), ḡ = Σ_j h_j g_j / T. Homogeneity gives Σ_j h_j g_j = −3E, so
-//! ḡ = −3E/T: at a stationary point every g_j equals the fixed-length multiplier μ = −3E/T.
+//! **Parametrization.** The free spans are H = T·softmax(θ), so they stay positive and sum to T
+//! for every θ; each is split into m equal refined spans (m = k + 1 for data knots, 1 for all
+//! knots) and the knots are t_0 + cumulative sums. With g_j = ∂F/∂h_j per refined span (from
+//! ∂E/∂t_k = g_{k−1} − g_k, so g_j = −Σ_{k≤j} ∂E/∂t_k) and G_i = (1/m) Σ_{j in span i} g_j, the chain
+//! rule gives ∂F/∂θ_i = H_i (G_i − Ḡ), Ḡ = Σ_i H_i G_i / T. Homogeneity gives Σ_i H_i G_i = −3E,
+//! so Ḡ = −3E/T: at a stationary point every G_i equals the fixed-length multiplier μ = −3E/T.
 //! Everything is O(N) per evaluation (one banded fixed-knot solve, or one interior-point solve
 //! whose steps are banded, plus O(N) gradients).
 //!
 //! **Optimizer.** L-BFGS in θ ([`FreeKnotOptions::memory`] pairs) with Armijo backtracking,
-//! started from the knots Algorithm 4.1 produces with the problem's parametrization (centripetal
-//! by default) and `knot_iterations` updates. At most [`FreeKnotOptions::max_iterations`]
-//! iterations; it stops when the relative stationarity residual (below) is at most
-//! [`FreeKnotOptions::tolerance`]. Every accepted step lowers F (up to
+//! started from the centripetal knots (the problem's parametrization; see [`FreeKnots`] for the
+//! exact start). At most [`FreeKnotOptions::max_iterations`] iterations; it stops when the
+//! relative stationarity residual (below) is at most [`FreeKnotOptions::tolerance`], when E is 0
+//! up to rounding ([`FREE_KNOT_ZERO_ENERGY`]), or when a line search finds no acceptable step
+//! (then `converged` is false). Every accepted step lowers F (up to
 //! [`FREE_KNOT_ROUNDING_SLACK`] relative, for steps taken in F's rounding noise).
 //!
-//! # Residuals (Corollaries 2.5–2.7, Theorem 3.2, corrected)
+//! # Residuals (Corollaries 2.5–2.7, Theorems 3.1–3.2, corrected)
 //!
 //! [`KnotDiagnostics`] reports, relative to the scale σ = 3E/T = |μ|:
-//! - `stationarity` = max_j |∂F/∂h_j − μ| / σ, the first-order condition with the fixed-length
+//! - `stationarity` = max_i |∂F/∂H_i − μ| / σ, the first-order condition with the fixed-length
 //!   multiplier removed (0 at optimal knots);
-//! - `knot_residual` = max_i |∂E/∂t_i| / σ over the vertices whose parameter is free (every vertex
-//!   of a closed curve — vertex 0's parameter moving t_0 and t_N together — and the interior
-//!   vertices of an open one): the **corrected Corollary 2.5 / Theorem 3.1–3.2 knot condition**,
-//!   exactly 0 at the optimum. (The two end knots of an open curve carry the multiplier:
-//!   ∂E/∂t_0 = −μ, ∂E/∂t_last = μ.)
-//! - `orthogonality_max` = max_i |Df(t_i)·(Hp)_i| / σ, **Corollary 2.7**'s approximate condition
-//!   (and Theorem 3.2's w_i (p_{i_k} − q_i)·Df(t_{i_k}) ≈ 0, the same number at a data vertex since
-//!   (Hp)_{i_k} = −w_i(p_{i_k} − q_i)). It is only approximately 0 at the optimum: the exact
-//!   condition reads −Df(t_i)·(Hp)_i + |Δ_{i,2} f|² − |Δ_{i−2,2} f|² ≈ 0 (see
+//! - `knot_residual` = max_b |dF/du_b| / σ over the free knots (every data knot of a closed curve,
+//!   the interior ones of an open curve, whose end knots carry the multiplier);
+//! - `vertex_knot_residual` = max_i |∂E/∂t_i| / σ over the refined vertices whose parameter is free
+//!   (every vertex of a closed curve — vertex 0's parameter moving t_0 and t_N together — and the
+//!   interior vertices of an open one): the **corrected Corollary 2.5 / Theorem 3.1–3.2 knot
+//!   condition**. It is 0 at the data-knot optimum too (see [`FreeKnots::Data`]).
+//! - `orthogonality_max` = max_i |Df(t_i)·(Hp)_i| / σ over the same vertices, **Corollary 2.7**'s
+//!   approximate condition (and Theorem 3.2's w_i (p_{i_k} − q_i)·Df(t_{i_k}) ≈ 0, the same number
+//!   at a data vertex since (Hp)_{i_k} = −w_i(p_{i_k} − q_i)). It is only approximately 0 at the
+//!   optimum: the exact condition reads −Df(t_i)·(Hp)_i + |Δ_{i,2} f|² − |Δ_{i−2,2} f|² ≈ 0 (see
 //!   [`energy::orthogonality_residuals`]).
 
 use divdiff::{Knots, Points, Topology};
