@@ -17,6 +17,10 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+thread_local! {
+    static LAST_PANIC: std::cell::RefCell<String> = const { std::cell::RefCell::new(String::new()) };
+}
+
 /// xorshift64*: a small deterministic generator (reproducible runs from `--seed`).
 struct Rng(u64);
 
@@ -113,6 +117,31 @@ fn mutate_value(v: &mut serde_json::Value, rng: &mut Rng, depth: usize) {
     }
 }
 
+/// Numbers of `v` changed in place: mode 0 relative noise 1e-3, mode 1 rounding to one decimal
+/// (creates coincident and collinear points), mode 2 multiplies every float by `scale`, mode 3
+/// replaces one number by a small random value.
+fn jitter(v: &mut serde_json::Value, rng: &mut Rng, mode: usize, scale: f64) {
+    use serde_json::Value;
+    match v {
+        Value::Array(a) => a.iter_mut().for_each(|x| jitter(x, rng, mode, scale)),
+        Value::Object(o) => o.iter_mut().for_each(|(_, x)| jitter(x, rng, mode, scale)),
+        Value::Number(n) if n.is_f64() || mode == 2 => {
+            let x = n.as_f64().unwrap_or(0.0);
+            let y = match mode {
+                0 => x * (1.0 + 1e-3 * (rng.below(2001) as f64 - 1000.0) / 1000.0),
+                1 => (x * 10.0).round() / 10.0,
+                2 if n.is_f64() => x * scale,
+                3 if rng.below(8) == 0 => (rng.below(200) as f64 - 100.0) / 50.0,
+                _ => x,
+            };
+            if let Some(m) = serde_json::Number::from_f64(y) {
+                *n = m;
+            }
+        }
+        _ => {}
+    }
+}
+
 fn mutate(seed: &str, rng: &mut Rng) -> String {
     if rng.below(5) == 0 {
         // Byte-level: flip, delete, insert or splice an extreme token.
@@ -138,6 +167,14 @@ fn mutate(seed: &str, rng: &mut Rng) -> String {
         return String::from_utf8_lossy(&b).into_owned();
     }
     match serde_json::from_str::<serde_json::Value>(seed) {
+        Ok(mut v) if rng.below(2) == 0 => {
+            // Structure-preserving: jitter or rescale the numbers so that most inputs stay valid
+            // and reach the solvers (degenerate geometry, extreme scales, near-coincident points).
+            let mode = rng.below(4);
+            let scale = [1e-8, 1e-3, 1e3, 1e8][rng.below(4)];
+            jitter(&mut v, rng, mode, scale);
+            v.to_string()
+        }
         Ok(mut v) => {
             for _ in 0..1 + rng.below(3) {
                 mutate_value(&mut v, rng, 0);
@@ -202,17 +239,38 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
             other => anyhow::bail!("unknown argument {other}"),
         }
     }
+    // Record each panic's location and message instead of printing a backtrace per crash.
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        let loc = info
+            .location()
+            .map(|l| format!("{}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        LAST_PANIC.with(|p| *p.borrow_mut() = format!("{loc}: {msg}"));
+    }));
     let root = PathBuf::from("tests/fuzz-corpus");
     let mut seeds = load_corpus(&root)?;
     anyhow::ensure!(!seeds.is_empty(), "no seeds in {}", root.display());
     let crash_dir = root.join("crashes");
+    // Seeds loaded from disk are valid problems (crash files aside); jitter mutations start from them.
+    let n_base = seeds.len();
     let mut rng = Rng(seed | 1);
     let mut outcomes: HashSet<(String, i32, String)> = HashSet::new();
     let (mut crashes, mut slow) = (0u64, 0u64);
     let started = Instant::now();
     let mut codes = [0u64; 3];
     for n in 0..execs {
-        let (cmd, base) = seeds[rng.below(seeds.len())].clone();
+        let pick = if rng.below(2) == 0 {
+            rng.below(n_base)
+        } else {
+            rng.below(seeds.len())
+        };
+        let (cmd, base) = seeds[pick].clone();
         let input = mutate(&base, &mut rng);
         let t = Instant::now();
         let (mut out, mut err) = (Vec::new(), Vec::new());

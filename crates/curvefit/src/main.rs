@@ -2,7 +2,10 @@
 
 fn main() {
     // Solvers report failures as values; a panic would be a bug. Keep its report to one line.
-    std::panic::set_hook(Box::new(|_| {}));
+    // Set CURVEFIT_DEBUG_PANICS=1 to see the standard panic report when debugging.
+    if std::env::var_os("CURVEFIT_DEBUG_PANICS").is_none() {
+        std::panic::set_hook(Box::new(|_| {}));
+    }
     let code = curvefit::cli::run(
         std::env::args_os(),
         &mut std::io::stdin().lock(),

@@ -277,10 +277,16 @@ impl System {
             for &(b, _) in stencil {
                 let (i, j) = if a >= b { (a, b) } else { (b, a) };
                 if j < env.first(i) || (self.topology == Topology::Open && i - j > 2) {
-                    return Err(Error::StencilTooWide { first: a, second: b });
+                    return Err(Error::StencilTooWide {
+                        first: a,
+                        second: b,
+                    });
                 }
                 if self.topology == Topology::Closed && i - j > 2 && n - (i - j) > 2 {
-                    return Err(Error::StencilTooWide { first: a, second: b });
+                    return Err(Error::StencilTooWide {
+                        first: a,
+                        second: b,
+                    });
                 }
             }
         }
@@ -333,7 +339,11 @@ impl System {
                 if v == 0.0 {
                     continue;
                 }
-                let k = (j + step) % n;
+                let k = if j + step >= n {
+                    j + step - n
+                } else {
+                    j + step
+                };
                 for c in 0..d {
                     y[j * d + c] += v * xs[k * d + c];
                     y[k * d + c] += v * xs[j * d + c];
@@ -342,9 +352,16 @@ impl System {
         }
         if let Some(blocks) = &self.blocks {
             let env = Envelope::new(self.topology, n);
+            // Envelope entries are stored row by row, columns first(i)..=i consecutively.
+            let mut blocks_iter = blocks.chunks_exact(d * d);
             for i in 0..n {
                 for j in env.first(i)..=i {
-                    let b = &blocks[env.index(i, j) * d * d..][..d * d];
+                    let Some(b) = blocks_iter.next() else {
+                        break;
+                    };
+                    if b.iter().all(|&v| v == 0.0) {
+                        continue;
+                    }
                     for r in 0..d {
                         for c in 0..d {
                             y[i * d + r] += b[r * d + c] * xs[j * d + c];

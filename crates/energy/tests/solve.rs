@@ -221,9 +221,9 @@ fn check(p: &Problem, d: usize, seed: u64) -> (f64, f64) {
     let mut b = DVector::zeros(free.len());
     for (a, &r) in free.iter().enumerate() {
         b[a] = rhs[r];
-        for c in 0..n * d {
+        for (c, rc) in rhs.iter().enumerate() {
             if p.fixed[c / d] {
-                b[a] -= p.dense[(r, c)] * rhs[c];
+                b[a] -= p.dense[(r, c)] * rc;
             }
         }
         for (e, &c) in free.iter().enumerate() {
@@ -273,7 +273,10 @@ fn apply_matches_dense() {
                 let y = p.system.apply(&Points::new(d, x.clone()).unwrap()).unwrap();
                 let yref = &p.dense * DVector::from_vec(x);
                 let err = (DVector::from_column_slice(y.coords()) - &yref).norm();
-                assert!(err <= 1e-12 * yref.norm().max(1.0), "{top:?} n={n} d={d}: {err}");
+                assert!(
+                    err <= 1e-12 * yref.norm().max(1.0),
+                    "{top:?} n={n} d={d}: {err}"
+                );
             }
         }
     }
@@ -308,7 +311,10 @@ fn singular_systems_are_typed_errors() {
             // Open: one weight pins the constant but not the slope.
             let mut s = bare(Topology::Open, n, d);
             s.add_weight(n / 2, 1.0).unwrap();
-            assert!(matches!(s.factor(), Err(Error::Singular { .. })), "open n={n}");
+            assert!(
+                matches!(s.factor(), Err(Error::Singular { .. })),
+                "open n={n}"
+            );
             // Closed: one weight suffices.
             let mut s = bare(Topology::Closed, n, d);
             s.add_weight(n / 2, 1.0).unwrap();
@@ -325,16 +331,30 @@ fn singular_systems_are_typed_errors() {
 #[test]
 fn bad_input_is_rejected() {
     let mut s = bare(Topology::Closed, 6, 2);
-    assert!(matches!(s.add_weight(6, 1.0), Err(Error::IndexOutOfRange { .. })));
-    assert!(matches!(s.add_block(0, &[1.0]), Err(Error::SizeMismatch { .. })));
+    assert!(matches!(
+        s.add_weight(6, 1.0),
+        Err(Error::IndexOutOfRange { .. })
+    ));
+    assert!(matches!(
+        s.add_block(0, &[1.0]),
+        Err(Error::SizeMismatch { .. })
+    ));
     assert!(matches!(
         s.add_stencil(&[(0, 1.0), (3, 1.0)], &[1.0, 0.0, 0.0, 1.0]),
         Err(Error::StencilTooWide { .. })
     ));
-    assert!(s.add_stencil(&[(5, 1.0), (0, -2.0), (1, 1.0)], &[1.0, 0.0, 0.0, 1.0]).is_ok());
+    assert!(s
+        .add_stencil(&[(5, 1.0), (0, -2.0), (1, 1.0)], &[1.0, 0.0, 0.0, 1.0])
+        .is_ok());
     assert!(matches!(s.fix(9), Err(Error::IndexOutOfRange { .. })));
     assert!(matches!(
-        System::from_bands(Topology::Closed, vec![1.0; 2], vec![0.0; 2], vec![0.0; 2], 1),
+        System::from_bands(
+            Topology::Closed,
+            vec![1.0; 2],
+            vec![0.0; 2],
+            vec![0.0; 2],
+            1
+        ),
         Err(Error::SizeMismatch { .. })
     ));
     assert!(matches!(
@@ -343,7 +363,10 @@ fn bad_input_is_rejected() {
     ));
     s.add_weight(0, 1.0).unwrap();
     let f = s.factor().unwrap();
-    assert!(matches!(f.solve(&Points::zeros(5, 2)), Err(Error::SizeMismatch { .. })));
+    assert!(matches!(
+        f.solve(&Points::zeros(5, 2)),
+        Err(Error::SizeMismatch { .. })
+    ));
 }
 
 #[test]

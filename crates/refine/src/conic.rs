@@ -39,6 +39,9 @@
 //! - total: the largest of the three. The solver stops when total ≤ [`ConicOptions::tolerance`]
 //!   and fails with [`Error::NotConverged`] if it cannot reach [`CONIC_ACCEPT`].
 
+// The cone algebra and block kernels index several small arrays by the same row/column.
+#![allow(clippy::needless_range_loop)]
+
 use crate::Error;
 use divdiff::{Points, Topology};
 use energy::{Factor, Hessian, System};
@@ -92,7 +95,7 @@ pub enum ConvexSet {
 
 /// A constraint L p ∈ K on a stencil L = Σ_k c_k e_{v_k}ᵀ.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Constraint {
+pub struct ConicConstraint {
     /// The stencil [(v_k, c_k)]: at most three vertices within two steps of each other
     /// (cyclically for closed curves).
     pub stencil: Vec<(usize, f64)>,
@@ -177,7 +180,7 @@ pub struct ConicProblem {
     off2: Vec<f64>,
     fixed: Vec<Option<Vec<f64>>>,
     smoothing: Vec<Smoothing>,
-    constraints: Vec<Constraint>,
+    constraints: Vec<ConicConstraint>,
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -244,7 +247,7 @@ impl ConicProblem {
     }
 
     /// The constraints added so far, in index order.
-    pub fn constraints(&self) -> &[Constraint] {
+    pub fn constraints(&self) -> &[ConicConstraint] {
         &self.constraints
     }
 
@@ -290,7 +293,12 @@ impl ConicProblem {
     /// # Errors
     /// [`Error::VertexOutOfRange`], [`Error::WrongDimension`], [`Error::NonFiniteInput`], and
     /// [`Error::InvalidConstraint`] for a negative or non-finite weight.
-    pub fn add_smoothing(&mut self, vertex: usize, weight: f64, target: &[f64]) -> Result<(), Error> {
+    pub fn add_smoothing(
+        &mut self,
+        vertex: usize,
+        weight: f64,
+        target: &[f64],
+    ) -> Result<(), Error> {
         self.check_vertex("smoothing", vertex)?;
         self.check_vec("smoothing", vertex, target)?;
         if !(weight.is_finite() && weight >= 0.0) {
@@ -314,7 +322,11 @@ impl ConicProblem {
     /// index the constraint would get) for an empty or too wide stencil, a negative radius, a
     /// zero normal, a non-unit axis or an angle outside [0, π/2), [`Error::WrongDimension`] /
     /// [`Error::NonFiniteInput`] for vectors of the wrong size or non-finite entries.
-    pub fn add_constraint(&mut self, stencil: &[(usize, f64)], set: ConvexSet) -> Result<usize, Error> {
+    pub fn add_constraint(
+        &mut self,
+        stencil: &[(usize, f64)],
+        set: ConvexSet,
+    ) -> Result<usize, Error> {
         let index = self.constraints.len();
         let invalid = |reason| Error::InvalidConstraint {
             constraint: index,
@@ -384,7 +396,7 @@ impl ConicProblem {
             }
             ConvexSet::Point(v) => self.check_vec("point", index, v)?,
         }
-        self.constraints.push(Constraint {
+        self.constraints.push(ConicConstraint {
             stencil: stencil.to_vec(),
             set,
         });
@@ -426,8 +438,9 @@ impl ConicProblem {
                     }
                 }
                 Err(Error::NotConverged {
+                    solver: "conic interior-point method",
                     iterations,
-                    best_residual: best,
+                    residual: best,
                 })
             }
         }
@@ -437,12 +450,12 @@ impl ConicProblem {
 /// Is {x : n_i·x ≤ o_i} empty? Decided by the interior-point method itself on the one-vertex
 /// problem min ½|x|² s.t. the half-spaces: it converges iff the polytope is nonempty.
 fn polytope_is_empty(hs: &[(Vec<f64>, f64)], d: usize) -> bool {
-    let Ok(mut p) = ConicProblem::from_bands(Topology::Open, vec![0.0], vec![0.0], vec![0.0], d) else {
+    let Ok(mut p) = ConicProblem::from_bands(Topology::Open, vec![0.0], vec![0.0], vec![0.0], d)
+    else {
         return false;
     };
     if p.add_smoothing(0, 1.0, &vec![0.0; d]).is_err()
-        || p
-            .add_constraint(&[(0, 1.0)], ConvexSet::HalfSpaces(hs.to_vec()))
+        || p.add_constraint(&[(0, 1.0)], ConvexSet::HalfSpaces(hs.to_vec()))
             .is_err()
     {
         return false;
@@ -503,7 +516,7 @@ struct Prepared {
     d: usize,
     /// Fixed value per vertex.
     fixed: Vec<Option<Vec<f64>>>,
-    /// Constraint that fixed a vertex (for its reaction force): (constraint, coefficient).
+    /// The constraint that fixed a vertex (for its reaction force): (constraint, coefficient).
     owner: Vec<Option<(usize, f64)>>,
     /// H + smoothing weights, with fixed vertices marked.
     base: System,
@@ -582,7 +595,10 @@ impl Prepared {
                 match &fixed[*vert] {
                     Some(old) => {
                         let gap = norm(
-                            &old.iter().zip(&target).map(|(a, b)| a - b).collect::<Vec<_>>(),
+                            &old.iter()
+                                .zip(&target)
+                                .map(|(a, b)| a - b)
+                                .collect::<Vec<_>>(),
                         );
                         if gap > 1e-12 * (1.0 + inf_norm(old).max(inf_norm(&target))) {
                             return Err(Error::Infeasible { constraint: ci });
@@ -739,7 +755,12 @@ impl Prepared {
         let scale_p = (0..n)
             .filter(|&v| fixed[v].is_none())
             .map(|v| {
-                p.diag[v] + p.smoothing.iter().filter(|s| s.vertex == v).map(|s| s.weight).sum::<f64>()
+                p.diag[v]
+                    + p.smoothing
+                        .iter()
+                        .filter(|s| s.vertex == v)
+                        .map(|s| s.weight)
+                        .sum::<f64>()
             })
             .fold(0.0, f64::max);
         Ok(Prepared {
@@ -880,13 +901,10 @@ fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
 fn max_step(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
     match kind {
         Kind::Zero => cap,
-        Kind::Nonneg => u.iter().zip(du).fold(cap, |a, (x, dx)| {
-            if *dx < 0.0 {
-                a.min(-x / dx)
-            } else {
-                a
-            }
-        }),
+        Kind::Nonneg => u
+            .iter()
+            .zip(du)
+            .fold(cap, |a, (x, dx)| if *dx < 0.0 { a.min(-x / dx) } else { a }),
         Kind::Soc => {
             // q(α) = J(u + α du) = a α² + b α + c, c = J(u) > 0; first positive root.
             let a = soc_j(du);
@@ -941,7 +959,6 @@ fn project(kind: Kind, u: &mut [f64]) {
         }
     }
 }
-
 
 // ---------------------------------------------------------------------------------------------
 // The interior-point method.
@@ -1037,7 +1054,11 @@ impl Prepared {
             return Ok(x);
         }
         // min ½xᵀPx + cᵀx + (ω/2) Σ |h + F L x|²: (P + ω Σ LᵀFᵀFL) x = −c − ω Σ LᵀFᵀh.
-        let omega = if self.scale_p > 0.0 { self.scale_p } else { 1.0 };
+        let omega = if self.scale_p > 0.0 {
+            self.scale_p
+        } else {
+            1.0
+        };
         let mut sys = self.base.clone();
         let mut rhs = x.clone();
         for v in 0..n {
@@ -1075,7 +1096,11 @@ impl Prepared {
             s: vec![0.0; tm],
             z: vec![0.0; tm],
         };
-        let omega = if self.scale_p > 0.0 { self.scale_p } else { 1.0 };
+        let omega = if self.scale_p > 0.0 {
+            self.scale_p
+        } else {
+            1.0
+        };
         // Slacks from x, shifted into the interior; z = μ_b s⁻¹ with Θ ≈ ω.
         {
             let mut fx = vec![0.0; 16];
@@ -1132,7 +1157,7 @@ impl Prepared {
         let mut tmp = vec![0.0; 16];
         let mut tmp2 = vec![0.0; 16];
         let mut wbuf = vec![0.0; 16];
-        let mut best_state: Option<(f64, Vec<f64>, Vec<f64>, Vec<f64>)> = None;
+        let mut best_state: Option<(f64, State)> = None;
         let mut polish_tried = false;
         let mut rx = vec![0.0; n * d];
         let mut rs = vec![0.0; tm];
@@ -1182,15 +1207,28 @@ impl Prepared {
                 .filter(|b| b.kind != Kind::Zero)
                 .map(|b| dot(&st.s[b.off..b.off + b.m], &st.z[b.off..b.off + b.m]))
                 .sum();
-            let mu = if self.degree > 0.0 { gap / self.degree } else { 0.0 };
+            let mu = if self.degree > 0.0 {
+                gap / self.degree
+            } else {
+                0.0
+            };
             // Cheap relative residuals of the iterate (the certificate is computed near the end).
             let xs = self.scale_x.max(inf_norm(&st.x)).max(f64::MIN_POSITIVE);
             let sden = gn.max(zn).max(self.scale_p * xs).max(f64::MIN_POSITIVE);
             let primal = inf_norm(&rs) / sn.max(f64::MIN_POSITIVE);
-            let cheap = (inf_norm(&rx) / sden).max(primal).max(gap.abs() / (sden * xs));
+            let cheap = (inf_norm(&rx) / sden)
+                .max(primal)
+                .max(gap.abs() / (sden * xs));
             best_primal = best_primal.min(primal);
             if best_state.as_ref().is_none_or(|b| cheap < b.0) {
-                best_state = Some((cheap, st.x.clone(), st.s.clone(), st.z.clone()));
+                best_state = Some((
+                    cheap,
+                    State {
+                        x: st.x.clone(),
+                        s: st.s.clone(),
+                        z: st.z.clone(),
+                    },
+                ));
             }
             if cheap <= POLISH_FROM || iterations >= opts.max_iterations {
                 let sol = self.certificate(problem, &st, iterations);
@@ -1290,6 +1328,11 @@ impl Prepared {
                 sc: &sc,
                 eq_blocks: &eq_blocks,
                 delta: &delta,
+                refine_steps: if cheap <= REFINE_FROM {
+                    NEWTON_REFINEMENT_STEPS
+                } else {
+                    1
+                },
             };
 
             // Predictor: ξ = −λ.
@@ -1305,8 +1348,12 @@ impl Prepared {
             if self.degree > 0.0 && mu > 0.0 {
                 let mut gap_a = 0.0;
                 for b in self.blocks.iter().filter(|b| b.kind != Kind::Zero) {
-                    let sa: Vec<f64> = (b.off..b.off + b.m).map(|r| st.s[r] + alpha_a * ds_a[r]).collect();
-                    let za: Vec<f64> = (b.off..b.off + b.m).map(|r| st.z[r] + alpha_a * dz_a[r]).collect();
+                    let sa: Vec<f64> = (b.off..b.off + b.m)
+                        .map(|r| st.s[r] + alpha_a * ds_a[r])
+                        .collect();
+                    let za: Vec<f64> = (b.off..b.off + b.m)
+                        .map(|r| st.z[r] + alpha_a * dz_a[r])
+                        .collect();
                     gap_a += dot(&sa, &za);
                 }
                 sigma = (gap_a / (mu * self.degree)).clamp(0.0, 1.0).powi(3);
@@ -1363,8 +1410,7 @@ impl Prepared {
             }
         }
         // Not at the target: accept the best iterate if its certificate is within CONIC_ACCEPT.
-        if let Some((_, x, s, z)) = best_state {
-            let bst = State { x, s, z };
+        if let Some((_, bst)) = best_state {
             let sol = self.certificate(problem, &bst, iterations);
             best = best.min(sol.kkt.total);
             if sol.kkt.total <= CONIC_ACCEPT {
@@ -1391,9 +1437,18 @@ impl Prepared {
     /// J(s(x)) = 0 with z = w J s, orthant components through s_i(x) = 0 — and a few Newton
     /// steps on the resulting KKT system (quasi-definite, iterative refinement) remove the
     /// interior-point bias. Returns the certificate, or `None` if a step fails.
-    fn polish(&self, problem: &ConicProblem, st: &State, iterations: usize) -> Option<ConicSolution> {
+    fn polish(
+        &self,
+        problem: &ConicProblem,
+        st: &State,
+        iterations: usize,
+    ) -> Option<ConicSolution> {
         let (n, d) = (self.n, self.d);
-        let omega = if self.scale_p > 0.0 { self.scale_p } else { 1.0 };
+        let omega = if self.scale_p > 0.0 {
+            self.scale_p
+        } else {
+            1.0
+        };
         // Rows: (block, component or usize::MAX for a whole SOC, multiplier).
         struct Row {
             block: usize,
@@ -1406,13 +1461,21 @@ impl Prepared {
             match b.kind {
                 Kind::Zero => {
                     for (r, zr) in z.iter().enumerate() {
-                        rows.push(Row { block: bi, comp: r, mult: *zr });
+                        rows.push(Row {
+                            block: bi,
+                            comp: r,
+                            mult: *zr,
+                        });
                     }
                 }
                 Kind::Nonneg => {
                     for r in 0..b.m {
                         if z[r] >= omega * s[r] {
-                            rows.push(Row { block: bi, comp: r, mult: z[r] });
+                            rows.push(Row {
+                                block: bi,
+                                comp: r,
+                                mult: z[r],
+                            });
                         }
                     }
                 }
@@ -1424,7 +1487,11 @@ impl Prepared {
                             // J s = 0 carries no direction: the interior-point result stands.
                             return None;
                         }
-                        rows.push(Row { block: bi, comp: usize::MAX, mult: z[0] / s[0] });
+                        rows.push(Row {
+                            block: bi,
+                            comp: usize::MAX,
+                            mult: z[0] / s[0],
+                        });
                     }
                 }
             }
@@ -1500,7 +1567,7 @@ impl Prepared {
                 socs.push((row.block, blk));
             }
             let gn: Vec<f64> = grads.iter().map(|g| norm(g)).collect();
-            if gn.iter().any(|&v| !(v > 0.0)) {
+            if gn.iter().any(|&v| v.is_nan() || v <= 0.0) {
                 return best;
             }
             let mut delta = Vec::with_capacity(rows.len());
@@ -1531,17 +1598,25 @@ impl Prepared {
                     self.stencil_apply(b, v, &mut y);
                     for &(u, c) in &b.stencil {
                         for i in 0..d {
-                            out[u * d + i] += c * (0..d).map(|j| blk[i * d + j] * y[j]).sum::<f64>();
+                            out[u * d + i] +=
+                                c * (0..d).map(|j| blk[i * d + j] * y[j]).sum::<f64>();
                         }
                     }
                 }
                 out
             };
             // Unit rows: ĝ = g/|g|, value/|g|, multiplier·|g|.
-            let unit: Vec<Vec<f64>> = grads.iter().zip(&gn).map(|(g, l)| g.iter().map(|v| v / l).collect()).collect();
+            let unit: Vec<Vec<f64>> = grads
+                .iter()
+                .zip(&gn)
+                .map(|(g, l)| g.iter().map(|v| v / l).collect())
+                .collect();
             let b1: Vec<f64> = res.iter().map(|v| -v).collect();
             let b2: Vec<f64> = vals.iter().zip(&gn).map(|(v, l)| -v / l).collect();
-            let stencils: Vec<&[(usize, f64)]> = rows.iter().map(|r| self.blocks[r.block].stencil.as_slice()).collect();
+            let stencils: Vec<&[(usize, f64)]> = rows
+                .iter()
+                .map(|r| self.blocks[r.block].stencil.as_slice())
+                .collect();
             let (dx, dm) = self.saddle_solve(&factor, &apply_k, &stencils, &unit, &delta, &b1, &b2);
             if dx.iter().chain(&dm).any(|v| !v.is_finite()) {
                 return best;
@@ -1670,7 +1745,7 @@ impl Prepared {
         worst
     }
 
-    fn constraint_value(&self, con: &Constraint, x: &[f64]) -> Vec<f64> {
+    fn constraint_value(&self, con: &ConicConstraint, x: &[f64]) -> Vec<f64> {
         let d = self.d;
         let mut y = vec![0.0; d];
         for &(v, c) in &con.stencil {
@@ -1799,7 +1874,8 @@ impl Prepared {
             active[ci] = slack <= ACTIVE_RTOL * den;
             if let ConvexSet::Ball { radius, .. } = &con.set {
                 if *radius > 0.0 {
-                    ball_weights[ci] = Some(cone_duals[ci].first().copied().unwrap_or(0.0) / radius);
+                    ball_weights[ci] =
+                        Some(cone_duals[ci].first().copied().unwrap_or(0.0) / radius);
                 }
             }
         }
@@ -1833,7 +1909,11 @@ impl Prepared {
                 .iter()
                 .map(|sm| {
                     let p = &x[sm.vertex * d..(sm.vertex + 1) * d];
-                    0.5 * sm.weight * p.iter().zip(&sm.target).map(|(a, b)| (a - b) * (a - b)).sum::<f64>()
+                    0.5 * sm.weight
+                        * p.iter()
+                            .zip(&sm.target)
+                            .map(|(a, b)| (a - b) * (a - b))
+                            .sum::<f64>()
                 })
                 .sum::<f64>();
         ConicSolution {
@@ -1917,6 +1997,8 @@ struct NewtonCtx<'a> {
     eq_blocks: &'a [usize],
     /// Regularization δ_b per block (equality blocks only).
     delta: &'a [f64],
+    /// Refinement steps without equality rows (0 early on, when accuracy does not matter yet).
+    refine_steps: usize,
 }
 
 impl NewtonCtx<'_> {
@@ -1963,16 +2045,19 @@ impl NewtonCtx<'_> {
             }
             let bnorm = inf_norm(&b1).max(inf_norm(&e2)).max(f64::MIN_POSITIVE);
             let steps = if self.eq_blocks.is_empty() {
-                NEWTON_REFINEMENT_STEPS
+                self.refine_steps
             } else {
                 EQUALITY_REFINEMENT_STEPS
             };
-            for _ in 0..steps {
+            for step in 0..steps {
                 // ddx = K_δ⁻¹(e1 + Gᵀ e2/δ); ddz = (e2 − G ddx)/δ.
                 let mut r = e1.clone();
                 for &bi in self.eq_blocks {
                     let b = &p.blocks[bi];
-                    let w: Vec<f64> = e2[b.off..b.off + b.m].iter().map(|v| v / self.delta[bi]).collect();
+                    let w: Vec<f64> = e2[b.off..b.off + b.m]
+                        .iter()
+                        .map(|v| v / self.delta[bi])
+                        .collect();
                     p.add_adjoint(b, &w, &mut r);
                 }
                 for v in 0..n {
@@ -1992,6 +2077,9 @@ impl NewtonCtx<'_> {
                     for k in 0..b.m {
                         dz[b.off + k] += (e2[b.off + k] - gx[k]) / self.delta[bi];
                     }
+                }
+                if step + 1 == steps {
+                    break;
                 }
                 // New residuals of the unregularized system.
                 let kdx = self.apply_k(&dx);
@@ -2071,6 +2159,9 @@ pub const POLISH_FROM: f64 = 1e-8;
 /// Iterative-refinement steps (against the unregularized operator) of Newton systems without
 /// equality rows: the first solve plus corrections.
 pub const NEWTON_REFINEMENT_STEPS: usize = 2;
+/// Newton systems without equality rows are refined only once the iterate's relative residual is
+/// below this (early directions need no accuracy).
+pub const REFINE_FROM: f64 = 1e-6;
 /// Iterative refinement stops when the residual is below this times the right-hand side.
 pub const REFINEMENT_RTOL: f64 = 1e-14;
 

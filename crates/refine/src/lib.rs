@@ -67,15 +67,13 @@
 
 mod conic;
 mod error;
+mod freeknots;
 mod kersey;
 mod schemes;
 
 pub use conic::*;
-// Both modules define a `Constraint`; the problem-level one (a data constraint of Kersey §3) is
-// the crate's `Constraint`, the stencil constraint of the conic solver is `ConicConstraint`.
-pub use conic::Constraint as ConicConstraint;
 pub use error::Error;
-pub use kersey::Constraint;
+#[allow(unused_imports)] // filled by the free-knot work
+pub use freeknots::*;
 pub use kersey::*;
-#[allow(unused_imports)] // empty until the schemes land
 pub use schemes::*;

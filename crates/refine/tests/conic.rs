@@ -4,6 +4,8 @@
 //! Hessian, fixed vertices as zero cones, balls and wedges as second-order cones, half-spaces as
 //! the nonnegative orthant), without any code of the solver under test.
 #![allow(non_snake_case)]
+// Assembling rows coordinate by coordinate reads more clearly with index loops.
+#![allow(clippy::needless_range_loop)]
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -64,11 +66,7 @@ impl Spec {
         let n = self.n();
         let (hm, hp) = (self.knots.h(i as isize - 1), self.knots.h(i as isize));
         let (a, c) = ((i + n - 1) % n, (i + 1) % n);
-        vec![
-            (a, -0.5 / hm),
-            (i, 0.5 / hm - 0.5 / hp),
-            (c, 0.5 / hp),
-        ]
+        vec![(a, -0.5 / hm), (i, 0.5 / hm - 0.5 / hp), (c, 0.5 / hp)]
     }
 
     fn problem(&self) -> ConicProblem {
@@ -215,11 +213,20 @@ impl Spec {
 fn check(spec: &Spec) -> ConicSolution {
     let sol = spec.problem().solve(&ConicOptions::default()).unwrap();
     let reference = spec.clarabel();
-    assert!(sol.kkt.total <= 1e-9, "KKT {:?} after {} iterations", sol.kkt, sol.iterations);
+    assert!(
+        sol.kkt.total <= 1e-9,
+        "KKT {:?} after {} iterations",
+        sol.kkt,
+        sol.iterations
+    );
     // Relative agreement. Problems whose optimum has E = 0 are compared on the energy scale
     // of the data, max|H| · max|p|², times 1e-4 (so a zero optimum must agree to 1e-12 of it).
     let h = Hessian::new(&spec.knots);
-    let xmax = sol.points.coords().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let xmax = sol
+        .points
+        .coords()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
     let floor = 1e-4 * h.max_abs() * xmax * xmax;
     let scale = sol.objective.abs().max(reference.abs()).max(floor);
     assert!(
@@ -255,13 +262,24 @@ fn data(n: usize, d: usize, rng: &mut Rng) -> Vec<Vec<f64>> {
 
 fn balls_spec(top: Topology, n: usize, k: usize, d: usize, seed: u64) -> Spec {
     let mut rng = Rng(seed);
-    let nv = if top == Topology::Closed { (k + 1) * n } else { (k + 1) * (n - 1) + 1 };
+    let nv = if top == Topology::Closed {
+        (k + 1) * n
+    } else {
+        (k + 1) * (n - 1) + 1
+    };
     let mut spec = Spec::new(top, nv, d, &mut rng);
     for (i, q) in data(n, d, &mut rng).into_iter().enumerate() {
-        let r = if i % 4 == 3 { 0.0 } else { rng.range(0.05, 0.8) };
+        let r = if i % 4 == 3 {
+            0.0
+        } else {
+            rng.range(0.05, 0.8)
+        };
         spec.constraints.push((
             vec![((k + 1) * i, 1.0)],
-            ConvexSet::Ball { center: q, radius: r },
+            ConvexSet::Ball {
+                center: q,
+                radius: r,
+            },
         ));
     }
     spec
@@ -308,30 +326,43 @@ fn balls_with_smoothing_terms_and_fixed_vertices() {
     let mut rng = Rng(12);
     spec.fixed.push((3, vec![0.5, 1.5]));
     for v in [5, 7] {
-        spec.smoothing
-            .push((v, rng.range(0.5, 5.0), vec![rng.range(-2.0, 2.0), rng.range(-2.0, 2.0)]));
+        spec.smoothing.push((
+            v,
+            rng.range(0.5, 5.0),
+            vec![rng.range(-2.0, 2.0), rng.range(-2.0, 2.0)],
+        ));
     }
     check(&spec);
 }
 
 #[test]
 fn polygons_and_polytopes() {
-    for (top, d, seed) in [(Topology::Closed, 2, 21), (Topology::Open, 3, 22), (Topology::Open, 1, 23)] {
+    for (top, d, seed) in [
+        (Topology::Closed, 2, 21),
+        (Topology::Open, 3, 22),
+        (Topology::Open, 1, 23),
+    ] {
         let mut rng = Rng(seed);
         let n = 6;
         let k = 2;
-        let nv = if top == Topology::Closed { (k + 1) * n } else { (k + 1) * (n - 1) + 1 };
+        let nv = if top == Topology::Closed {
+            (k + 1) * n
+        } else {
+            (k + 1) * (n - 1) + 1
+        };
         let mut spec = Spec::new(top, nv, d, &mut rng);
         for (i, q) in data(n, d, &mut rng).into_iter().enumerate() {
             // A random polytope containing q: 2d + 1 half-spaces at random distances.
             let hs: Vec<(Vec<f64>, f64)> = (0..2 * d + 1)
                 .map(|_| {
                     let nr: Vec<f64> = (0..d).map(|_| rng.range(-1.0, 1.0)).collect();
-                    let o = nr.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>() + rng.range(0.05, 0.5);
+                    let o =
+                        nr.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>() + rng.range(0.05, 0.5);
                     (nr, o)
                 })
                 .collect();
-            spec.constraints.push((vec![((k + 1) * i, 1.0)], ConvexSet::HalfSpaces(hs)));
+            spec.constraints
+                .push((vec![((k + 1) * i, 1.0)], ConvexSet::HalfSpaces(hs)));
         }
         if top == Topology::Open {
             // Smoothing terms toward the data make the solution unique even where the
@@ -354,12 +385,39 @@ fn wedges_and_balls_on_derivative_stencils() {
     let df2 = spec.df(6);
     let df4 = spec.df(12);
     let df5 = spec.df(15);
-    spec.constraints.push((df1, ConvexSet::Cone { axis: ax(2.0), half_angle: 0.2 }));
-    spec.constraints.push((df4, ConvexSet::Cone { axis: ax(-1.0), half_angle: 0.4 }));
-    spec.constraints.push((df2, ConvexSet::Ball { center: vec![-1.0, 1.0], radius: 0.3 }));
-    spec.constraints.push((df5, ConvexSet::Ball { center: vec![0.0, 0.0], radius: 0.2 }));
+    spec.constraints.push((
+        df1,
+        ConvexSet::Cone {
+            axis: ax(2.0),
+            half_angle: 0.2,
+        },
+    ));
+    spec.constraints.push((
+        df4,
+        ConvexSet::Cone {
+            axis: ax(-1.0),
+            half_angle: 0.4,
+        },
+    ));
+    spec.constraints.push((
+        df2,
+        ConvexSet::Ball {
+            center: vec![-1.0, 1.0],
+            radius: 0.3,
+        },
+    ));
+    spec.constraints.push((
+        df5,
+        ConvexSet::Ball {
+            center: vec![0.0, 0.0],
+            radius: 0.2,
+        },
+    ));
     let sol = check(&spec);
-    assert!(sol.active[spec.constraints.len() - 1], "tension ball should be active");
+    assert!(
+        sol.active[spec.constraints.len() - 1],
+        "tension ball should be active"
+    );
 }
 
 #[test]
@@ -373,10 +431,20 @@ fn clamped_ends_are_derivative_equalities() {
         let hl = spec.knots.h(n as isize - 2);
         let v0: Vec<f64> = (0..d).map(|c| if c == 0 { 1.0 } else { 0.5 }).collect();
         let v1: Vec<f64> = (0..d).map(|c| if c == 1 { -1.0 } else { 0.2 }).collect();
-        spec.constraints.push((vec![(0, -1.0 / h0), (1, 1.0 / h0)], ConvexSet::Point(v0)));
-        spec.constraints.push((vec![(n - 2, -1.0 / hl), (n - 1, 1.0 / hl)], ConvexSet::Point(v1)));
+        spec.constraints
+            .push((vec![(0, -1.0 / h0), (1, 1.0 / h0)], ConvexSet::Point(v0)));
+        spec.constraints.push((
+            vec![(n - 2, -1.0 / hl), (n - 1, 1.0 / hl)],
+            ConvexSet::Point(v1),
+        ));
         let dfm = spec.df(4);
-        spec.constraints.push((dfm, ConvexSet::Ball { center: vec![0.3; d], radius: 0.0 }));
+        spec.constraints.push((
+            dfm,
+            ConvexSet::Ball {
+                center: vec![0.3; d],
+                radius: 0.0,
+            },
+        ));
         let sol = check(&spec);
         assert!(sol.active.iter().rev().take(3).all(|&a| a));
     }
@@ -394,7 +462,8 @@ fn balls_sharing_a_point_give_a_constant_curve() {
             let r = rng.range(0.5, 1.0);
             // Center at distance 0.9 r from the common point.
             let center = vec![1.0 + 0.9 * r * dir.cos(), -2.0 + 0.9 * r * dir.sin()];
-            spec.constraints.push((vec![(v, 1.0)], ConvexSet::Ball { center, radius: r }));
+            spec.constraints
+                .push((vec![(v, 1.0)], ConvexSet::Ball { center, radius: r }));
         }
         let sol = spec.problem().solve(&ConicOptions::default()).unwrap();
         assert!(sol.kkt.total <= 1e-9, "{:?}", sol.kkt);
@@ -425,7 +494,10 @@ fn collinear_data_and_smallest_sizes() {
         let x = i as f64;
         spec.constraints.push((
             vec![(v, 1.0)],
-            ConvexSet::Ball { center: vec![x, 2.0 * x], radius: 0.1 },
+            ConvexSet::Ball {
+                center: vec![x, 2.0 * x],
+                radius: 0.1,
+            },
         ));
     }
     check(&spec);
@@ -434,7 +506,13 @@ fn collinear_data_and_smallest_sizes() {
         let mut spec = Spec::new(Topology::Closed, 3, d, &mut rng);
         for v in 0..3 {
             let c: Vec<f64> = (0..d).map(|_| rng.range(-3.0, 3.0)).collect();
-            spec.constraints.push((vec![(v, 1.0)], ConvexSet::Ball { center: c, radius: 0.3 }));
+            spec.constraints.push((
+                vec![(v, 1.0)],
+                ConvexSet::Ball {
+                    center: c,
+                    radius: 0.3,
+                },
+            ));
         }
         check(&spec);
     }
@@ -457,8 +535,20 @@ fn infeasible_and_malformed_input_are_typed_errors() {
     // A fixed vertex outside its own ball.
     let mut spec = Spec::new(Topology::Closed, 6, 2, &mut rng);
     spec.fixed.push((2, vec![5.0, 5.0]));
-    spec.constraints.push((vec![(0, 1.0)], ConvexSet::Ball { center: vec![0.0, 0.0], radius: 1.0 }));
-    spec.constraints.push((vec![(2, 1.0)], ConvexSet::Ball { center: vec![0.0, 0.0], radius: 1.0 }));
+    spec.constraints.push((
+        vec![(0, 1.0)],
+        ConvexSet::Ball {
+            center: vec![0.0, 0.0],
+            radius: 1.0,
+        },
+    ));
+    spec.constraints.push((
+        vec![(2, 1.0)],
+        ConvexSet::Ball {
+            center: vec![0.0, 0.0],
+            radius: 1.0,
+        },
+    ));
     assert_eq!(
         spec.problem().solve(&ConicOptions::default()).unwrap_err(),
         Error::Infeasible { constraint: 1 }
@@ -466,32 +556,62 @@ fn infeasible_and_malformed_input_are_typed_errors() {
     // Malformed constraints.
     let h = Hessian::new(&knots(Topology::Closed, 6, &mut rng));
     let mut p = ConicProblem::new(&h, 2).unwrap();
-    let ball = |r: f64| ConvexSet::Ball { center: vec![0.0, 0.0], radius: r };
-    assert!(matches!(p.add_constraint(&[(9, 1.0)], ball(1.0)), Err(Error::VertexOutOfRange { .. })));
-    assert!(matches!(p.add_constraint(&[(0, 1.0)], ball(-1.0)), Err(Error::InvalidConstraint { .. })));
+    let ball = |r: f64| ConvexSet::Ball {
+        center: vec![0.0, 0.0],
+        radius: r,
+    };
+    assert!(matches!(
+        p.add_constraint(&[(9, 1.0)], ball(1.0)),
+        Err(Error::VertexOutOfRange { .. })
+    ));
+    assert!(matches!(
+        p.add_constraint(&[(0, 1.0)], ball(-1.0)),
+        Err(Error::InvalidConstraint { .. })
+    ));
     assert!(matches!(
         p.add_constraint(&[(0, 1.0), (3, 1.0)], ball(1.0)),
         Err(Error::InvalidConstraint { .. })
     ));
     assert!(matches!(
-        p.add_constraint(&[(0, 1.0)], ConvexSet::Ball { center: vec![0.0], radius: 1.0 }),
+        p.add_constraint(
+            &[(0, 1.0)],
+            ConvexSet::Ball {
+                center: vec![0.0],
+                radius: 1.0
+            }
+        ),
         Err(Error::WrongDimension { .. })
     ));
     assert!(matches!(
-        p.add_constraint(&[(0, 1.0)], ConvexSet::Cone { axis: vec![2.0, 0.0], half_angle: 0.1 }),
+        p.add_constraint(
+            &[(0, 1.0)],
+            ConvexSet::Cone {
+                axis: vec![2.0, 0.0],
+                half_angle: 0.1
+            }
+        ),
         Err(Error::InvalidConstraint { .. })
     ));
     assert!(matches!(
-        p.add_constraint(&[(0, 1.0)], ConvexSet::HalfSpaces(vec![(vec![0.0, 0.0], 1.0)])),
+        p.add_constraint(
+            &[(0, 1.0)],
+            ConvexSet::HalfSpaces(vec![(vec![0.0, 0.0], 1.0)])
+        ),
         Err(Error::InvalidConstraint { .. })
     ));
-    assert!(matches!(p.fix(0, &[f64::NAN, 0.0]), Err(Error::NonFiniteInput { .. })));
+    assert!(matches!(
+        p.fix(0, &[f64::NAN, 0.0]),
+        Err(Error::NonFiniteInput { .. })
+    ));
     let bad_warm = ConicOptions {
         warm_start: Some(Points::zeros(3, 2)),
         ..ConicOptions::default()
     };
     p.add_constraint(&[(0, 1.0)], ball(1.0)).unwrap();
-    assert!(matches!(p.solve(&bad_warm), Err(Error::WrongDimension { .. })));
+    assert!(matches!(
+        p.solve(&bad_warm),
+        Err(Error::WrongDimension { .. })
+    ));
 }
 
 #[test]

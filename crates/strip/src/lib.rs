@@ -1,1 +1,90 @@
-//! curvefit: strip (under construction).
+//! Best interpolation in a strip (Dontchev & Kolmanovsky, seed `002`; curvefit's `math.md` §4).
+//!
+//! Minimize ∫ f''² over f ∈ W^{2,2}\[t_1, t_n\] subject to f(t_i) = y_i and
+//! e(t) ≤ f(t) ≤ d(t). For bounds that are linear (or cubic) in each interval the answer is an
+//! exact C² cubic spline with knots t_i plus at most two extra knots per interval (Theorem 2.1):
+//! a touching point, a subarc, or a touching pair.
+//!
+//! * **Per interval** (problem (7)/(8)): for Hermite data (y_i, z_i, y_{i+1}, z_{i+1}) every
+//!   candidate shape is built exactly — the touching point from a cubic equation (`roots`), a
+//!   subarc from two linear equations, a touching pair from the Sylvester resultant of its two
+//!   polynomial equations (real roots isolated by a derivative cascade, polished by Newton) —
+//!   its feasibility is decided from the exact extrema of f − e and d − f on every cubic piece,
+//!   and the feasible candidate of least energy wins. [`Pruning`] skips candidates (the seed's §3
+//!   rules, or an optimality certificate) without changing the answer.
+//! * **Outer problem** (5): Φ(z) = Σ φ_i(z_i, z_{i+1}) is convex with
+//!   ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)). [`Method::Newton`] (default) uses the banded Hessian
+//!   (per-interval Hessians by implicit differentiation of the contact equations) with a
+//!   backtracking line search: O(n) per iteration. [`Method::Bfgs`] is the seed's argmin BFGS.
+//!   Starting point: the natural (or clamped, with [`Problem::end_slopes`]) cubic spline.
+//! * **§4**: a [`Bound::Polyline`] (or [`Bound::from_fn`], the piecewise-linear approximation of
+//!   a continuous function) adds its vertices as grid points whose values s_j are unknowns
+//!   (problem (10)), kept ε inside the strip; the Newton step is then projected on those boxes.
+//! * **Remark 4.2**: data on a bound are moved inside by ε (reported in
+//!   [`Solution::shifted_data`]); the solution converges as ε → 0.
+//!
+//! **Touching pairs.** With w = f − e (p, q its value and slope at t_i) and G = d − e, the pair
+//! (τ₁ on e, τ₂ on d) solves two polynomial equations: f'' continuous at τ₁ is a cubic in
+//! L₂ = τ₂ − τ₁ and f'' continuous at τ₂ a quadratic in L₂, both with coefficients polynomial in
+//! τ₂. Their 5×5 Sylvester resultant (Laplace expansion over polynomials) is one polynomial in τ₂;
+//! its real roots in the (normalized) interval are isolated by a derivative cascade (the roots of
+//! p' split the interval into monotone pieces, bisected where p changes sign; near-double roots are
+//! kept), each root gives L₂ from the quadratic (and, as extra starting points, the cubic), and
+//! Newton's method on the two original equations polishes every start. Spurious starts are
+//! discarded by ordering, convergence and the exact feasibility test.
+//!
+//! **Optimality certificate.** A feasible candidate whose f''' jumps up at every lower contact
+//! and down at every upper contact is *the* minimizer of its interval: for any feasible g,
+//! ∫g''² − ∫f''² = ∫(g − f)''² + 2 Σ jump·(g − f)(τ) ≥ 0. Every interval of a [`Solution`] is
+//! checked; [`Solution::uncertified`] lists those where no candidate carried it.
+//!
+//! **Limitations.** For cubic bounds (Remark 3.2) only Theorem 2.1's shapes are enumerated; a
+//! solution needing more than two extra knots in an interval shows up as
+//! [`Error::NoFeasibleCandidate`] or in [`Solution::uncertified`]. Polyline vertices where f
+//! touches a bound are held ε·width inside (problem (10)); the result is the ε-problem's optimum
+//! (the verification suite measures the gap to Clarabel's lower bound: ~1e-7 relative for
+//! ε = 1e-7).
+//!
+//! ```
+//! use strip::{solve, Bound, Options, Problem};
+//! // Five points; a lower bound y ≥ -0.05 that the natural spline would cross.
+//! let t = vec![0.0, 1.0, 2.0, 3.0, 4.0];
+//! let y = vec![0.0, 1.0, 0.0, 0.0, 1.0];
+//! let lower = Bound::Pieces(vec![[-0.05, 0.0, 0.0, 0.0]; 4]);
+//! let p = Problem { t, y, lower, upper: Bound::None, end_slopes: [None, None] };
+//! let s = solve(&p, &Options::default()).unwrap();
+//! assert!(!s.extra_knots.is_empty());
+//! for k in 0..=400 {
+//!     let x = 4.0 * k as f64 / 400.0;
+//!     assert!(s.eval(x) >= -0.05 - 1e-9);
+//! }
+//! assert!((s.eval(1.0) - 1.0).abs() < 1e-12);
+//! ```
+
+// Index loops mirror the formulas (several arrays indexed together); iterator chains would
+// obscure them.
+#![allow(clippy::needless_range_loop)]
+
+mod banded;
+mod bfgs;
+mod cell;
+mod error;
+pub mod examples;
+mod poly;
+mod qp;
+mod solve;
+
+pub use cell::{Pruning, Shape, Side};
+pub use error::Error;
+pub use qp::{lower_bound_qp, LowerBoundQp};
+pub use solve::{
+    solve, Bound, ExtraKnot, KnotKind, Method, Options, Problem, Solution, CONTACT_TOL,
+    DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS, FEASIBILITY_TOL,
+    MAX_MAGNITUDE,
+};
+
+#[doc(hidden)]
+pub mod internals {
+    //! Per-interval internals exposed for tests and benchmarks (not a stable API).
+    pub use crate::cell::internals::*;
+}

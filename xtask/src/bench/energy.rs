@@ -60,7 +60,9 @@ fn system(top: Topology, n: usize, d: usize, blocks: bool) -> anyhow::Result<Sys
 fn rhs(n: usize, d: usize) -> anyhow::Result<Points> {
     Ok(Points::new(
         d,
-        (0..n * d).map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0).collect(),
+        (0..n * d)
+            .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
+            .collect(),
     )?)
 }
 
@@ -95,7 +97,9 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         }
     }
     println!();
-    println!("Dense contrast (d = 1, closed): nalgebra LU of the same K vs the cyclic banded solve.");
+    println!(
+        "Dense contrast (d = 1, closed): nalgebra LU of the same K vs the cyclic banded solve."
+    );
     println!();
     println!("| N | dense LU | banded | ratio |");
     println!("|---:|---:|---:|---:|");
@@ -127,7 +131,11 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
                 .expect("sizes match")
         });
         // Same answer?
-        let xd = k.clone().lu().solve(&bv).unwrap_or_else(|| DVector::zeros(n));
+        let xd = k
+            .clone()
+            .lu()
+            .solve(&bv)
+            .unwrap_or_else(|| DVector::zeros(n));
         let xb = s.factor()?.solve(&b)?;
         let diff = (DVector::from_column_slice(xb.coords()) - &xd).norm() / xd.norm();
         println!(
@@ -156,7 +164,9 @@ fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
     let mut t = vec![0.0];
     for i in 0..n {
         let (a, b) = (q[i], q[(i + 1) % n]);
-        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt().sqrt();
+        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2))
+            .sqrt()
+            .sqrt();
         let t0 = *t.last().unwrap_or(&0.0);
         for j in 1..=k + 1 {
             t.push(t0 + span * j as f64 / (k + 1) as f64);
@@ -186,7 +196,11 @@ fn conic(opts: Opts) -> anyhow::Result<()> {
     println!();
     println!("| n | N | conic time | iterations | KKT | Clarabel time | Clarabel objective | rel. diff | ratio |");
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let sizes: &[usize] = if opts.quick { &[1_000] } else { &[1_000, 10_000, 100_000] };
+    let sizes: &[usize] = if opts.quick {
+        &[1_000]
+    } else {
+        &[1_000, 10_000, 100_000]
+    };
     for &n in sizes {
         let p = balls_problem(n)?;
         let reps = if n >= 100_000 { 3 } else { 7 };
@@ -206,7 +220,8 @@ fn conic(opts: Opts) -> anyhow::Result<()> {
             sol.iterations,
             sol.kkt.total,
             tc.map(fmt_ms).unwrap_or_else(|| "—".into()),
-            obj.map(|o| format!("{o:.10e}")).unwrap_or_else(|| "—".into()),
+            obj.map(|o| format!("{o:.10e}"))
+                .unwrap_or_else(|| "—".into()),
             obj.map(|o| format!("{:.1e}", (o - sol.objective).abs() / sol.objective.abs()))
                 .unwrap_or_else(|| "—".into()),
             tc.map(|c| format!("{:.0}×", c.as_secs_f64() / t.as_secs_f64()))
@@ -236,7 +251,9 @@ fn clarabel_balls(n: usize) -> anyhow::Result<(std::time::Duration, f64)> {
     let mut t = vec![0.0];
     for i in 0..n {
         let (a, b) = (q[i], q[(i + 1) % n]);
-        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt().sqrt();
+        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2))
+            .sqrt()
+            .sqrt();
         let t0 = *t.last().unwrap_or(&0.0);
         for j in 1..=k + 1 {
             t.push(t0 + span * j as f64 / (k + 1) as f64);

@@ -20,7 +20,86 @@ pub struct Example {
 }
 
 /// The built-in examples (the JSON files are in `crates/curvefit/examples/data/`).
-pub const EXAMPLES: &[Example] = &[];
+pub const EXAMPLES: &[Example] = &[
+    Example {
+        name: "refine-interpolate-closed",
+        command: "refine",
+        title: "interpolatory refinement, centripetal knots, one 3-level step then two further levels (Kersey Figs. 1.1, 3.1)",
+        problem: include_str!("../../examples/data/refine-interpolate-closed.json"),
+    },
+    Example {
+        name: "refine-balls-closed",
+        command: "refine",
+        title: "near-interpolation to balls of random radii; active balls in red (Kersey Fig. 3.2)",
+        problem: include_str!("../../examples/data/refine-balls-closed.json"),
+    },
+    Example {
+        name: "refine-star-balls",
+        command: "refine",
+        title: "the star with tolerance 0.35 at every point (Kersey Fig. 3.3)",
+        problem: include_str!("../../examples/data/refine-star-balls.json"),
+    },
+    Example {
+        name: "refine-balls-open",
+        command: "refine",
+        title: "open curve, interpolated ends, two loosened tolerances (Kersey Fig. 3.9)",
+        problem: include_str!("../../examples/data/refine-balls-open.json"),
+    },
+    Example {
+        name: "refine-halfspaces-closed",
+        command: "refine",
+        title: "each point confined to a square or triangle: corner, edge and interior contacts (Kersey Fig. 3.4)",
+        problem: include_str!("../../examples/data/refine-halfspaces-closed.json"),
+    },
+    Example {
+        name: "refine-tangent-wedges",
+        command: "refine",
+        title: "direction-only tangent wedges tilted by 0.6 rad, half-angle 0.1 (Kersey Figs. 3.5b, 3.7)",
+        problem: include_str!("../../examples/data/refine-tangent-wedges.json"),
+    },
+    Example {
+        name: "refine-clamped-open",
+        command: "refine",
+        title: "open curve with clamped end derivatives (Bessel end quadratics; Kersey §3.6, Fig. 3.9)",
+        problem: include_str!("../../examples/data/refine-clamped-open.json"),
+    },
+    Example {
+        name: "refine-smoothing-open",
+        command: "refine",
+        title: "smoothing of noisy samples, open curve with natural ends (Kersey (3.6), §3.6)",
+        problem: include_str!("../../examples/data/refine-smoothing-open.json"),
+    },
+    Example {
+        name: "strip-example-5-1",
+        command: "strip",
+        title: "16 points in a strip: touching points, a subarc and a touching pair (Dontchev–Kolmanovsky Fig. 2)",
+        problem: include_str!("../../examples/data/strip-example-5-1.json"),
+    },
+    Example {
+        name: "strip-example-5-2",
+        command: "strip",
+        title: "bounds jumping at data sites, a cubic lower piece, end slopes −2, −2 (Fig. 4)",
+        problem: include_str!("../../examples/data/strip-example-5-2.json"),
+    },
+    Example {
+        name: "strip-example-5-3",
+        command: "strip",
+        title: "two points, end slopes −2 and 2, a winding polyline channel (§4, Remark 4.2, Fig. 5)",
+        problem: include_str!("../../examples/data/strip-example-5-3.json"),
+    },
+    Example {
+        name: "natural-example",
+        command: "natural",
+        title: "natural cubic subdivision: energies decrease to the exact limit energy (Warren–Weimer §6.2)",
+        problem: include_str!("../../examples/data/natural-example.json"),
+    },
+    Example {
+        name: "surface-torus",
+        command: "surface",
+        title: "4-point binary tensor-product scheme on a closed 8 × 5 grid, two levels (Khan et al. §4)",
+        problem: include_str!("../../examples/data/surface-torus.json"),
+    },
+];
 
 /// The summary of one solved example.
 pub struct Summary {

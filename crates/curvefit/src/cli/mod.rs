@@ -5,8 +5,12 @@
 //! one line on stderr naming the field (and index), and no output file.
 
 pub mod demo;
+pub mod natural;
 pub mod refine;
 pub mod refine_types;
+pub mod scheme;
+pub mod strip;
+pub mod surface;
 
 use std::ffi::OsString;
 use std::fmt::Display;
@@ -57,6 +61,69 @@ pub trait Command {
     fn solve(problem: &Self::Problem) -> Result<Self::Solution, InputError>;
     /// The picture for `--svg`, or `None`.
     fn svg(problem: &Self::Problem, solution: &Self::Solution) -> Option<String>;
+    /// A mesh for `--obj` (Wavefront OBJ text), or `None` when the command has none.
+    fn obj(
+        _problem: &Self::Problem,
+        _solution: &Self::Solution,
+    ) -> Option<Result<String, InputError>> {
+        None
+    }
+}
+
+/// `curvefit scheme`: flags in, JSON out (written atomically to `-o` or standard output).
+fn run_scheme_cmd(
+    a: &SchemeArgs,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> Result<(), Failure> {
+    let t0 = Instant::now();
+    let polygon = match &a.apply {
+        Some(p) => {
+            let file = std::fs::File::open(p).map_err(|e| {
+                InputError::new("--apply", format!("cannot open {}: {e}", p.display()))
+            })?;
+            Some(read_limited(&mut &file, &p.display().to_string())?)
+        }
+        None => None,
+    };
+    let t1 = Instant::now();
+    let value = scheme::run_scheme(
+        a.points,
+        a.arity,
+        a.surface,
+        polygon.as_deref().map(|t| (t, a.levels)),
+    )?;
+    let t2 = Instant::now();
+    let json = value.to_string() + "\n";
+    match &a.output {
+        Some(path) => write_files(&[(path.clone(), json.into_bytes())])?,
+        None => stdout
+            .write_all(json.as_bytes())
+            .map_err(|e| InputError::new("-o", format!("cannot write to standard output: {e}")))?,
+    }
+    if a.timings {
+        let line = serde_json::json!({
+            "parse_s": (t1 - t0).as_secs_f64(),
+            "solve_s": (t2 - t1).as_secs_f64(),
+            "write_s": t2.elapsed().as_secs_f64(),
+        });
+        let _ = writeln!(stderr, "{line}");
+    }
+    Ok(())
+}
+
+/// The message on one line: control characters (e.g. a newline inside an unknown field's name)
+/// are escaped, so the error is always exactly one line on stderr.
+fn one_line(s: &str) -> String {
+    s.chars()
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect()
 }
 
 /// Exit code for bad input (and any other refusal): nothing was written.
@@ -93,6 +160,42 @@ pub struct JsonArgs {
     pub timings: bool,
 }
 
+/// Options of `curvefit scheme`.
+#[derive(Args, Debug, Clone)]
+pub struct SchemeArgs {
+    /// Number of points P = 2m + 2 of the rule (even, ≥ 2).
+    #[arg(long, value_name = "P")]
+    pub points: usize,
+    /// Arity N ≥ 2 (binary 2, ternary 3, …).
+    #[arg(long, value_name = "N")]
+    pub arity: usize,
+    /// Also print the tensor-product surface rules.
+    #[arg(long)]
+    pub surface: bool,
+    /// Apply the scheme to this polygon ({"points": [[…], …], "closed": bool}).
+    #[arg(long, value_name = "POLYGON.json")]
+    pub apply: Option<PathBuf>,
+    /// Levels of refinement for `--apply`.
+    #[arg(long, default_value_t = 1)]
+    pub levels: usize,
+    /// Write the JSON result here (default: standard output).
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Print one JSON line {"parse_s", "solve_s", "write_s"} on standard error.
+    #[arg(long)]
+    pub timings: bool,
+}
+
+/// Options of `curvefit surface`.
+#[derive(Args, Debug, Clone)]
+pub struct SurfaceArgs {
+    #[command(flatten)]
+    json: JsonArgs,
+    /// Write the refined quad mesh as Wavefront OBJ.
+    #[arg(long, value_name = "FILE")]
+    obj: Option<PathBuf>,
+}
+
 #[derive(Subcommand, Debug)]
 enum Cmd {
     /// Kersey variational refinement (interpolation, balls, smoothing, half-spaces, tangents).
@@ -101,6 +204,10 @@ enum Cmd {
     Strip(JsonArgs),
     /// Warren–Weimer natural cubic subdivision on [0, L].
     Natural(JsonArgs),
+    /// The (2m+2)-point n-ary interpolating rules (exact rationals), optionally applied to a polygon.
+    Scheme(SchemeArgs),
+    /// The tensor-product n-ary scheme on a quad grid; `--obj` writes the refined quad mesh.
+    Surface(SurfaceArgs),
     /// The main job on built-in data: solves the seeds' examples, writes SVGs, index.html and a summary.
     Demo {
         /// Output directory.
@@ -148,11 +255,21 @@ where
             if code == 0 {
                 let _ = stdout.write_all(text.as_bytes());
             } else {
-                let first = text
+                // One line: clap's message up to its usage section, whitespace collapsed.
+                let msg: Vec<&str> = text
                     .lines()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("invalid arguments");
-                let _ = writeln!(stderr, "{first}");
+                    .take_while(|l| {
+                        !l.starts_with("Usage:") && !l.starts_with("For more information")
+                    })
+                    .map(str::trim)
+                    .filter(|l| !l.is_empty())
+                    .collect();
+                let line = if msg.is_empty() {
+                    "error: invalid arguments".to_string()
+                } else {
+                    msg.join(" ")
+                };
+                let _ = writeln!(stderr, "{}", one_line(&line));
             }
             return code;
         }
@@ -163,7 +280,7 @@ where
     match result {
         Ok(Ok(())) => 0,
         Ok(Err(f)) => {
-            let _ = writeln!(stderr, "error: {}", f.error);
+            let _ = writeln!(stderr, "error: {}", one_line(&f.error.to_string()));
             f.code
         }
         Err(_) => {
@@ -184,8 +301,17 @@ fn dispatch(
 ) -> Result<(), Failure> {
     match cli.command {
         Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
-        Cmd::Strip(a) => run_json::<NotYet>(&a, "strip", stdin, stdout, stderr),
-        Cmd::Natural(a) => run_json::<NotYet>(&a, "natural", stdin, stdout, stderr),
+        Cmd::Strip(a) => run_json::<strip::Strip>(&a, "strip", stdin, stdout, stderr),
+        Cmd::Natural(a) => run_json::<natural::NaturalCmd>(&a, "natural", stdin, stdout, stderr),
+        Cmd::Surface(a) => run_json_with::<surface::SurfaceCmd>(
+            &a.json,
+            "surface",
+            a.obj.as_deref(),
+            stdin,
+            stdout,
+            stderr,
+        ),
+        Cmd::Scheme(a) => run_scheme_cmd(&a, stdout, stderr),
         Cmd::Demo { out } => Ok(demo::run(&out, stdout, solve_example)?),
     }
 }
@@ -201,27 +327,38 @@ fn solve_example(ex: &demo::Example) -> Result<demo::Summary, InputError> {
                 s.kkt_residual
             )
         }),
+        "strip" => demo::solve_with::<strip::Strip>(ex.problem, |s| {
+            format!(
+                "‖f''‖ = {:.6}, ∫f''² = {:.6}, {} extra knots, {} iterations, |∇Φ| = {:.1e}",
+                s.norm,
+                s.energy,
+                s.extra_knots.len(),
+                s.iterations,
+                s.gradient_norm
+            )
+        }),
+        "natural" => demo::solve_with::<natural::NaturalCmd>(ex.problem, |s| {
+            let last = s.levels.last().map_or(f64::NAN, |l| l.energy);
+            format!(
+                "level {} energy {:.6} → exact limit {:.6}",
+                s.levels.len().saturating_sub(1),
+                last,
+                s.limit_energy
+            )
+        }),
+        "surface" => demo::solve_with::<surface::SurfaceCmd>(ex.problem, |s| {
+            format!(
+                "{} × {} grid after {} levels, {} quads",
+                s.rows,
+                s.cols,
+                s.levels,
+                s.quads.len()
+            )
+        }),
         other => Err(InputError::new(
             "command",
             format!("unknown example command {other}"),
         )),
-    }
-}
-
-/// Placeholder for subcommands whose solver has not been wired in yet: refuses every problem.
-enum NotYet {}
-
-impl Command for NotYet {
-    type Problem = serde_json::Value;
-    type Solution = serde_json::Value;
-    fn solve(_: &Self::Problem) -> Result<Self::Solution, InputError> {
-        Err(InputError::new(
-            "",
-            "this subcommand is not available in this build yet",
-        ))
-    }
-    fn svg(_: &Self::Problem, _: &Self::Solution) -> Option<String> {
-        None
     }
 }
 
@@ -230,6 +367,18 @@ impl Command for NotYet {
 pub fn run_json<C: Command>(
     args: &JsonArgs,
     name: &str,
+    stdin: &mut dyn Read,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> Result<(), Failure> {
+    run_json_with::<C>(args, name, None, stdin, stdout, stderr)
+}
+
+/// [`run_json`] with an optional OBJ mesh output (from [`Command::obj`]).
+pub fn run_json_with<C: Command>(
+    args: &JsonArgs,
+    name: &str,
+    obj: Option<&Path>,
     stdin: &mut dyn Read,
     stdout: &mut dyn Write,
     stderr: &mut dyn Write,
@@ -246,6 +395,11 @@ pub fn run_json<C: Command>(
         None => None,
     };
     let mut outputs: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    if let Some(path) = obj {
+        let text = C::obj(&problem, &solution)
+            .ok_or_else(|| InputError::new("--obj", format!("`{name}` has no mesh output")))??;
+        outputs.push((path.to_path_buf(), text.into_bytes()));
+    }
     if let (Some(path), Some(svg)) = (&args.svg, svg) {
         outputs.push((path.clone(), svg.into_bytes()));
     } else if let Some(path) = &args.svg {

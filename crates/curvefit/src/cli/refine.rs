@@ -7,6 +7,10 @@ use super::InputError;
 /// is refused before any allocation (it would need gigabytes of memory and output).
 pub const MAX_REFINED_COORDS: usize = 50_000_000;
 
+/// Largest `knot_iterations` accepted: Algorithm 4.1's knot updates settle within a few
+/// iterations (the seed uses "a few"); more is almost certainly a mistake and would only burn time.
+pub const MAX_KNOT_ITERATIONS: usize = 100;
+
 /// Number of vertices after a `k`-level split of `n` data points (open or closed), or `None` on
 /// overflow.
 pub fn split_count(n: usize, k: usize, closed: bool) -> Option<usize> {
@@ -134,6 +138,15 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     if p.k == 0 {
         return Err(InputError::new("k", "must be at least 1"));
     }
+    if p.knot_iterations > MAX_KNOT_ITERATIONS {
+        return Err(InputError::new(
+            "knot_iterations",
+            format!(
+                "must be at most {MAX_KNOT_ITERATIONS}, got {}",
+                p.knot_iterations
+            ),
+        ));
+    }
     if p.level_k == 0 {
         return Err(InputError::new("level_k", "must be at least 1"));
     }
@@ -231,6 +244,364 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     Ok(d)
 }
 
+/// Builds the library problem from the (validated) JSON problem.
+///
+/// # Errors
+/// An [`InputError`] for points the library rejects.
+pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
+    use divdiff::{DerivativeRule, Parametrization, Points, Topology};
+    let points = Points::from_rows(&p.points).map_err(|e| InputError::new("", e))?;
+    let hs = |h: &HalfSpaceSpec| refine::HalfSpace {
+        normal: h.normal.clone(),
+        offset: h.offset,
+    };
+    let mut prob = refine::Problem::new(points)
+        .with_topology(if p.closed {
+            Topology::Closed
+        } else {
+            Topology::Open
+        })
+        .with_parametrization(match p.parametrization {
+            ParamSpec::Uniform => Parametrization::Uniform,
+            ParamSpec::Centripetal => Parametrization::Centripetal,
+            ParamSpec::Chordal => Parametrization::Chordal,
+            ParamSpec::Exponent(e) => Parametrization::Exponent(e),
+        })
+        .with_k(p.k)
+        .with_knot_iterations(p.knot_iterations)
+        .with_levels(p.levels, p.level_k)
+        .with_constraint(match &p.constraint {
+            ConstraintSpec::Interpolate => refine::Constraint::Interpolate,
+            ConstraintSpec::Balls { radii } => refine::Constraint::Balls(radii.clone()),
+            ConstraintSpec::Smoothing { weights } => refine::Constraint::Smoothing(weights.clone()),
+            ConstraintSpec::Halfspaces { sets } => refine::Constraint::HalfSpaces(
+                sets.iter()
+                    .map(|set| set.iter().map(hs).collect())
+                    .collect(),
+            ),
+        })
+        .with_derivative(match p.derivative {
+            DerivativeSpec::Average => DerivativeRule::Average,
+            DerivativeSpec::Bessel => DerivativeRule::Bessel,
+        })
+        .with_boundary(match &p.boundary {
+            BoundarySpec::Natural => refine::Boundary::Natural,
+            BoundarySpec::Clamped { start, end } => refine::Boundary::Clamped {
+                start: start.clone(),
+                end: end.clone(),
+            },
+            BoundarySpec::NearClamped { start, end, radius } => refine::Boundary::NearClamped {
+                start: start.clone(),
+                end: end.clone(),
+                radius: *radius,
+            },
+        })
+        .with_solver(match p.solver {
+            SolverSpec::Exact => refine::Solver::Exact,
+            SolverSpec::Paper => refine::Solver::Paper,
+        });
+    if let Some(t) = &p.knots {
+        prob = prob.with_knots(t.clone());
+    }
+    if let Some(tangents) = &p.tangents {
+        prob = prob.with_tangents(
+            tangents
+                .iter()
+                .map(|t| {
+                    t.as_ref().map(|t| match t {
+                        TangentSpec::Ball { center, radius } => refine::Tangent::Ball {
+                            center: center.clone(),
+                            radius: *radius,
+                        },
+                        TangentSpec::Wedge {
+                            direction,
+                            half_angle,
+                        } => refine::Tangent::Wedge {
+                            direction: direction.clone(),
+                            half_angle: *half_angle,
+                        },
+                        TangentSpec::Tension { radius } => {
+                            refine::Tangent::Tension { radius: *radius }
+                        }
+                        TangentSpec::Halfspaces { halfspaces } => {
+                            refine::Tangent::HalfSpaces(halfspaces.iter().map(hs).collect())
+                        }
+                    })
+                })
+                .collect(),
+        );
+    }
+    Ok(prob)
+}
+
+/// Converts the library's refinement into the JSON result.
+pub fn to_result(r: &refine::Refinement) -> RefineResult {
+    RefineResult {
+        points: r.points.to_rows(),
+        knots: r.knots.values().to_vec(),
+        data_vertex: r.data_vertex.clone(),
+        energy: r.energy,
+        multipliers: serde_json::json!(r.multipliers),
+        active: r.active.clone(),
+        kkt_residual: r.kkt_residual,
+        iterations: serde_json::json!({
+            "solves": r.iterations.solves,
+            "knot_updates": r.iterations.knot_updates,
+            "solver": r.iterations.solver,
+        }),
+    }
+}
+
+/// The `refine` subcommand.
+pub enum RefineCmd {}
+
+impl super::Command for RefineCmd {
+    type Problem = RefineProblem;
+    type Solution = RefineResult;
+
+    fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
+        validate(problem)?;
+        let prob = to_library(problem)?;
+        let r = prob.solve().map_err(|e| InputError::new("", e))?;
+        Ok(to_result(&r))
+    }
+
+    fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
+        Some(picture(problem, solution))
+    }
+}
+
+/// Draws each tangent constraint at its data vertex: the derivative of the refined curve there
+/// (central difference of the neighbours) as a solid arrow, the wedge's bounding rays dashed and
+/// the ball of a ball/tension constraint around the vertex, all scaled to a common length.
+fn draw_tangents(
+    fig: &mut crate::plot::Figure,
+    tangents: &[Option<TangentSpec>],
+    r: &RefineResult,
+) {
+    use crate::plot::{palette, Style};
+    let n = r.points.len();
+    if n < 3 {
+        return;
+    }
+    let closed_len = r.knots.len() > n;
+    let span: f64 =
+        r.knots.last().copied().unwrap_or(1.0) - r.knots.first().copied().unwrap_or(0.0);
+    let extent = r
+        .points
+        .iter()
+        .flat_map(|v| v.iter().take(2))
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(1e-300);
+    let len = 0.12 * extent;
+    for (i, t) in tangents.iter().enumerate() {
+        let (Some(t), Some(&j)) = (t, r.data_vertex.get(i)) else {
+            continue;
+        };
+        let (a, b) = if closed_len {
+            ((j + n - 1) % n, (j + 1) % n)
+        } else {
+            (j.saturating_sub(1), (j + 1).min(n - 1))
+        };
+        let dt = if b > a {
+            r.knots[b] - r.knots[a]
+        } else {
+            r.knots[b] + span - r.knots[a]
+        };
+        // Knots are strictly increasing, so dt > 0; guard anyway (a picture never fails).
+        let dt = if dt > 0.0 { dt } else { 1.0 };
+        let df = [
+            (r.points[b][0] - r.points[a][0]) / dt,
+            (r.points[b][1] - r.points[a][1]) / dt,
+        ];
+        let p0 = [r.points[j][0], r.points[j][1]];
+        let norm = (df[0] * df[0] + df[1] * df[1]).sqrt().max(1e-300);
+        let arrow = [p0[0] + len * df[0] / norm, p0[1] + len * df[1] / norm];
+        fig.segment(p0, arrow, Style::stroke(palette::SECOND, 2.0));
+        if let TangentSpec::Wedge {
+            direction,
+            half_angle,
+        } = t
+        {
+            let u = (direction[0].hypot(direction[1])).max(1e-300);
+            for s in [-1.0, 1.0] {
+                let (c, sn) = ((s * half_angle).cos(), (s * half_angle).sin());
+                let v = [
+                    (c * direction[0] - sn * direction[1]) / u,
+                    (sn * direction[0] + c * direction[1]) / u,
+                ];
+                fig.segment(
+                    p0,
+                    [p0[0] + 1.4 * len * v[0], p0[1] + 1.4 * len * v[1]],
+                    Style::stroke(palette::THIRD, 1.0).dashed("3 2"),
+                );
+            }
+        }
+    }
+    fig.legend("Df at vertex", Style::stroke(palette::SECOND, 2.0));
+}
+
+/// Clips a big box by the half-planes `n · x ≤ c` (Sutherland–Hodgman); the polygon of a 2-D set.
+pub fn halfplane_polygon(
+    halfspaces: &[HalfSpaceSpec],
+    around: [f64; 2],
+    extent: f64,
+) -> Vec<[f64; 2]> {
+    let (x, y, e) = (around[0], around[1], extent);
+    let mut poly = vec![
+        [x - e, y - e],
+        [x + e, y - e],
+        [x + e, y + e],
+        [x - e, y + e],
+    ];
+    for h in halfspaces {
+        if h.normal.len() < 2 {
+            continue;
+        }
+        let f = |p: &[f64; 2]| h.normal[0] * p[0] + h.normal[1] * p[1] - h.offset;
+        let mut out = Vec::with_capacity(poly.len() + 1);
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            let (fa, fb) = (f(&a), f(&b));
+            if fa <= 0.0 {
+                out.push(a);
+            }
+            if (fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0) {
+                let s = fa / (fa - fb);
+                out.push([a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]);
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            break;
+        }
+    }
+    poly
+}
+
+/// The picture of a refinement: data points, their tolerance regions (active ones highlighted),
+/// the refined curve and the attached data vertices; curves in R^d show the first two coordinates,
+/// curves in R^1 are drawn as graphs over their knots.
+pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
+    use crate::plot::{palette, Figure, Marker, Style};
+    let d = p.points.first().map_or(0, Vec::len);
+    let xy = |v: &[f64], t: f64| -> [f64; 2] {
+        if d >= 2 {
+            [v[0], v[1]]
+        } else {
+            [t, v.first().copied().unwrap_or(0.0)]
+        }
+    };
+    let kind = match &p.constraint {
+        ConstraintSpec::Interpolate => "interpolation",
+        ConstraintSpec::Balls { .. } => "balls",
+        ConstraintSpec::Smoothing { .. } => "smoothing",
+        ConstraintSpec::Halfspaces { .. } => "convex polygons",
+    };
+    let mut fig = Figure::new(&format!(
+        "Refinement: {kind} ({}, {} → {} vertices)",
+        if p.closed { "closed" } else { "open" },
+        p.points.len(),
+        r.points.len()
+    ));
+    fig.equal_aspect(d >= 2);
+    let data_t: Vec<f64> = r
+        .data_vertex
+        .iter()
+        .map(|&j| r.knots.get(j).copied().unwrap_or(0.0))
+        .collect();
+    let active_style = Style::stroke(palette::ACTIVE, 1.3).with_fill(palette::ACTIVE, 0.08);
+    let inactive_style = Style::stroke(palette::REGION, 1.0).with_fill(palette::REGION, 0.08);
+    match &p.constraint {
+        ConstraintSpec::Balls { radii } if d >= 2 => {
+            for (i, q) in p.points.iter().enumerate() {
+                let st = if r.active.get(i).copied().unwrap_or(false) {
+                    &active_style
+                } else {
+                    &inactive_style
+                };
+                fig.circle(xy(q, 0.0), radii[i], st.clone());
+            }
+        }
+        ConstraintSpec::Halfspaces { sets } if d == 2 => {
+            // Unbounded sets are clipped to a box around the data (a quarter of its size beyond it).
+            let (lo, hi) = p.points.iter().fold(
+                ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+                |(lo, hi), q| {
+                    (
+                        [lo[0].min(q[0]), lo[1].min(q[1])],
+                        [hi[0].max(q[0]), hi[1].max(q[1])],
+                    )
+                },
+            );
+            let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300);
+            let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+            for (i, (_q, set)) in p.points.iter().zip(sets).enumerate() {
+                let poly = halfplane_polygon(set, centre, 0.75 * size);
+                let st = if r.active.get(i).copied().unwrap_or(false) {
+                    &active_style
+                } else {
+                    &inactive_style
+                };
+                if poly.len() >= 3 {
+                    fig.polygon(&poly, st.clone());
+                }
+            }
+        }
+        _ => {}
+    }
+    let curve: Vec<[f64; 2]> = r
+        .points
+        .iter()
+        .zip(&r.knots)
+        .map(|(v, &t)| xy(v, t))
+        .collect();
+    if p.closed && d >= 2 {
+        fig.polygon(&curve, Style::stroke(palette::CURVE, 1.6));
+    } else {
+        fig.polyline(&curve, Style::stroke(palette::CURVE, 1.6));
+    }
+    if let (Some(tangents), true) = (&p.tangents, d >= 2) {
+        draw_tangents(&mut fig, tangents, r);
+    }
+    let attached: Vec<[f64; 2]> = r
+        .data_vertex
+        .iter()
+        .zip(&data_t)
+        .filter_map(|(&j, &t)| r.points.get(j).map(|v| xy(v, t)))
+        .collect();
+    fig.points_sized(
+        &attached,
+        Marker::Ring,
+        6.0,
+        Style::stroke(palette::CURVE, 1.0),
+    );
+    let data: Vec<[f64; 2]> = p
+        .points
+        .iter()
+        .zip(&data_t)
+        .map(|(q, &t)| xy(q, t))
+        .collect();
+    fig.points(&data, Marker::Dot, Style::fill(palette::DATA));
+    fig.legend("refined curve", Style::stroke(palette::CURVE, 1.6));
+    fig.legend("data point", Style::fill(palette::DATA));
+    if !matches!(
+        p.constraint,
+        ConstraintSpec::Interpolate | ConstraintSpec::Smoothing { .. }
+    ) {
+        fig.legend("active constraint", Style::stroke(palette::ACTIVE, 1.3));
+        fig.legend("inactive constraint", Style::stroke(palette::REGION, 1.0));
+    }
+    let n_active = r.active.iter().filter(|&&a| a).count();
+    fig.caption(&format!(
+        "E = {:.6}   KKT residual = {:.1e}   active: {n_active} of {}",
+        r.energy,
+        r.kkt_residual,
+        r.active.len()
+    ));
+    fig.to_svg()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -292,175 +663,4 @@ mod tests {
             Ok(2)
         );
     }
-}
-
-/// The `refine` subcommand.
-pub enum RefineCmd {}
-
-impl super::Command for RefineCmd {
-    type Problem = RefineProblem;
-    type Solution = RefineResult;
-
-    fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
-        validate(problem)?;
-        Err(InputError::new(
-            "",
-            "the refine solver is not wired into this build yet",
-        ))
-    }
-
-    fn svg(_: &RefineProblem, _: &RefineResult) -> Option<String> {
-        None
-    }
-}
-
-/// Clips a big box by the half-planes `n · x ≤ c` (Sutherland–Hodgman); the polygon of a 2-D set.
-pub fn halfplane_polygon(
-    halfspaces: &[HalfSpaceSpec],
-    around: [f64; 2],
-    extent: f64,
-) -> Vec<[f64; 2]> {
-    let (x, y, e) = (around[0], around[1], extent);
-    let mut poly = vec![
-        [x - e, y - e],
-        [x + e, y - e],
-        [x + e, y + e],
-        [x - e, y + e],
-    ];
-    for h in halfspaces {
-        if h.normal.len() < 2 {
-            continue;
-        }
-        let f = |p: &[f64; 2]| h.normal[0] * p[0] + h.normal[1] * p[1] - h.offset;
-        let mut out = Vec::with_capacity(poly.len() + 1);
-        for i in 0..poly.len() {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            let (fa, fb) = (f(&a), f(&b));
-            if fa <= 0.0 {
-                out.push(a);
-            }
-            if (fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0) {
-                let s = fa / (fa - fb);
-                out.push([a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]);
-            }
-        }
-        poly = out;
-        if poly.is_empty() {
-            break;
-        }
-    }
-    poly
-}
-
-/// The picture of a refinement: data points, their tolerance regions (active ones highlighted),
-/// the refined curve and the attached data vertices; curves in R^d show the first two coordinates,
-/// curves in R^1 are drawn as graphs over their knots.
-pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
-    use crate::plot::{palette, Figure, Marker, Style};
-    let d = p.points.first().map_or(0, Vec::len);
-    let xy = |v: &[f64], t: f64| -> [f64; 2] {
-        if d >= 2 {
-            [v[0], v[1]]
-        } else {
-            [t, v.first().copied().unwrap_or(0.0)]
-        }
-    };
-    let kind = match &p.constraint {
-        ConstraintSpec::Interpolate => "interpolation",
-        ConstraintSpec::Balls { .. } => "near-interpolation to balls",
-        ConstraintSpec::Smoothing { .. } => "smoothing",
-        ConstraintSpec::Halfspaces { .. } => "near-interpolation to convex polygons",
-    };
-    let mut fig = Figure::new(&format!(
-        "Variational refinement: {kind} ({}, {} points → {} vertices)",
-        if p.closed { "closed" } else { "open" },
-        p.points.len(),
-        r.points.len()
-    ));
-    fig.equal_aspect(d >= 2);
-    let data_t: Vec<f64> = r
-        .data_vertex
-        .iter()
-        .map(|&j| r.knots.get(j).copied().unwrap_or(0.0))
-        .collect();
-    let active_style = Style::stroke(palette::ACTIVE, 1.3).with_fill(palette::ACTIVE, 0.08);
-    let inactive_style = Style::stroke(palette::REGION, 1.0).with_fill(palette::REGION, 0.08);
-    match &p.constraint {
-        ConstraintSpec::Balls { radii } if d >= 2 => {
-            for (i, q) in p.points.iter().enumerate() {
-                let st = if r.active.get(i).copied().unwrap_or(false) {
-                    &active_style
-                } else {
-                    &inactive_style
-                };
-                fig.circle(xy(q, 0.0), radii[i], st.clone());
-            }
-        }
-        ConstraintSpec::Halfspaces { sets } if d == 2 => {
-            let scale = p
-                .points
-                .iter()
-                .flat_map(|q| q.iter().map(|x| x.abs()))
-                .fold(1.0f64, f64::max);
-            for (i, (q, set)) in p.points.iter().zip(sets).enumerate() {
-                let poly = halfplane_polygon(set, [q[0], q[1]], 4.0 * scale);
-                let st = if r.active.get(i).copied().unwrap_or(false) {
-                    &active_style
-                } else {
-                    &inactive_style
-                };
-                if poly.len() >= 3 {
-                    fig.polygon(&poly, st.clone());
-                }
-            }
-        }
-        _ => {}
-    }
-    let curve: Vec<[f64; 2]> = r
-        .points
-        .iter()
-        .zip(&r.knots)
-        .map(|(v, &t)| xy(v, t))
-        .collect();
-    if p.closed && d >= 2 {
-        fig.polygon(&curve, Style::stroke(palette::CURVE, 1.6));
-    } else {
-        fig.polyline(&curve, Style::stroke(palette::CURVE, 1.6));
-    }
-    let attached: Vec<[f64; 2]> = r
-        .data_vertex
-        .iter()
-        .zip(&data_t)
-        .filter_map(|(&j, &t)| r.points.get(j).map(|v| xy(v, t)))
-        .collect();
-    fig.points_sized(
-        &attached,
-        Marker::Ring,
-        6.0,
-        Style::stroke(palette::CURVE, 1.0),
-    );
-    let data: Vec<[f64; 2]> = p
-        .points
-        .iter()
-        .zip(&data_t)
-        .map(|(q, &t)| xy(q, t))
-        .collect();
-    fig.points(&data, Marker::Dot, Style::fill(palette::DATA));
-    fig.legend("refined curve", Style::stroke(palette::CURVE, 1.6));
-    fig.legend("data point", Style::fill(palette::DATA));
-    if !matches!(
-        p.constraint,
-        ConstraintSpec::Interpolate | ConstraintSpec::Smoothing { .. }
-    ) {
-        fig.legend("active constraint", Style::stroke(palette::ACTIVE, 1.3));
-        fig.legend("inactive constraint", Style::stroke(palette::REGION, 1.0));
-    }
-    let n_active = r.active.iter().filter(|&&a| a).count();
-    fig.caption(&format!(
-        "E = {:.6}   KKT residual = {:.1e}   active: {n_active} of {}",
-        r.energy,
-        r.kkt_residual,
-        r.active.len()
-    ));
-    fig.to_svg()
 }

@@ -244,11 +244,7 @@ impl BandFactor {
                 let xj = &mut x[at(j)..at(j) + W];
                 let mut v = [0.0; W];
                 for c in 0..W {
-                    v[c] = xj[c] * inv
-                        - a1n * x1[c]
-                        - a2nn * x2[c]
-                        - g0 * xr0[c]
-                        - g1 * xr1[c];
+                    v[c] = xj[c] * inv - a1n * x1[c] - a2nn * x2[c] - g0 * xr0[c] - g1 * xr1[c];
                     xj[c] = v[c];
                 }
                 x2 = x1;

@@ -6,6 +6,9 @@
 //! it stays symmetric and accurate even when diagonal blocks are very ill-conditioned (barrier
 //! terms of interior-point methods); no block is ever inverted explicitly.
 
+// Dense d×d kernels index several arrays by the same row/column: index loops are clearer.
+#![allow(clippy::needless_range_loop)]
+
 use super::{Envelope, Parts};
 use crate::Error;
 use divdiff::Topology;
@@ -240,7 +243,11 @@ impl<const D: usize> BlockBand<D> {
                 let mut g = [zero::<D>(); 2];
                 for (r, rv) in [r0, r1].into_iter().enumerate() {
                     let cyc = i.abs_diff(rv).min(n - i.abs_diff(rv));
-                    let mut e = if cyc <= 2 { coupling(rv, i) } else { zero::<D>() };
+                    let mut e = if cyc <= 2 {
+                        coupling(rv, i)
+                    } else {
+                        zero::<D>()
+                    };
                     sub_assign(&mut e, &mul_t(&g_prev[r], &l1));
                     sub_assign(&mut e, &mul_t(&g_prev2[r], &l2));
                     g[r] = right_solve_t(&e, &lii);

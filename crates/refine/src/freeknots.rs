@@ -1,0 +1,1 @@
+//! Optimal free knots (beyond Kersey §4): minimize E over the knots for fixed total parameter length.
