@@ -15,7 +15,7 @@ pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
 pub use degenerate::{COMMON_POINT_SWEEPS, COMMON_POINT_TOL, STAGNATION};
 pub use divdiff::{DerivativeRule, Parametrization};
 pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};
-pub use fixed::PAPER_WEIGHT_FLOOR;
+pub use fixed::{PAPER_WEIGHT_FLOOR, POLISH_ACTIVE_RTOL};
 pub use problem::{
     Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
     DEFAULT_PAPER_ITERATIONS,

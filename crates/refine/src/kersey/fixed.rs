@@ -79,6 +79,23 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             _ => {}
         }
     }
+    // Balls alone: the paper's multiplier iteration (scalar banded solves) finds the active set
+    // approximately, the active-set polish makes it exact; the certificate decides. The
+    // interior-point solver is the fallback.
+    if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
+        // A failure here (e.g. a singular system when every ball is inactive and nothing pins
+        // the kernel of H) only means this shortcut does not apply.
+        if let Ok(start) = paper(fp) {
+            if let Ok(Some((polished, kp))) = polish_balls(fp, &start, radii) {
+                if kp <= super::exact::EXACT_KKT_TARGET {
+                    return Ok(FixedSolution {
+                        iterations: start.iterations + polished.iterations,
+                        ..polished
+                    });
+                }
+            }
+        }
+    }
     let certified = |tol: f64| -> Result<(FixedSolution, f64), Error> {
         let (mut sol, extra, kkt) = super::exact::solve(fp, tol)?;
         sol.extra = extra;
@@ -99,13 +116,141 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     if k1 <= super::exact::EXACT_KKT_TARGET {
         return Ok(first);
     }
-    match certified(super::exact::EXACT_CONIC_TOLERANCE) {
-        Ok((second, k2)) if k2 < k1 => Ok(FixedSolution {
-            iterations: first.iterations + second.iterations,
-            ..second
-        }),
-        _ => Ok(first),
+    let (mut best, mut k) = match certified(super::exact::EXACT_CONIC_TOLERANCE) {
+        Ok((second, k2)) if k2 < k1 => (
+            FixedSolution {
+                iterations: first.iterations + second.iterations,
+                ..second
+            },
+            k2,
+        ),
+        _ => (first, k1),
+    };
+    if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
+        if k > super::exact::EXACT_KKT_TARGET {
+            if let Ok(Some((polished, kp))) = polish_balls(fp, &best, radii) {
+                if kp < k {
+                    best = FixedSolution {
+                        iterations: best.iterations + 1,
+                        ..polished
+                    };
+                    k = kp;
+                }
+            }
+        }
     }
+    let _ = k;
+    Ok(best)
+}
+
+/// A data vertex on its sphere to this relative accuracy is treated as active by the polish.
+pub const POLISH_ACTIVE_RTOL: f64 = 1e-6;
+
+/// Rounds of the active-set polish (each one scalar banded solve).
+pub const POLISH_ROUNDS: usize = 100;
+
+/// Active-set polish of a ball solution: the data vertices on their spheres are projected onto
+/// them exactly and fixed there, the others are freed (w = 0), and the curve is re-solved — one
+/// scalar banded solve. Freed vertices that leave their balls join the active set (at the
+/// projection of the new position), active ones whose multiplier w_i = −(Hp)·r/|r|² turns
+/// negative are freed, and the solve repeats (a primal active-set method started from the
+/// interior-point solution) for at most [`POLISH_ROUNDS`] rounds. When the set settles, every
+/// complementarity term vanishes exactly and the certificate measures what is left: the
+/// tangential part of (Hp)_{i_k} at the active vertices. `None` if it does not settle.
+fn polish_balls(
+    fp: &FixedProblem<'_>,
+    sol: &FixedSolution,
+    radii: &[f64],
+) -> Result<Option<(FixedSolution, f64)>, Error> {
+    let n = fp.q.len();
+    let d = fp.q.dim();
+    let nv = fp.knots.vertex_count();
+    // Positions the active vertices are pinned at (on their spheres).
+    let mut pin: Vec<Option<Vec<f64>>> = vec![None; n];
+    let project = |pv: &[f64], i: usize| -> Option<Vec<f64>> {
+        let qi = fp.q.point(i);
+        let g = dist(pv, qi);
+        (g > 0.0).then(|| {
+            qi.iter()
+                .zip(pv)
+                .map(|(q, p)| q + radii[i] * (p - q) / g)
+                .collect()
+        })
+    };
+    for i in 0..n {
+        let pv = sol.points.point(fp.data_vertex[i]);
+        if radii[i] > 0.0 && dist(pv, fp.q.point(i)) >= (1.0 - POLISH_ACTIVE_RTOL) * radii[i] {
+            pin[i] = project(pv, i);
+        }
+    }
+    for round in 1..=POLISH_ROUNDS {
+        let mut sys = hessian_system(fp.knots, d)?;
+        let mut rhs = vec![0.0; nv * d];
+        for i in 0..n {
+            let v = fp.data_vertex[i];
+            if radii[i] == 0.0 {
+                sys.fix(v)?;
+                rhs[v * d..(v + 1) * d].copy_from_slice(fp.q.point(i));
+            } else if let Some(y) = &pin[i] {
+                sys.fix(v)?;
+                rhs[v * d..(v + 1) * d].copy_from_slice(y);
+            }
+        }
+        let f = sys.factor()?;
+        f.solve_flat(&mut rhs)?;
+        let p = Points::new(d, rhs)?;
+        let hp = operator::apply_h(fp.knots, &p);
+        let mut multipliers = Vec::with_capacity(n);
+        let mut changed = false;
+        for i in 0..n {
+            let v = fp.data_vertex[i];
+            let qi = fp.q.point(i);
+            let h = &hp[v * d..(v + 1) * d];
+            if radii[i] == 0.0 {
+                multipliers.push(h.iter().map(|x| -x).collect());
+            } else if pin[i].is_some() {
+                let r: Vec<f64> = p.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
+                let rr: f64 = r.iter().map(|x| x * x).sum();
+                let w = -h.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+                if w < 0.0 {
+                    pin[i] = None;
+                    changed = true;
+                }
+                multipliers.push(vec![w.max(0.0)]);
+            } else {
+                if dist(p.point(v), qi) > radii[i] {
+                    pin[i] = project(p.point(v), i);
+                    changed = true;
+                }
+                multipliers.push(vec![0.0]);
+            }
+        }
+        if changed {
+            continue;
+        }
+        let (cert, _) = super::certify::certify(
+            &Stencil::new(fp.knots),
+            &p,
+            fp.q,
+            fp.data_vertex,
+            fp.constraint,
+            Some(multipliers.clone()),
+            super::certify::ACTIVE_REL_TOL,
+            &[],
+        );
+        return Ok(Some((
+            FixedSolution {
+                points: p,
+                multipliers: Some(multipliers),
+                iterations: round,
+                stencil: None,
+                extra: Vec::new(),
+                solver_kkt: None,
+            },
+            cert.kkt_residual,
+        )));
+    }
+    Ok(None)
 }
 
 /// Interpolation (3.3) at every data vertex: the fused banded solver of [`super::fast`].
