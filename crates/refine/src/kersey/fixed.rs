@@ -144,17 +144,23 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
 }
 
 /// A data vertex on its sphere to this relative accuracy is treated as active by the polish.
-pub const POLISH_ACTIVE_RTOL: f64 = 1e-6;
+pub const BALL_POLISH_ACTIVE_RTOL: f64 = 1e-6;
+
+/// Newton steps on the settled active set at the end of the polish.
+pub const BALL_POLISH_NEWTON_STEPS: usize = 4;
+/// Stiffness of the penalty that holds an active vertex's normal direction during those steps,
+/// relative to the largest diagonal entry of H.
+pub const BALL_POLISH_STIFFNESS: f64 = 1e10;
 
 /// Rounds of the active-set polish (each one scalar banded solve).
-pub const POLISH_ROUNDS: usize = 100;
+pub const BALL_POLISH_ROUNDS: usize = 100;
 
 /// Active-set polish of a ball solution: the data vertices on their spheres are projected onto
 /// them exactly and fixed there, the others are freed (w = 0), and the curve is re-solved — one
 /// scalar banded solve. Freed vertices that leave their balls join the active set (at the
 /// projection of the new position), active ones whose multiplier w_i = −(Hp)·r/|r|² turns
 /// negative are freed, and the solve repeats (a primal active-set method started from the
-/// interior-point solution) for at most [`POLISH_ROUNDS`] rounds. When the set settles, every
+/// interior-point solution) for at most [`BALL_POLISH_ROUNDS`] rounds. When the set settles, every
 /// complementarity term vanishes exactly and the certificate measures what is left: the
 /// tangential part of (Hp)_{i_k} at the active vertices. `None` if it does not settle.
 fn polish_balls(
@@ -179,11 +185,11 @@ fn polish_balls(
     };
     for i in 0..n {
         let pv = sol.points.point(fp.data_vertex[i]);
-        if radii[i] > 0.0 && dist(pv, fp.q.point(i)) >= (1.0 - POLISH_ACTIVE_RTOL) * radii[i] {
+        if radii[i] > 0.0 && dist(pv, fp.q.point(i)) >= (1.0 - BALL_POLISH_ACTIVE_RTOL) * radii[i] {
             pin[i] = project(pv, i);
         }
     }
-    for round in 1..=POLISH_ROUNDS {
+    for round in 1..=BALL_POLISH_ROUNDS {
         let mut sys = hessian_system(fp.knots, d)?;
         let mut rhs = vec![0.0; nv * d];
         for i in 0..n {
@@ -228,26 +234,52 @@ fn polish_balls(
         if changed {
             continue;
         }
-        let (cert, _) = super::certify::certify(
-            &Stencil::new(fp.knots),
-            &p,
-            fp.q,
-            fp.data_vertex,
-            fp.constraint,
-            Some(multipliers.clone()),
-            super::certify::ACTIVE_REL_TOL,
-            &[],
-        );
+        let certify_here = |p: &Points, m: &[Vec<f64>]| {
+            super::certify::certify(
+                &Stencil::new(fp.knots),
+                p,
+                fp.q,
+                fp.data_vertex,
+                fp.constraint,
+                Some(m.to_vec()),
+                super::certify::ACTIVE_REL_TOL,
+                &[],
+            )
+            .0
+            .kkt_residual
+        };
+        let mut best = (p, multipliers);
+        let mut k = certify_here(&best.0, &best.1);
+        // Newton steps on the equality-constrained problem of the settled active set: the
+        // tangential positions on the spheres move, with the Lagrangian's curvature w_i I there
+        // and the normal direction held by a stiff penalty; then re-project and re-certify.
+        for _ in 0..BALL_POLISH_NEWTON_STEPS {
+            if k <= super::exact::EXACT_KKT_TARGET {
+                break;
+            }
+            match tangential_newton(fp, radii, &pin, &best.0, &best.1)? {
+                Some((p2, m2)) => {
+                    let k2 = certify_here(&p2, &m2);
+                    if k2 < k {
+                        best = (p2, m2);
+                        k = k2;
+                    } else {
+                        break;
+                    }
+                }
+                None => break,
+            }
+        }
         return Ok(Some((
             FixedSolution {
-                points: p,
-                multipliers: Some(multipliers),
+                points: best.0,
+                multipliers: Some(best.1),
                 iterations: round,
                 stencil: None,
                 extra: Vec::new(),
                 solver_kkt: None,
             },
-            cert.kkt_residual,
+            k,
         )));
     }
     Ok(None)
@@ -329,6 +361,92 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 "the paper's slot iteration (Fig. 4.1) is not implemented; use the exact solver",
         }),
     }
+}
+
+/// One Newton step of the polish (see [`polish_balls`]); `None` if a freed vertex leaves its
+/// ball or an active multiplier turns negative.
+fn tangential_newton(
+    fp: &FixedProblem<'_>,
+    radii: &[f64],
+    pin: &[Option<Vec<f64>>],
+    p: &Points,
+    w: &[Vec<f64>],
+) -> Result<Option<(Points, Vec<Vec<f64>>)>, Error> {
+    let n = fp.q.len();
+    let d = fp.q.dim();
+    let h = Hessian::new(fp.knots);
+    let hmax = h.bands().0.iter().fold(0.0f64, |a, &x| a.max(x));
+    let mut sys = hessian_system(fp.knots, d)?;
+    let mut g = operator::apply_h(fp.knots, p);
+    for i in 0..n {
+        let v = fp.data_vertex[i];
+        if radii[i] == 0.0 {
+            sys.fix(v)?;
+            g[v * d..(v + 1) * d].iter_mut().for_each(|x| *x = 0.0);
+        } else if pin[i].is_some() {
+            let r: Vec<f64> = p
+                .point(v)
+                .iter()
+                .zip(fp.q.point(i))
+                .map(|(a, b)| a - b)
+                .collect();
+            let rn = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let wi = w[i][0];
+            let mut block = vec![0.0; d * d];
+            for a in 0..d {
+                g[v * d + a] += wi * r[a];
+                for b in 0..d {
+                    block[a * d + b] = BALL_POLISH_STIFFNESS * hmax * r[a] * r[b] / (rn * rn);
+                }
+                block[a * d + a] += wi;
+            }
+            sys.add_block(v, &block)?;
+        }
+    }
+    let f = sys.factor()?;
+    let mut step: Vec<f64> = g.iter().map(|x| -x).collect();
+    f.solve_flat(&mut step)?;
+    let mut coords = p.coords().to_vec();
+    for (x, s) in coords.iter_mut().zip(&step) {
+        *x += s;
+    }
+    for i in 0..n {
+        if pin[i].is_some() {
+            // Back onto the sphere.
+            let v = fp.data_vertex[i];
+            let qi = fp.q.point(i);
+            let pv = &mut coords[v * d..(v + 1) * d];
+            let gap = dist(pv, qi);
+            for (x, q) in pv.iter_mut().zip(qi) {
+                *x = q + radii[i] * (*x - q) / gap;
+            }
+        }
+    }
+    let p2 = Points::new(d, coords)?;
+    let hp = operator::apply_h(fp.knots, &p2);
+    let mut m = Vec::with_capacity(n);
+    for i in 0..n {
+        let v = fp.data_vertex[i];
+        let qi = fp.q.point(i);
+        let hv = &hp[v * d..(v + 1) * d];
+        if radii[i] == 0.0 {
+            m.push(hv.iter().map(|x| -x).collect());
+        } else if pin[i].is_some() {
+            let r: Vec<f64> = p2.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
+            let rr: f64 = r.iter().map(|x| x * x).sum();
+            let wi = -hv.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+            if wi < 0.0 {
+                return Ok(None);
+            }
+            m.push(vec![wi]);
+        } else {
+            if dist(p2.point(v), qi) > radii[i] {
+                return Ok(None);
+            }
+            m.push(vec![0.0]);
+        }
+    }
+    Ok(Some((p2, m)))
 }
 
 pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {
