@@ -363,6 +363,9 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     }
 }
 
+/// A curve with its multipliers.
+type PointsAndMultipliers = (Points, Vec<Vec<f64>>);
+
 /// One Newton step of the polish (see [`polish_balls`]); `None` if a freed vertex leaves its
 /// ball or an active multiplier turns negative.
 fn tangential_newton(
@@ -371,7 +374,7 @@ fn tangential_newton(
     pin: &[Option<Vec<f64>>],
     p: &Points,
     w: &[Vec<f64>],
-) -> Result<Option<(Points, Vec<Vec<f64>>)>, Error> {
+) -> Result<Option<PointsAndMultipliers>, Error> {
     let n = fp.q.len();
     let d = fp.q.dim();
     let h = Hessian::new(fp.knots);
