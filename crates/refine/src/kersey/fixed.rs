@@ -150,7 +150,9 @@ pub const BALL_POLISH_ACTIVE_RTOL: f64 = 1e-6;
 pub const BALL_POLISH_NEWTON_STEPS: usize = 4;
 /// Stiffness of the penalty that holds an active vertex's normal direction during those steps,
 /// relative to the largest diagonal entry of H.
-pub const BALL_POLISH_STIFFNESS: f64 = 1e10;
+/// (A moderate value: the normal component is re-projected after each step anyway, and a
+/// stiffer penalty trips the factorization's relative pivot test.)
+pub const BALL_POLISH_STIFFNESS: f64 = 1e4;
 
 /// Rounds of the active-set polish (each one scalar banded solve).
 pub const BALL_POLISH_ROUNDS: usize = 100;
@@ -257,8 +259,18 @@ fn polish_balls(
             if k <= super::exact::EXACT_KKT_TARGET {
                 break;
             }
-            match tangential_newton(fp, radii, &pin, &best.0, &best.1)? {
-                Some((p2, m2)) => {
+            // A failed step (e.g. a pivot test tripped by the penalty) only ends the polish.
+            // Damped: halve the step while it would free a vertex out of its ball or turn a
+            // multiplier negative.
+            let mut tn = Ok(None);
+            for scale in [1.0, 0.5, 0.25, 0.125, 0.0625] {
+                tn = tangential_newton(fp, radii, &pin, &best.0, &best.1, scale);
+                if !matches!(tn, Ok(None)) {
+                    break;
+                }
+            }
+            match tn {
+                Ok(Some((p2, m2))) => {
                     let k2 = certify_here(&p2, &m2);
                     if k2 < k {
                         best = (p2, m2);
@@ -267,7 +279,7 @@ fn polish_balls(
                         break;
                     }
                 }
-                None => break,
+                _ => break,
             }
         }
         return Ok(Some((
@@ -374,6 +386,7 @@ fn tangential_newton(
     pin: &[Option<Vec<f64>>],
     p: &Points,
     w: &[Vec<f64>],
+    scale: f64,
 ) -> Result<Option<PointsAndMultipliers>, Error> {
     let n = fp.q.len();
     let d = fp.q.dim();
@@ -411,7 +424,7 @@ fn tangential_newton(
     f.solve_flat(&mut step)?;
     let mut coords = p.coords().to_vec();
     for (x, s) in coords.iter_mut().zip(&step) {
-        *x += s;
+        *x += scale * s;
     }
     for i in 0..n {
         if pin[i].is_some() {
