@@ -12,9 +12,13 @@ mod split;
 
 pub use algorithm::{Iterations, Refinement, Stage};
 pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
-pub use degenerate::{COMMON_POINT_SWEEPS, COMMON_POINT_TOL, STAGNATION};
+pub use degenerate::{COMMON_POINT_STAGNATION, COMMON_POINT_SWEEPS, COMMON_POINT_TOL};
 pub use divdiff::{DerivativeRule, Parametrization};
-pub use fixed::PAPER_WEIGHT_FLOOR;
+pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};
+pub use fixed::{
+    BALL_POLISH_ACTIVE_RTOL, BALL_POLISH_NEWTON_STEPS, BALL_POLISH_ROUNDS, BALL_POLISH_STIFFNESS,
+    PAPER_WEIGHT_FLOOR,
+};
 pub use problem::{
     Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
     DEFAULT_PAPER_ITERATIONS,

@@ -47,7 +47,8 @@
 //! Every [`Refinement`] carries its certificate, recomputed from the points independently of the
 //! solver: the energy, the multipliers, the active set, and a **relative KKT residual** — the
 //! largest of the stationarity residual ‖Hp + Σ (constraint gradient × multiplier)‖_∞,
-//! complementarity and negative multipliers (all over ‖H‖_∞ · L), and the constraint violation
+//! complementarity and negative multipliers (all over ‖H‖_∞ · δ, δ the largest step between
+//! consecutive vertices, the rounding scale of Hp computed from differences), the constraint violation
 //! (over L), where L is the largest coordinate distance of a vertex or data point from the data's
 //! centroid, and the duality gap Σ ½w_i(ε_i² − |p_{i_k} − q_i|²) over E (a bound on the relative
 //! energy excess over the optimum). Balls that share a common point make the constant curve optimal (E = 0); it is

@@ -253,7 +253,9 @@ pub fn cases() -> Vec<Case> {
             Ok(Outcome::check(
                 r,
                 KKT_TOL,
-                format!("max |jmp| at {inactive} inactive data vertices, relative to |H| L"),
+                format!(
+                    "max |jmp| at {inactive} inactive data vertices, relative to the force scale"
+                ),
             ))
         }),
         Case::holds("kersey/alg4.1/levels-interpolate-and-certify", || {
