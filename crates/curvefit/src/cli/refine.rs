@@ -568,7 +568,8 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         .data_vertex
         .iter()
         .zip(&data_t)
-        .filter_map(|(&j, &t)| (j < r.points.len()).then(|| xy(r.points.point(j), t)))
+        .filter(|&(&j, _)| j < r.points.len())
+        .map(|(&j, &t)| xy(r.points.point(j), t))
         .collect();
     fig.points_sized(
         &attached,
