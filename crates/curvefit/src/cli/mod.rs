@@ -574,7 +574,14 @@ pub fn write_files_with(files: Vec<(PathBuf, Writer<'_>)>) -> Result<(), InputEr
             let _ = std::fs::remove_file(t);
         }
     };
+    let mut direct: Vec<(PathBuf, Writer<'_>)> = Vec::new();
     for (k, (path, write)) in files.into_iter().enumerate() {
+        // A device, FIFO or other special file (e.g. /dev/null, /dev/stdout) is written in
+        // place: renaming a temporary over it would replace the device with a regular file.
+        if std::fs::metadata(&path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+            direct.push((path, write));
+            continue;
+        }
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -603,6 +610,19 @@ pub fn write_files_with(files: Vec<(PathBuf, Writer<'_>)>) -> Result<(), InputEr
                 format!("cannot write {}: {e}", path.display()),
             ));
         }
+    }
+    for (path, write) in direct {
+        let result = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .and_then(|f| {
+                let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
+                write(&mut w)?;
+                w.flush()
+            });
+        result.map_err(|e| {
+            InputError::new("output", format!("cannot write {}: {e}", path.display()))
+        })?;
     }
     Ok(())
 }
