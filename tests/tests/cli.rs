@@ -6,7 +6,7 @@ use curvefit_tests::{problem_path, run_cli, scratch_dir};
 fn help_runs_for_every_subcommand() {
     let (code, out, _) = run_cli(&["--help"], "");
     assert_eq!(code, 0);
-    for sub in ["refine", "strip", "natural"] {
+    for sub in ["refine", "strip", "natural", "scheme", "surface", "demo"] {
         assert!(out.contains(sub), "--help lists {sub}");
         let (code, out, err) = run_cli(&[sub, "--help"], "");
         assert_eq!(code, 0, "{sub} --help: {err}");
@@ -96,4 +96,142 @@ fn csv_points_and_json_points_conflict() {
     assert_refused(&["refine", "--points", &c], "", "points[1]");
     std::fs::write(&csv, "0,0\n1,0,2\n").unwrap();
     assert_refused(&["refine", "--points", &c], "", "points[1]");
+}
+
+/// Every `curvefit …` command line in the README's shell blocks runs and succeeds (output files
+/// redirected to a scratch directory; input paths are relative to the repository root).
+#[test]
+fn every_readme_example_runs() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let dir = scratch_dir("readme");
+    let mut in_sh = false;
+    let mut ran = 0;
+    for line in readme.lines() {
+        if line.starts_with("```") {
+            in_sh = line.trim() == "```sh";
+            continue;
+        }
+        let Some(cmd) = line.trim().strip_prefix("curvefit ") else {
+            continue;
+        };
+        if !in_sh {
+            continue;
+        }
+        let mut args: Vec<String> = Vec::new();
+        let mut redirect = false;
+        for tok in cmd.split_whitespace() {
+            if redirect {
+                args.push(dir.join(tok).to_string_lossy().into_owned());
+                redirect = false;
+                continue;
+            }
+            redirect = matches!(tok, "-o" | "--svg" | "--obj");
+            let path = root.join(tok);
+            if tok.ends_with(".json") && path.exists() {
+                args.push(path.to_string_lossy().into_owned());
+            } else {
+                args.push(tok.to_string());
+            }
+        }
+        let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, out, err) = run_cli(&argv, "");
+        assert_eq!(code, 0, "README example `curvefit {cmd}` failed: {err}");
+        assert!(
+            out.is_empty() || serde_json::from_str::<serde_json::Value>(&out).is_ok(),
+            "JSON output"
+        );
+        ran += 1;
+    }
+    assert!(ran >= 6, "found the README's examples ({ran})");
+}
+
+#[test]
+fn catalogue_of_bad_inputs() {
+    let cases: &[(&str, &str, &str)] = &[
+        // (subcommand, problem, field the message must name)
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 1e999], [0, 1]]}"#,
+            "problem",
+        ),
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 0], [0, 1, 2]]}"#,
+            "points[2]",
+        ),
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 0], [0, 1]], "knots": [0, 2, 1, 3]}"#,
+            "knots[2]",
+        ),
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 0], [1, 0], [0, 1]]}"#,
+            "points[2]",
+        ),
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 0], [0, 1]], "constraint": {"type": "balls", "radii": [0.1, -0.1, 0.1]}}"#,
+            "constraint.radii[1]",
+        ),
+        ("refine", r#"{"points": []}"#, "points"),
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 0], [0, 1]], "k": 1000000000}"#,
+            "levels",
+        ),
+        (
+            "refine",
+            r#"{"points": [[0, 0], [1, 0], [0, 1]], "constraint": {"type": "smoothing", "weights": []}}"#,
+            "constraint.weights",
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1, 2], "y": [0, 5, 0], "lower": null, "upper": {"pieces": [[1, 0, 0, 0], [1, 0, 0, 0]]}}"#,
+            "y[1]",
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1, 1], "y": [0, 0, 0], "lower": null, "upper": null}"#,
+            "t[2]",
+        ),
+        (
+            "strip",
+            r#"{"t": [], "y": [], "lower": null, "upper": null}"#,
+            "t",
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1], "y": [0, 0], "lower": {"pieces": [[1, 0, 0, 0]]}, "upper": {"pieces": [[-1, 0, 0, 0]]}}"#,
+            "pieces[0]",
+        ),
+        ("natural", r#"{"points": [], "levels": 2}"#, "points"),
+        (
+            "natural",
+            r#"{"points": [[0], [1], [2]], "levels": 200}"#,
+            "levels",
+        ),
+        (
+            "surface",
+            r#"{"rows": 2, "cols": 2, "points": [[0, 0], [1, 0], [0, 1]]}"#,
+            "points",
+        ),
+    ];
+    for (cmd, problem, field) in cases {
+        assert_refused(&[cmd, "-"], problem, field);
+    }
+}
+
+#[test]
+fn scheme_flags_are_validated() {
+    for (args, field) in [
+        (&["scheme", "--points", "3", "--arity", "2"][..], "--points"),
+        (&["scheme", "--points", "4", "--arity", "1"][..], "--arity"),
+        (&["scheme", "--points", "4"][..], "arity"),
+    ] {
+        let (code, _, err) = run_cli(args, "");
+        assert_eq!(code, 2, "{args:?}");
+        assert!(err.contains(field), "{args:?}: {err}");
+    }
 }

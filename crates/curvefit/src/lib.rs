@@ -35,3 +35,8 @@ pub mod prelude {
     pub use divdiff::{Knots, Points, Topology};
     pub use energy::Hessian;
 }
+
+/// The README's Rust examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeDoctests;

@@ -433,3 +433,52 @@ fn wide_dimensions_and_tiny_closed_curves_use_the_envelope_path() {
         }
     }
 }
+
+#[test]
+fn interpolatory_solution_has_zero_hp_at_free_vertices() {
+    // Kersey (3.3): p fixed at every third vertex, (Hp)_j = 0 elsewhere; H from energy::Hessian.
+    let mut rng = Rng(17);
+    for top in [Topology::Open, Topology::Closed] {
+        for n in [4, 7, 30, 301] {
+            let count = if top == Topology::Closed { n + 1 } else { n };
+            let mut t = vec![0.0];
+            for _ in 1..count {
+                let last = *t.last().unwrap();
+                t.push(last + rng.range(0.2, 2.0));
+            }
+            let knots = divdiff::Knots::new(top, t).unwrap();
+            let h = energy::Hessian::new(&knots);
+            let mut fixed: Vec<usize> = (0..n).step_by(3).collect();
+            if top == Topology::Open && !fixed.contains(&(n - 1)) {
+                fixed.push(n - 1);
+            }
+            let d = 2;
+            let values: Vec<f64> = (0..fixed.len() * d).map(|_| rng.range(-5.0, 5.0)).collect();
+            let values = Points::new(d, values).unwrap();
+            let p = energy::solve_interpolatory(&h, &fixed, &values).unwrap();
+            for (k, &j) in fixed.iter().enumerate() {
+                assert_eq!(p.point(j), values.point(k));
+            }
+            let hp = h.apply(&p);
+            let scale = h.max_abs() * p.coords().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for j in (0..n).filter(|j| !fixed.contains(j)) {
+                for v in hp.point(j) {
+                    assert!(v.abs() <= 1e-11 * scale, "{top:?} n={n}: (Hp)_{j} = {v}");
+                }
+            }
+        }
+    }
+    // Too little fixed: singular, typed.
+    let knots = divdiff::Knots::open((0..6).map(f64::from).collect()).unwrap();
+    let h = energy::Hessian::new(&knots);
+    let one = Points::new(1, vec![1.0]).unwrap();
+    assert!(matches!(
+        energy::solve_interpolatory(&h, &[2], &one),
+        Err(Error::Singular { .. })
+    ));
+    let two = Points::new(1, vec![1.0, 2.0]).unwrap();
+    assert!(matches!(
+        energy::solve_interpolatory(&h, &[2, 2], &two),
+        Err(Error::DuplicateFixed { index: 2 })
+    ));
+}

@@ -161,6 +161,10 @@ pub struct ConicSolution {
     pub kkt: Kkt,
     /// Interior-point iterations.
     pub iterations: usize,
+    /// Whether the active-set polish produced this result. Then z_c = w_c (L_c p − center)
+    /// holds exactly for balls; otherwise the forces are the interior-point duals (projected
+    /// onto the dual cones), which satisfy it only up to O(√gap).
+    pub polished: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -1009,10 +1013,17 @@ impl Prepared {
     /// F (L x) for a block.
     fn block_map(&self, b: &Block, x: &[f64], out: &mut [f64]) {
         let d = self.d;
-        let mut y = vec![0.0; d];
-        self.stencil_apply(b, x, &mut y);
+        let mut stack = [0.0; 16];
+        let mut heap = Vec::new();
+        let y: &mut [f64] = if d <= 16 {
+            &mut stack[..d]
+        } else {
+            heap.resize(d, 0.0);
+            &mut heap
+        };
+        self.stencil_apply(b, x, y);
         for r in 0..b.m {
-            out[r] = dot(&b.f[r * d..(r + 1) * d], &y);
+            out[r] = dot(&b.f[r * d..(r + 1) * d], y);
         }
     }
 
@@ -1234,7 +1245,7 @@ impl Prepared {
                 let sol = self.certificate(problem, &st, iterations);
                 let total = sol.kkt.total;
                 best = best.min(total);
-                if total <= opts.tolerance || !polish_tried {
+                if !polish_tried {
                     polish_tried = true;
                     let pol = self.polish(problem, &st, iterations);
                     if let Some(p) = pol {
@@ -1348,33 +1359,34 @@ impl Prepared {
             if self.degree > 0.0 && mu > 0.0 {
                 let mut gap_a = 0.0;
                 for b in self.blocks.iter().filter(|b| b.kind != Kind::Zero) {
-                    let sa: Vec<f64> = (b.off..b.off + b.m)
-                        .map(|r| st.s[r] + alpha_a * ds_a[r])
-                        .collect();
-                    let za: Vec<f64> = (b.off..b.off + b.m)
-                        .map(|r| st.z[r] + alpha_a * dz_a[r])
-                        .collect();
-                    gap_a += dot(&sa, &za);
+                    gap_a += (b.off..b.off + b.m)
+                        .map(|r| (st.s[r] + alpha_a * ds_a[r]) * (st.z[r] + alpha_a * dz_a[r]))
+                        .sum::<f64>();
                 }
                 sigma = (gap_a / (mu * self.degree)).clamp(0.0, 1.0).powi(3);
             }
             // Corrector: ξ = λ⁻¹ ∘ (σμe − λ∘λ − (V⁻¹ds_a)∘(V dz_a)).
             let mut xi = vec![0.0; tm];
+            let (mut ca, mut cc) = (Vec::with_capacity(16), Vec::with_capacity(16));
             for (bi, b) in self.blocks.iter().enumerate() {
                 if b.kind == Kind::Zero {
                     continue;
                 }
                 let r = b.off..b.off + b.m;
-                let mut a = ds_a[r.clone()].to_vec();
-                apply_v(b.kind, &sc[bi], &mut a, true);
-                let mut c = dz_a[r.clone()].to_vec();
-                apply_v(b.kind, &sc[bi], &mut c, false);
+                ca.clear();
+                ca.extend_from_slice(&ds_a[r.clone()]);
+                apply_v(b.kind, &sc[bi], &mut ca, true);
+                cc.clear();
+                cc.extend_from_slice(&dz_a[r.clone()]);
+                apply_v(b.kind, &sc[bi], &mut cc, false);
                 tmp.resize(b.m, 0.0);
-                jordan(b.kind, &a, &c, &mut tmp);
+                jordan(b.kind, &ca, &cc, &mut tmp);
                 tmp2.resize(b.m, 0.0);
                 let l = &lam[r.clone()];
                 jordan(b.kind, l, l, &mut tmp2);
-                let mut rhs: Vec<f64> = (0..b.m).map(|k| -tmp2[k] - tmp[k]).collect();
+                let rhs = &mut wbuf;
+                rhs.clear();
+                rhs.extend((0..b.m).map(|k| -tmp2[k] - tmp[k]));
                 match b.kind {
                     Kind::Nonneg => {
                         for v in rhs.iter_mut() {
@@ -1384,7 +1396,7 @@ impl Prepared {
                     Kind::Soc => rhs[0] += sigma * mu,
                     Kind::Zero => {}
                 }
-                jordan_div(b.kind, l, &rhs, &mut xi[r]);
+                jordan_div(b.kind, l, rhs, &mut xi[r]);
             }
             let (dx, ds, dz) = ctx.solve(&rx, &rs, &xi);
             let mut alpha: f64 = 1.0 / STEP_FRACTION;
@@ -1469,8 +1481,9 @@ impl Prepared {
                     }
                 }
                 Kind::Nonneg => {
+                    let scale = norm(s).max(f64::MIN_POSITIVE);
                     for r in 0..b.m {
-                        if z[r] >= omega * s[r] {
+                        if z[r] >= omega * s[r] || s[r] <= POLISH_ACTIVE_RTOL * scale {
                             rows.push(Row {
                                 block: bi,
                                 comp: r,
@@ -1480,8 +1493,12 @@ impl Prepared {
                     }
                 }
                 Kind::Soc => {
+                    // Both on the boundary and J-orthogonal (active): sᵀz ≪ |s||z|; inactive
+                    // blocks on the central path have z ∝ J s, so sᵀz is comparable to |s||z|.
                     let ds = s[0] - norm(&s[1..]);
-                    if z[0] >= omega * ds {
+                    if norm(s) * norm(z) >= POLISH_SOC_RATIO * dot(s, z)
+                        || ds <= POLISH_ACTIVE_RTOL * s[0]
+                    {
                         if !b.ball || norm(s) <= 1e-9 * self.scale_x.max(f64::MIN_POSITIVE) {
                             // An active wedge has an indefinite curvature term, and at the apex
                             // J s = 0 carries no direction: the interior-point result stands.
@@ -1646,7 +1663,8 @@ impl Prepared {
                     ps.z[b.off + row.comp] = row.mult;
                 }
             }
-            let cert = self.certificate(problem, &ps, iterations);
+            let mut cert = self.certificate(problem, &ps, iterations);
+            cert.polished = true;
             let better = best.as_ref().is_none_or(|b| cert.kkt.total < b.kkt.total);
             let done = cert.kkt.total <= CONIC_TOLERANCE;
             if better {
@@ -1926,6 +1944,7 @@ impl Prepared {
             objective,
             kkt,
             iterations,
+            polished: false,
         }
     }
 }
@@ -2119,12 +2138,10 @@ impl NewtonCtx<'_> {
             t.clear();
             t.extend(rs[r.clone()].iter().zip(&y).map(|(a, c)| a - c));
             apply_v(b.kind, &self.sc[bi], &mut t, true);
-            let mut w = xi[r.clone()].to_vec();
-            for (a, c) in w.iter_mut().zip(&t) {
-                *a += c;
-            }
-            apply_v(b.kind, &self.sc[bi], &mut w, true);
-            dz[r.clone()].copy_from_slice(&w);
+            u.clear();
+            u.extend(xi[r.clone()].iter().zip(&t).map(|(a, c)| a + c));
+            apply_v(b.kind, &self.sc[bi], &mut u, true);
+            dz[r.clone()].copy_from_slice(&u);
             for k in 0..b.m {
                 ds[b.off + k] = -rs[b.off + k] + y[k];
             }
@@ -2153,6 +2170,11 @@ impl NewtonCtx<'_> {
 
 /// Newton steps of the active-set polish.
 pub const POLISH_STEPS: usize = 3;
+/// The polish also treats a constraint as active when its slack is below this times its size
+/// (weakly active constraints: zero multiplier on the boundary).
+pub const POLISH_ACTIVE_RTOL: f64 = 1e-6;
+/// A second-order-cone block counts as active in the polish when |s||z| ≥ this × sᵀz.
+pub const POLISH_SOC_RATIO: f64 = 100.0;
 /// The polish is first tried when the interior-point iterate's relative KKT residual is below this.
 pub const POLISH_FROM: f64 = 1e-8;
 

@@ -297,6 +297,10 @@ fn balls_closed_and_open_in_1_2_3_dimensions() {
     ] {
         let spec = balls_spec(top, 7, 2, d, seed);
         let sol = check(&spec);
+        assert!(
+            sol.polished,
+            "{top:?} d={d}: the active-set polish should succeed here"
+        );
         // Kersey (3.5): z_c = w_c (p − q) with w_c ≥ 0 for balls of positive radius, and
         // inactive balls carry no force.
         for (c, (st, set)) in spec.constraints.iter().enumerate() {

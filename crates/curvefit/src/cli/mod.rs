@@ -255,11 +255,21 @@ where
             if code == 0 {
                 let _ = stdout.write_all(text.as_bytes());
             } else {
-                let first = text
+                // One line: clap's message up to its usage section, whitespace collapsed.
+                let msg: Vec<&str> = text
                     .lines()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("invalid arguments");
-                let _ = writeln!(stderr, "{first}");
+                    .take_while(|l| {
+                        !l.starts_with("Usage:") && !l.starts_with("For more information")
+                    })
+                    .map(str::trim)
+                    .filter(|l| !l.is_empty())
+                    .collect();
+                let line = if msg.is_empty() {
+                    "error: invalid arguments".to_string()
+                } else {
+                    msg.join(" ")
+                };
+                let _ = writeln!(stderr, "{}", one_line(&line));
             }
             return code;
         }

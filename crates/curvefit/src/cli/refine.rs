@@ -403,14 +403,13 @@ fn draw_tangents(
         } else {
             (j.saturating_sub(1), (j + 1).min(n - 1))
         };
-        let mut dt = if b > a {
+        let dt = if b > a {
             r.knots[b] - r.knots[a]
         } else {
             r.knots[b] + span - r.knots[a]
         };
-        if !(dt > 0.0) {
-            dt = 1.0;
-        }
+        // Knots are strictly increasing, so dt > 0; guard anyway (a picture never fails).
+        let dt = if dt > 0.0 { dt } else { 1.0 };
         let df = [
             (r.points[b][0] - r.points[a][0]) / dt,
             (r.points[b][1] - r.points[a][1]) / dt,

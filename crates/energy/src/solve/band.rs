@@ -123,6 +123,10 @@ impl BandFactor {
                 let mut g = [0.0; 2];
                 for r in 0..2 {
                     g[r] = (k[r] - gm1[r] * dm1 * a1 - gm2[r] * dm2 * a2) * inv;
+                    // Border entries decay geometrically; flush before they turn denormal.
+                    if g[r].abs() < 1e-200 {
+                        g[r] = 0.0;
+                    }
                 }
                 p0 += g[0] * g[0] * p;
                 c10 += g[1] * g[0] * p;
