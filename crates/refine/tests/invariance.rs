@@ -402,9 +402,10 @@ fn max_mult(r: &Refinement) -> f64 {
 /// Largest certified relative KKT residual accepted here. The exact solver stops at
 /// [`refine::CONIC_ACCEPT`] in its own measure, but the refinement's independent certificate
 /// reads up to ~1e-5 on some ball problems (ROBUSTNESS.md, finding 3: the answer is then
-/// suboptimal by about that much, confirmed with Clarabel). Comparisons below are made to
-/// within the certified accuracy: tolerances grow with the residuals reported.
-const KKT_TOL: f64 = 1e-4;
+/// suboptimal by about that much, confirmed with Clarabel), and up to ~2e-4 since main's
+/// polish change (finding 11). Comparisons below are made to within the certified accuracy:
+/// tolerances grow with the residuals reported.
+const KKT_TOL: f64 = 1e-3;
 /// Tolerances are at least this multiple of the larger certified KKT residual.
 const KKT_FACTOR: f64 = 100.0;
 
