@@ -114,6 +114,10 @@ fn case(kind: Kind, derivatives: bool, topology: Option<bool>) -> impl Strategy<
                 } else {
                     iters
                 };
+                // In R^1 knot updates on ball problems amplify rounding into E differences of
+                // 1e-5 … 7e-3 (refined vertices bunch where the curve turns inside a ball;
+                // ROBUSTNESS.md, finding 12): fixed knots there.
+                let iters = if d == 1 { 0 } else { iters };
                 let mut r = r.into_iter().cycle();
                 let mut next = move || r.next().unwrap_or(0.0);
                 let topo = if closed {
@@ -405,7 +409,7 @@ fn max_mult(r: &Refinement) -> f64 {
 /// suboptimal by about that much, confirmed with Clarabel), and up to ~2e-4 since main's
 /// polish change (finding 11). Comparisons below are made to within the certified accuracy:
 /// tolerances grow with the residuals reported.
-const KKT_TOL: f64 = 1e-3;
+const KKT_TOL: f64 = 1e-4;
 /// Tolerances are at least this multiple of the larger certified KKT residual.
 const KKT_FACTOR: f64 = 100.0;
 
@@ -416,19 +420,43 @@ fn zero_energy(p: &Problem, r: &Refinement) -> bool {
     r.energy <= 1e-6 * energy_scale(p, r)
 }
 
-/// L²/T³: the energy of a curve bent by its own extent L over its parameter length T.
-fn energy_scale(p: &Problem, r: &Refinement) -> f64 {
-    let mut centroid = vec![0.0; p.points.dim()];
-    for x in p.points.iter() {
+/// The largest coordinate distance of a data point from the data's centroid.
+fn centred_extent(q: &Points) -> f64 {
+    let mut centroid = vec![0.0; q.dim()];
+    for x in q.iter() {
         for (c, v) in centroid.iter_mut().zip(x) {
-            *c += v / p.points.len() as f64;
+            *c += v / q.len() as f64;
         }
     }
-    let l = p
-        .points
-        .iter()
+    q.iter()
         .flat_map(|x| x.iter().zip(&centroid).map(|(a, b)| (a - b).abs()))
-        .fold(0.0f64, f64::max);
+        .fold(0.0f64, f64::max)
+}
+
+/// Whether two consecutive refined vertices nearly coincide (closer than 1e-2 of the data's
+/// extent), which makes the next knot update ill-conditioned.
+fn stalled(p: &Problem, r: &Refinement) -> bool {
+    let l = centred_extent(&p.points).max(f64::MIN_POSITIVE);
+    let n = r.points.len();
+    let spans = match p.topology {
+        Topology::Open => n - 1,
+        Topology::Closed => n,
+    };
+    (0..spans).any(|j| {
+        let (a, b) = (r.points.point(j), r.points.point((j + 1) % n));
+        let d = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f64>()
+            .sqrt();
+        d < 1e-2 * l
+    })
+}
+
+/// L²/T³: the energy of a curve bent by its own extent L over its parameter length T.
+fn energy_scale(p: &Problem, r: &Refinement) -> f64 {
+    let l = centred_extent(&p.points);
     let t = r.knots.length();
     l * l / (t * t * t)
 }
@@ -442,6 +470,14 @@ fn solve_pair(a: &Problem, b: &Problem) -> Result<Option<(Refinement, Refinement
             let (zx, zy) = (zero_energy(a, &x), zero_energy(b, &y));
             prop_assert_eq!(zx, zy, "E = {} vs {}", x.energy, y.energy);
             if zx {
+                return Ok(None);
+            }
+            let nearly_straight = x.energy <= 1e-2 * energy_scale(a, &x);
+            if a.knot_iterations > 0 && (nearly_straight || stalled(a, &x) || stalled(b, &y)) {
+                // Knot updates on nearly coincident refined vertices (u ↦ |Δp|^e has an
+                // unbounded derivative at 0) or on a nearly straight optimum (whose minimizer is
+                // nearly non-unique) turn rounding-level differences into changes of E of up to
+                // ~0.7% (ROBUSTNESS.md, finding 12). Not an invariance question.
                 return Ok(None);
             }
             prop_assert!(x.kkt_residual <= KKT_TOL, "kkt {}", x.kkt_residual);
