@@ -34,7 +34,44 @@ impl Problem {
     /// linear system is numerically singular; [`crate::Error::Unsupported`] for combinations a
     /// solver does not handle.
     pub fn solve(&self) -> Result<Refinement, crate::Error> {
-        algorithm::run(self)
+        // Solve on data centred at their centroid and translate back: every part of the
+        // problem is translation invariant, but the interior-point method measures its
+        // convergence relative to absolute coordinates, so data far from the origin (relative
+        // to their extent) stopped early with a wrong active set (tests/invariance.rs).
+        self.validate()?;
+        let (n, d) = (self.points.len(), self.points.dim());
+        let mut centroid = vec![0.0; d];
+        for x in self.points.iter() {
+            for (c, v) in centroid.iter_mut().zip(x) {
+                *c += v / n as f64;
+            }
+        }
+        if centroid.iter().all(|&c| c == 0.0) {
+            return algorithm::run(self);
+        }
+        let mut centred = self.clone();
+        for i in 0..n {
+            for (x, c) in centred.points.point_mut(i).iter_mut().zip(&centroid) {
+                *x -= c;
+            }
+        }
+        if let Constraint::HalfSpaces(sets) = &mut centred.constraint {
+            for h in sets.iter_mut().flatten() {
+                h.offset -= h
+                    .normal
+                    .iter()
+                    .zip(&centroid)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+            }
+        }
+        let mut r = algorithm::run(&centred)?;
+        for j in 0..r.points.len() {
+            for (x, c) in r.points.point_mut(j).iter_mut().zip(&centroid) {
+                *x += c;
+            }
+        }
+        Ok(r)
     }
 }
 
