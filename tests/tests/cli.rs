@@ -235,3 +235,32 @@ fn scheme_flags_are_validated() {
         assert!(err.contains(field), "{args:?}: {err}");
     }
 }
+
+/// Writing the result to a device (here /dev/null) writes in place: the atomic
+/// temporary-and-rename path must never replace a device or FIFO with a regular file.
+#[cfg(unix)]
+#[test]
+fn writing_to_a_device_keeps_the_device() {
+    use std::os::unix::fs::FileTypeExt;
+    let dev = std::path::Path::new("/dev/null");
+    if !std::fs::metadata(dev).is_ok_and(|m| m.file_type().is_char_device()) {
+        return; // not a character device on this system: nothing to protect
+    }
+    let p = problem_path("refine-interpolate-closed.json");
+    let (code, _, err) = run_cli(
+        &[
+            "refine",
+            &p.to_string_lossy(),
+            "-o",
+            "/dev/null",
+            "--svg",
+            "/dev/null",
+        ],
+        "",
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        std::fs::metadata(dev).unwrap().file_type().is_char_device(),
+        "/dev/null is still a device"
+    );
+}

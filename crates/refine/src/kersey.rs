@@ -12,9 +12,13 @@ mod split;
 
 pub use algorithm::{Iterations, Refinement, Stage};
 pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
-pub use degenerate::{COMMON_POINT_SWEEPS, COMMON_POINT_TOL, STAGNATION};
+pub use degenerate::{COMMON_POINT_STAGNATION, COMMON_POINT_SWEEPS, COMMON_POINT_TOL};
 pub use divdiff::{DerivativeRule, Parametrization};
-pub use fixed::PAPER_WEIGHT_FLOOR;
+pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};
+pub use fixed::{
+    BALL_POLISH_ACTIVE_RTOL, BALL_POLISH_NEWTON_STEPS, BALL_POLISH_ROUNDS, BALL_POLISH_STIFFNESS,
+    PAPER_WEIGHT_FLOOR,
+};
 pub use problem::{
     Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
     DEFAULT_PAPER_ITERATIONS,
@@ -30,6 +34,79 @@ impl Problem {
     /// linear system is numerically singular; [`crate::Error::Unsupported`] for combinations a
     /// solver does not handle.
     pub fn solve(&self) -> Result<Refinement, crate::Error> {
-        algorithm::run(self)
+        // Solve on data centred at their centroid and translate back: every part of the
+        // problem is translation invariant, but the interior-point method measures its
+        // convergence relative to absolute coordinates, so data far from the origin (relative
+        // to their extent) stopped early with a wrong active set (tests/invariance.rs).
+        self.validate()?;
+        let (n, d) = (self.points.len(), self.points.dim());
+        let mut centroid = vec![0.0; d];
+        for x in self.points.iter() {
+            for (c, v) in centroid.iter_mut().zip(x) {
+                *c += v / n as f64;
+            }
+        }
+        if centroid.iter().all(|&c| c == 0.0) {
+            return algorithm::run(self);
+        }
+        let mut centred = self.clone();
+        for i in 0..n {
+            for (x, c) in centred.points.point_mut(i).iter_mut().zip(&centroid) {
+                *x -= c;
+            }
+        }
+        if let Constraint::HalfSpaces(sets) = &mut centred.constraint {
+            for h in sets.iter_mut().flatten() {
+                h.offset -= h
+                    .normal
+                    .iter()
+                    .zip(&centroid)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+            }
+        }
+        let mut r = algorithm::run(&centred)?;
+        for j in 0..r.points.len() {
+            for (x, c) in r.points.point_mut(j).iter_mut().zip(&centroid) {
+                *x += c;
+            }
+        }
+        Ok(r)
     }
+}
+
+/// One exact fixed-knot solve of stage 0 (the near-interpolatory k-level step) on the given
+/// refined knots, certified: the points, E, and the relative KKT residual. Used by the free-knot
+/// optimizer ([`crate::optimize_knots`]), which validates `problem` and `knots` first.
+pub(crate) fn solve_stage0_on(
+    problem: &Problem,
+    knots: &divdiff::Knots,
+) -> Result<(divdiff::Points, f64, f64), crate::Error> {
+    let q = &problem.points;
+    let stride = problem.k + 1;
+    let dv: Vec<usize> = (0..q.len()).map(|i| stride * i).collect();
+    let fp = algorithm::FixedProblem {
+        knots,
+        q,
+        data_vertex: &dv,
+        constraint: &problem.constraint,
+        problem,
+        stride,
+    };
+    let s = fixed::exact(&fp)?;
+    let stencil = s.stencil.unwrap_or_else(|| operator::Stencil::new(knots));
+    let (cert, _) = certify::certify(
+        &stencil,
+        &s.points,
+        q,
+        &dv,
+        &problem.constraint,
+        s.multipliers,
+        ACTIVE_REL_TOL,
+        &s.extra,
+    );
+    let kkt = s
+        .solver_kkt
+        .map_or(cert.kkt_residual, |k| cert.kkt_residual.max(k));
+    Ok((s.points, cert.energy, kkt))
 }

@@ -35,10 +35,20 @@
 //! most three vertices) and the **paper's multiplier iteration** (w_i := w_i |p_{i_k} − q_i| / ε_i
 //! from w_i = 1), kept to reproduce the seed's figures (balls only).
 //!
+//! **Optimal free knots** (beyond the paper, [`optimize_knots`]): minimize F(t) = E(p*(t), t)
+//! over the data knots (each data span split into k + 1 equal sub-spans) with the total parameter
+//! length T fixed, p*(t) being the exact fixed-knot optimum. Position constraints do not depend on
+//! t, so by the envelope theorem dF/dt = ∂E/∂t at p* (the corrected Lemma 2.4 of `energy`);
+//! tangent and end constraints do depend on t and are rejected. L-BFGS on log-spans
+//! h = T·softmax(θ), started from centripetal knots; the result reports E and the corrected
+//! Corollary 2.5–2.7 / Theorem 3.1–3.2 knot residuals before and after. Freeing every refined
+//! knot instead ([`FreeKnots::All`]) is degenerate: sub-spans collapse.
+//!
 //! Every [`Refinement`] carries its certificate, recomputed from the points independently of the
 //! solver: the energy, the multipliers, the active set, and a **relative KKT residual** — the
 //! largest of the stationarity residual ‖Hp + Σ (constraint gradient × multiplier)‖_∞,
-//! complementarity and negative multipliers (all over ‖H‖_∞ · L), and the constraint violation
+//! complementarity and negative multipliers (all over ‖H‖_∞ · δ, δ the largest step between
+//! consecutive vertices, the rounding scale of Hp computed from differences), the constraint violation
 //! (over L), where L is the largest coordinate distance of a vertex or data point from the data's
 //! centroid, and the duality gap Σ ½w_i(ε_i² − |p_{i_k} − q_i|²) over E (a bound on the relative
 //! energy excess over the optimum). Balls that share a common point make the constant curve optimal (E = 0); it is
@@ -73,7 +83,6 @@ mod schemes;
 
 pub use conic::*;
 pub use error::Error;
-#[allow(unused_imports)] // filled by the free-knot work
 pub use freeknots::*;
 pub use kersey::*;
 pub use schemes::*;

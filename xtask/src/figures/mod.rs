@@ -28,6 +28,7 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     }
     std::fs::create_dir_all(&out)?;
     refine::draw(&out)?;
+    refine::draw_free_knots(&out)?;
     schemes::draw(&out)?;
     strip::draw(&out)?;
     Ok(true)

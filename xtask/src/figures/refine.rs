@@ -266,3 +266,102 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
     super::save(dir, "kersey_fig3_9_open.svg", &fig.to_svg())?;
     Ok(())
 }
+
+// ---- Free knots (issue 4 item 4) --------------------------------------------------------------
+
+/// Ticks of a knot vector on a parameter axis drawn at height `y` from x = `x0` over `width`:
+/// tall ticks at the data knots (every `stride`-th), short ones at the refined knots.
+fn knot_ticks(
+    fig: &mut Figure,
+    t: &[f64],
+    stride: usize,
+    x0: f64,
+    width: f64,
+    y: f64,
+    color: &str,
+) {
+    let (a, b) = (t[0], t[t.len() - 1]);
+    let x = |v: f64| x0 + width * (v - a) / (b - a);
+    fig.segment(
+        [x0, y],
+        [x0 + width, y],
+        Style::stroke(palette::REGION, 0.8),
+    );
+    for (j, &v) in t.iter().enumerate() {
+        let h = if j % stride == 0 { 0.22 } else { 0.09 };
+        fig.segment([x(v), y - h], [x(v), y + h], Style::stroke(color, 1.2));
+    }
+}
+
+/// Centripetal vs optimal free knots (`refine::optimize_knots`) on the same data.
+pub fn draw_free_knots(dir: &Path) -> anyhow::Result<()> {
+    let q = Points::from_rows(&[
+        [0.0, 0.0],
+        [0.2, 0.0],
+        [3.0, 1.0],
+        [3.2, 1.0],
+        [6.0, 0.0],
+        [6.1, 0.05],
+        [9.0, 1.0],
+    ])?;
+    let problem = Problem::new(q.clone()).with_topology(Topology::Open);
+    let r = refine::optimize_knots(&problem, &refine::FreeKnotOptions::default())?;
+    let stride = problem.k + 1;
+    let mut fig = Figure::new("Centripetal vs optimal free knots (open interpolation, k = 3)");
+    fig.size(760.0, 520.0);
+    fig.polyline(&xy(&r.start.points), Style::stroke(palette::SECOND, 1.6));
+    fig.polyline(&xy(&r.points), Style::stroke(palette::CURVE, 1.6));
+    fig.points_sized(
+        &xy(&r.start.points),
+        Marker::Dot,
+        2.5,
+        Style::fill(palette::SECOND),
+    );
+    fig.points_sized(
+        &xy(&r.points),
+        Marker::Dot,
+        2.5,
+        Style::fill(palette::CURVE),
+    );
+    data_points(&mut fig, &q, 0.0);
+    fig.legend("centripetal knots", Style::stroke(palette::SECOND, 1.6));
+    fig.legend("optimal free knots", Style::stroke(palette::CURVE, 1.6));
+    // The two knot vectors on parameter axes below the curves (same total length T).
+    knot_ticks(
+        &mut fig,
+        r.start.knots.values(),
+        stride,
+        0.0,
+        9.0,
+        -1.0,
+        palette::SECOND,
+    );
+    knot_ticks(
+        &mut fig,
+        r.knots.values(),
+        stride,
+        0.0,
+        9.0,
+        -1.7,
+        palette::CURVE,
+    );
+    fig.label([0.0, -0.62], "centripetal knots t", palette::SECOND);
+    fig.label([0.0, -1.32], "optimal knots t (same T)", palette::CURVE);
+    fig.caption(&format!(
+        "E = {:.4} on centripetal knots, E = {:.4} on optimal free knots ({:.0}% lower), T = {:.3}",
+        r.before.energy,
+        r.after.energy,
+        100.0 * (1.0 - r.after.energy / r.before.energy),
+        r.total_length
+    ));
+    fig.caption(&format!(
+        "max |dE/dt_i|/(3E/T): {:.1e} -> {:.1e}; max |Df·(Hp)_i|/(3E/T): {:.2} -> {:.2}; {} L-BFGS iterations",
+        r.before.vertex_knot_residual,
+        r.after.vertex_knot_residual,
+        r.before.orthogonality_max,
+        r.after.orthogonality_max,
+        r.iterations
+    ));
+    super::save(dir, "kersey_free_knots.svg", &fig.to_svg())?;
+    Ok(())
+}

@@ -89,6 +89,7 @@ fn all_cases() -> Vec<Case> {
     let mut v = Vec::new();
     v.extend(energy::cases());
     v.extend(refine::cases());
+    v.extend(refine::free_knot_cases());
     v.extend(schemes::cases());
     v.extend(strip::cases());
     v

@@ -388,44 +388,48 @@ pub fn run_json_with<C: Command>(
     let t1 = Instant::now();
     let solution = C::solve(&problem)?;
     let t2 = Instant::now();
-    let json = serde_json::to_string(&solution)
-        .map_err(|e| InputError::new("", format!("cannot serialize the {name} result: {e}")))?;
     let svg = match &args.svg {
         Some(_) => C::svg(&problem, &solution),
         None => None,
     };
-    let mut outputs: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut outputs: Vec<(PathBuf, Writer<'_>)> = Vec::new();
     if let Some(path) = obj {
         let text = C::obj(&problem, &solution)
             .ok_or_else(|| InputError::new("--obj", format!("`{name}` has no mesh output")))??;
-        outputs.push((path.to_path_buf(), text.into_bytes()));
+        outputs.push((path.to_path_buf(), bytes_writer(text.into_bytes())));
     }
-    if let (Some(path), Some(svg)) = (&args.svg, svg) {
-        outputs.push((path.clone(), svg.into_bytes()));
-    } else if let Some(path) = &args.svg {
-        return Err(InputError::new(
-            "--svg",
-            format!(
-                "`{name}` has no picture for this problem ({})",
-                path.display()
-            ),
-        )
-        .into());
+    match (&args.svg, svg) {
+        (Some(path), Some(svg)) => outputs.push((path.clone(), bytes_writer(svg.into_bytes()))),
+        (Some(path), None) => {
+            return Err(InputError::new(
+                "--svg",
+                format!(
+                    "`{name}` has no picture for this problem ({})",
+                    path.display()
+                ),
+            )
+            .into())
+        }
+        _ => {}
     }
+    // The JSON result is streamed into its file (or standard output): no copy of it in memory.
+    let json_to = |w: &mut dyn Write| -> std::io::Result<()> {
+        serde_json::to_writer(&mut *w, &solution).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    };
     match &args.output {
-        Some(path) => outputs.push((path.clone(), (json + "\n").into_bytes())),
+        Some(path) => {
+            outputs.push((path.clone(), Box::new(json_to)));
+            write_files_with(outputs)?;
+        }
         None => {
-            write_files(&outputs)?;
-            stdout
-                .write_all(json.as_bytes())
-                .and_then(|_| stdout.write_all(b"\n"))
-                .map_err(|e| {
-                    InputError::new("-o", format!("cannot write to standard output: {e}"))
-                })?;
-            outputs.clear();
+            write_files_with(outputs)?;
+            let mut buf = std::io::BufWriter::with_capacity(1 << 16, &mut *stdout);
+            json_to(&mut buf).and_then(|_| buf.flush()).map_err(|e| {
+                InputError::new("-o", format!("cannot write to standard output: {e}"))
+            })?;
         }
     }
-    write_files(&outputs)?;
     let t3 = Instant::now();
     if args.timings {
         let line = serde_json::json!({
@@ -544,22 +548,51 @@ fn read_csv_points(path: &Path) -> Result<Vec<Vec<f64>>, Failure> {
     Ok(parse_csv_points(&text)?)
 }
 
+/// Something that writes one output file's content.
+pub type Writer<'a> = Box<dyn FnOnce(&mut dyn Write) -> std::io::Result<()> + 'a>;
+
+fn bytes_writer<'a>(bytes: Vec<u8>) -> Writer<'a> {
+    Box::new(move |w: &mut dyn Write| w.write_all(&bytes))
+}
+
 /// Writes every `(path, bytes)` to a temporary sibling first, then renames them all; on any
 /// failure the temporaries are removed and no target file is created or changed.
 pub fn write_files(files: &[(PathBuf, Vec<u8>)]) -> Result<(), InputError> {
-    let mut temps: Vec<(PathBuf, &Path)> = Vec::new();
-    let cleanup = |temps: &[(PathBuf, &Path)]| {
+    write_files_with(
+        files
+            .iter()
+            .map(|(p, b)| (p.clone(), bytes_writer(b.clone())))
+            .collect(),
+    )
+}
+
+/// [`write_files`] with streamed contents: each writer fills a buffered temporary file.
+pub fn write_files_with(files: Vec<(PathBuf, Writer<'_>)>) -> Result<(), InputError> {
+    let mut temps: Vec<(PathBuf, PathBuf)> = Vec::new();
+    let cleanup = |temps: &[(PathBuf, PathBuf)]| {
         for (t, _) in temps {
             let _ = std::fs::remove_file(t);
         }
     };
-    for (k, (path, bytes)) in files.iter().enumerate() {
+    let mut direct: Vec<(PathBuf, Writer<'_>)> = Vec::new();
+    for (k, (path, write)) in files.into_iter().enumerate() {
+        // A device, FIFO or other special file (e.g. /dev/null, /dev/stdout) is written in
+        // place: renaming a temporary over it would replace the device with a regular file.
+        if std::fs::metadata(&path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+            direct.push((path, write));
+            continue;
+        }
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| "out".into());
         let tmp = path.with_file_name(format!(".{name}.{}.{k}.tmp", std::process::id()));
-        if let Err(e) = std::fs::write(&tmp, bytes) {
+        let result = std::fs::File::create(&tmp).and_then(|f| {
+            let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
+            write(&mut w)?;
+            w.flush()
+        });
+        if let Err(e) = result {
             cleanup(&temps);
             let _ = std::fs::remove_file(&tmp);
             return Err(InputError::new(
@@ -577,6 +610,19 @@ pub fn write_files(files: &[(PathBuf, Vec<u8>)]) -> Result<(), InputError> {
                 format!("cannot write {}: {e}", path.display()),
             ));
         }
+    }
+    for (path, write) in direct {
+        let result = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .and_then(|f| {
+                let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
+                write(&mut w)?;
+                w.flush()
+            });
+        result.map_err(|e| {
+            InputError::new("output", format!("cannot write {}: {e}", path.display()))
+        })?;
     }
     Ok(())
 }

@@ -337,7 +337,7 @@ pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
 /// Converts the library's refinement into the JSON result.
 pub fn to_result(r: &refine::Refinement) -> RefineResult {
     RefineResult {
-        points: r.points.to_rows(),
+        points: Rows(r.points.clone()),
         knots: r.knots.values().to_vec(),
         data_vertex: r.data_vertex.clone(),
         energy: r.energy,
@@ -411,10 +411,10 @@ fn draw_tangents(
         // Knots are strictly increasing, so dt > 0; guard anyway (a picture never fails).
         let dt = if dt > 0.0 { dt } else { 1.0 };
         let df = [
-            (r.points[b][0] - r.points[a][0]) / dt,
-            (r.points[b][1] - r.points[a][1]) / dt,
+            (r.points.point(b)[0] - r.points.point(a)[0]) / dt,
+            (r.points.point(b)[1] - r.points.point(a)[1]) / dt,
         ];
-        let p0 = [r.points[j][0], r.points[j][1]];
+        let p0 = [r.points.point(j)[0], r.points.point(j)[1]];
         let norm = (df[0] * df[0] + df[1] * df[1]).sqrt().max(1e-300);
         let arrow = [p0[0] + len * df[0] / norm, p0[1] + len * df[1] / norm];
         fig.segment(p0, arrow, Style::stroke(palette::SECOND, 2.0));
@@ -568,7 +568,8 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         .data_vertex
         .iter()
         .zip(&data_t)
-        .filter_map(|(&j, &t)| r.points.get(j).map(|v| xy(v, t)))
+        .filter(|&(&j, _)| j < r.points.len())
+        .map(|(&j, &t)| xy(r.points.point(j), t))
         .collect();
     fig.points_sized(
         &attached,

@@ -184,11 +184,34 @@ pub enum SolverSpec {
     Paper,
 }
 
+/// Points serialized as `[[x, y, …], …]` straight from their flat storage (no per-point
+/// allocation: results can have millions of vertices).
+#[derive(Clone, Debug, Default)]
+pub struct Rows(pub divdiff::Points);
+
+impl std::ops::Deref for Rows {
+    type Target = divdiff::Points;
+    fn deref(&self) -> &divdiff::Points {
+        &self.0
+    }
+}
+
+impl Serialize for Rows {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for p in self.0.iter() {
+            seq.serialize_element(p)?;
+        }
+        seq.end()
+    }
+}
+
 /// The result of `curvefit refine`.
 #[derive(Clone, Debug, Serialize)]
 pub struct RefineResult {
     /// Refined vertices p_1..p_N (a closed curve does not repeat p_1).
-    pub points: Vec<Vec<f64>>,
+    pub points: Rows,
     /// Knots those points were solved with (open t_1..t_N, closed t_1..t_{N+1}).
     pub knots: Vec<f64>,
     /// 0-based index of the vertex attached to each data point.

@@ -32,7 +32,7 @@ pub struct Stage {
     pub energy: f64,
     /// The relative KKT residual of the stage's final fixed-knot solve.
     pub kkt_residual: f64,
-    /// max over inactive data vertices of |jmp| relative to ‖H‖_∞ times the data's extent
+    /// max over inactive data vertices of |jmp| relative to the certificate's force scale
     /// (Corollary 3.3); `None` when no data vertex is inactive.
     pub jmp_inactive: Option<f64>,
 }

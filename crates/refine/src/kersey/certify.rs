@@ -46,7 +46,8 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 ///
 /// The relative KKT residual is the largest of: the stationarity residual
 /// ‖Hp + Σ (constraint gradient × multiplier)‖_∞, complementarity |w (slack)| and negative
-/// multipliers, all divided by the force scale ‖H‖_∞ · L; the constraint violation divided by
+/// multipliers, all divided by the force scale ‖H‖_∞ · δ (δ the largest coordinate step between
+/// consecutive vertices: Hp is computed from such differences); the constraint violation divided by
 /// the length scale L, the largest coordinate distance of a vertex or data point from the data's
 /// centroid; and the duality gap Σ_i ½ w_i(ε_i² − |p_{i_k} − q_i|²) (Σ w_ij·slack_ij for
 /// half-spaces) divided by E, which bounds the relative energy excess over the optimum.
@@ -86,7 +87,10 @@ pub(crate) fn certify(
         })
         .fold(0.0, f64::max);
     let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);
-    let force = pass.h_norm * length;
+    // Forces: Hp is a combination of differences of neighbouring vertices, computed to
+    // rounding level ‖H‖_∞ · (largest step between vertices); the reactions and multiplier
+    // terms present set the other scale.
+    let force = (pass.h_norm * pass.step).max(f64::MIN_POSITIVE);
     let hp = &pass.data_gradient;
     let multipliers = multipliers.unwrap_or_else(|| {
         (0..n)

@@ -16,7 +16,7 @@ pub const COMMON_POINT_SWEEPS: usize = 2000;
 pub const COMMON_POINT_TOL: f64 = 1e-13;
 /// The projections stop (no common point) when a sweep reduces the largest violation by less
 /// than this fraction: they stall on an empty intersection.
-pub const STAGNATION: f64 = 1e-4;
+pub const COMMON_POINT_STAGNATION: f64 = 1e-4;
 
 fn dist(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
@@ -80,7 +80,7 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
                 if v <= tol {
                     return Some(x);
                 }
-                if v > (1.0 - STAGNATION) * last {
+                if v > (1.0 - COMMON_POINT_STAGNATION) * last {
                     return None;
                 }
                 last = v;
@@ -124,7 +124,7 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
                 if v <= tol {
                     return Some(x);
                 }
-                if v > (1.0 - STAGNATION) * last {
+                if v > (1.0 - COMMON_POINT_STAGNATION) * last {
                     return None;
                 }
                 last = v;

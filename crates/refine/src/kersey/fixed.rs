@@ -79,10 +79,222 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             _ => {}
         }
     }
-    let (mut sol, extra, kkt) = super::exact::solve(fp)?;
-    sol.extra = extra;
-    sol.solver_kkt = Some(kkt);
-    Ok(sol)
+    // Balls alone: the paper's multiplier iteration (scalar banded solves) finds the active set
+    // approximately, the active-set polish makes it exact; the certificate decides. The
+    // interior-point solver is the fallback.
+    if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
+        // A failure here (e.g. a singular system when every ball is inactive and nothing pins
+        // the kernel of H) only means this shortcut does not apply.
+        if let Ok(start) = paper(fp) {
+            if let Ok(Some((polished, kp))) = polish_balls(fp, &start, radii) {
+                if kp <= super::exact::EXACT_KKT_TARGET {
+                    return Ok(FixedSolution {
+                        iterations: start.iterations + polished.iterations,
+                        ..polished
+                    });
+                }
+            }
+        }
+    }
+    let certified = |tol: f64| -> Result<(FixedSolution, f64), Error> {
+        let (mut sol, extra, kkt) = super::exact::solve(fp, tol)?;
+        sol.extra = extra;
+        sol.solver_kkt = Some(kkt);
+        let (cert, _) = super::certify::certify(
+            &Stencil::new(fp.knots),
+            &sol.points,
+            fp.q,
+            fp.data_vertex,
+            fp.constraint,
+            sol.multipliers.clone(),
+            super::certify::ACTIVE_REL_TOL,
+            &sol.extra,
+        );
+        Ok((sol, cert.kkt_residual.max(kkt)))
+    };
+    let (first, k1) = certified(crate::CONIC_TOLERANCE)?;
+    if k1 <= super::exact::EXACT_KKT_TARGET {
+        return Ok(first);
+    }
+    let (mut best, mut k) = match certified(super::exact::EXACT_CONIC_TOLERANCE) {
+        Ok((second, k2)) if k2 < k1 => (
+            FixedSolution {
+                iterations: first.iterations + second.iterations,
+                ..second
+            },
+            k2,
+        ),
+        _ => (first, k1),
+    };
+    if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
+        if k > super::exact::EXACT_KKT_TARGET {
+            if let Ok(Some((polished, kp))) = polish_balls(fp, &best, radii) {
+                if kp < k {
+                    best = FixedSolution {
+                        iterations: best.iterations + 1,
+                        ..polished
+                    };
+                    k = kp;
+                }
+            }
+        }
+    }
+    let _ = k;
+    Ok(best)
+}
+
+/// A data vertex on its sphere to this relative accuracy is treated as active by the polish.
+pub const BALL_POLISH_ACTIVE_RTOL: f64 = 1e-6;
+
+/// Newton steps on the settled active set at the end of the polish.
+pub const BALL_POLISH_NEWTON_STEPS: usize = 4;
+/// Stiffness of the penalty that holds an active vertex's normal direction during those steps,
+/// relative to the largest diagonal entry of H.
+/// (A moderate value: the normal component is re-projected after each step anyway, and a
+/// stiffer penalty trips the factorization's relative pivot test.)
+pub const BALL_POLISH_STIFFNESS: f64 = 1e4;
+
+/// Rounds of the active-set polish (each one scalar banded solve).
+pub const BALL_POLISH_ROUNDS: usize = 100;
+
+/// Active-set polish of a ball solution: the data vertices on their spheres are projected onto
+/// them exactly and fixed there, the others are freed (w = 0), and the curve is re-solved — one
+/// scalar banded solve. Freed vertices that leave their balls join the active set (at the
+/// projection of the new position), active ones whose multiplier w_i = −(Hp)·r/|r|² turns
+/// negative are freed, and the solve repeats (a primal active-set method started from the
+/// interior-point solution) for at most [`BALL_POLISH_ROUNDS`] rounds. When the set settles, every
+/// complementarity term vanishes exactly and the certificate measures what is left: the
+/// tangential part of (Hp)_{i_k} at the active vertices. `None` if it does not settle.
+fn polish_balls(
+    fp: &FixedProblem<'_>,
+    sol: &FixedSolution,
+    radii: &[f64],
+) -> Result<Option<(FixedSolution, f64)>, Error> {
+    let n = fp.q.len();
+    let d = fp.q.dim();
+    let nv = fp.knots.vertex_count();
+    // Positions the active vertices are pinned at (on their spheres).
+    let mut pin: Vec<Option<Vec<f64>>> = vec![None; n];
+    let project = |pv: &[f64], i: usize| -> Option<Vec<f64>> {
+        let qi = fp.q.point(i);
+        let g = dist(pv, qi);
+        (g > 0.0).then(|| {
+            qi.iter()
+                .zip(pv)
+                .map(|(q, p)| q + radii[i] * (p - q) / g)
+                .collect()
+        })
+    };
+    for i in 0..n {
+        let pv = sol.points.point(fp.data_vertex[i]);
+        if radii[i] > 0.0 && dist(pv, fp.q.point(i)) >= (1.0 - BALL_POLISH_ACTIVE_RTOL) * radii[i] {
+            pin[i] = project(pv, i);
+        }
+    }
+    for round in 1..=BALL_POLISH_ROUNDS {
+        let mut sys = hessian_system(fp.knots, d)?;
+        let mut rhs = vec![0.0; nv * d];
+        for i in 0..n {
+            let v = fp.data_vertex[i];
+            if radii[i] == 0.0 {
+                sys.fix(v)?;
+                rhs[v * d..(v + 1) * d].copy_from_slice(fp.q.point(i));
+            } else if let Some(y) = &pin[i] {
+                sys.fix(v)?;
+                rhs[v * d..(v + 1) * d].copy_from_slice(y);
+            }
+        }
+        let f = sys.factor()?;
+        f.solve_flat(&mut rhs)?;
+        let p = Points::new(d, rhs)?;
+        let hp = operator::apply_h(fp.knots, &p);
+        let mut multipliers = Vec::with_capacity(n);
+        let mut changed = false;
+        for i in 0..n {
+            let v = fp.data_vertex[i];
+            let qi = fp.q.point(i);
+            let h = &hp[v * d..(v + 1) * d];
+            if radii[i] == 0.0 {
+                multipliers.push(h.iter().map(|x| -x).collect());
+            } else if pin[i].is_some() {
+                let r: Vec<f64> = p.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
+                let rr: f64 = r.iter().map(|x| x * x).sum();
+                let w = -h.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+                if w < 0.0 {
+                    pin[i] = None;
+                    changed = true;
+                }
+                multipliers.push(vec![w.max(0.0)]);
+            } else {
+                if dist(p.point(v), qi) > radii[i] {
+                    pin[i] = project(p.point(v), i);
+                    changed = true;
+                }
+                multipliers.push(vec![0.0]);
+            }
+        }
+        if changed {
+            continue;
+        }
+        let certify_here = |p: &Points, m: &[Vec<f64>]| {
+            super::certify::certify(
+                &Stencil::new(fp.knots),
+                p,
+                fp.q,
+                fp.data_vertex,
+                fp.constraint,
+                Some(m.to_vec()),
+                super::certify::ACTIVE_REL_TOL,
+                &[],
+            )
+            .0
+            .kkt_residual
+        };
+        let mut best = (p, multipliers);
+        let mut k = certify_here(&best.0, &best.1);
+        // Newton steps on the equality-constrained problem of the settled active set: the
+        // tangential positions on the spheres move, with the Lagrangian's curvature w_i I there
+        // and the normal direction held by a stiff penalty; then re-project and re-certify.
+        for _ in 0..BALL_POLISH_NEWTON_STEPS {
+            if k <= super::exact::EXACT_KKT_TARGET {
+                break;
+            }
+            // A failed step (e.g. a pivot test tripped by the penalty) only ends the polish.
+            // Damped: halve the step while it would free a vertex out of its ball or turn a
+            // multiplier negative.
+            let mut tn = Ok(None);
+            for scale in [1.0, 0.5, 0.25, 0.125, 0.0625] {
+                tn = tangential_newton(fp, radii, &pin, &best.0, &best.1, scale);
+                if !matches!(tn, Ok(None)) {
+                    break;
+                }
+            }
+            match tn {
+                Ok(Some((p2, m2))) => {
+                    let k2 = certify_here(&p2, &m2);
+                    if k2 < k {
+                        best = (p2, m2);
+                        k = k2;
+                    } else {
+                        break;
+                    }
+                }
+                _ => break,
+            }
+        }
+        return Ok(Some((
+            FixedSolution {
+                points: best.0,
+                multipliers: Some(best.1),
+                iterations: round,
+                stencil: None,
+                extra: Vec::new(),
+                solver_kkt: None,
+            },
+            k,
+        )));
+    }
+    Ok(None)
 }
 
 /// Interpolation (3.3) at every data vertex: the fused banded solver of [`super::fast`].
@@ -161,6 +373,96 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 "the paper's slot iteration (Fig. 4.1) is not implemented; use the exact solver",
         }),
     }
+}
+
+/// A curve with its multipliers.
+type PointsAndMultipliers = (Points, Vec<Vec<f64>>);
+
+/// One Newton step of the polish (see [`polish_balls`]); `None` if a freed vertex leaves its
+/// ball or an active multiplier turns negative.
+fn tangential_newton(
+    fp: &FixedProblem<'_>,
+    radii: &[f64],
+    pin: &[Option<Vec<f64>>],
+    p: &Points,
+    w: &[Vec<f64>],
+    scale: f64,
+) -> Result<Option<PointsAndMultipliers>, Error> {
+    let n = fp.q.len();
+    let d = fp.q.dim();
+    let h = Hessian::new(fp.knots);
+    let hmax = h.bands().0.iter().fold(0.0f64, |a, &x| a.max(x));
+    let mut sys = hessian_system(fp.knots, d)?;
+    let mut g = operator::apply_h(fp.knots, p);
+    for i in 0..n {
+        let v = fp.data_vertex[i];
+        if radii[i] == 0.0 {
+            sys.fix(v)?;
+            g[v * d..(v + 1) * d].iter_mut().for_each(|x| *x = 0.0);
+        } else if pin[i].is_some() {
+            let r: Vec<f64> = p
+                .point(v)
+                .iter()
+                .zip(fp.q.point(i))
+                .map(|(a, b)| a - b)
+                .collect();
+            let rn = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let wi = w[i][0];
+            let mut block = vec![0.0; d * d];
+            for a in 0..d {
+                g[v * d + a] += wi * r[a];
+                for b in 0..d {
+                    block[a * d + b] = BALL_POLISH_STIFFNESS * hmax * r[a] * r[b] / (rn * rn);
+                }
+                block[a * d + a] += wi;
+            }
+            sys.add_block(v, &block)?;
+        }
+    }
+    let f = sys.factor()?;
+    let mut step: Vec<f64> = g.iter().map(|x| -x).collect();
+    f.solve_flat(&mut step)?;
+    let mut coords = p.coords().to_vec();
+    for (x, s) in coords.iter_mut().zip(&step) {
+        *x += scale * s;
+    }
+    for i in 0..n {
+        if pin[i].is_some() {
+            // Back onto the sphere.
+            let v = fp.data_vertex[i];
+            let qi = fp.q.point(i);
+            let pv = &mut coords[v * d..(v + 1) * d];
+            let gap = dist(pv, qi);
+            for (x, q) in pv.iter_mut().zip(qi) {
+                *x = q + radii[i] * (*x - q) / gap;
+            }
+        }
+    }
+    let p2 = Points::new(d, coords)?;
+    let hp = operator::apply_h(fp.knots, &p2);
+    let mut m = Vec::with_capacity(n);
+    for i in 0..n {
+        let v = fp.data_vertex[i];
+        let qi = fp.q.point(i);
+        let hv = &hp[v * d..(v + 1) * d];
+        if radii[i] == 0.0 {
+            m.push(hv.iter().map(|x| -x).collect());
+        } else if pin[i].is_some() {
+            let r: Vec<f64> = p2.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
+            let rr: f64 = r.iter().map(|x| x * x).sum();
+            let wi = -hv.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+            if wi < 0.0 {
+                return Ok(None);
+            }
+            m.push(vec![wi]);
+        } else {
+            if dist(p2.point(v), qi) > radii[i] {
+                return Ok(None);
+            }
+            m.push(vec![0.0]);
+        }
+    }
+    Ok(Some((p2, m)))
 }
 
 pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {

@@ -108,6 +108,8 @@ pub(crate) struct Pass {
     pub h_norm: f64,
     /// max_j |p_j − center|_∞.
     pub extent: f64,
+    /// max_j |p_{j+1} − p_j|_∞ (the largest coordinate step between consecutive vertices).
+    pub step: f64,
 }
 
 impl Stencil {
@@ -126,6 +128,7 @@ impl Stencil {
             a[0].abs() + a[1].abs() + a[2].abs()
         };
         let (mut energy, mut free_gradient, mut h_norm, mut extent) = (0.0, 0.0f64, 0.0f64, 0.0f64);
+        let mut step: f64 = 0.0;
         let mut phase = 0;
         let mut hp = vec![0.0; d];
         for j in 0..n {
@@ -144,9 +147,12 @@ impl Stencil {
                 let x0 = x[j * d + c];
                 let xp1 = x[jn * d + c];
                 let xp2 = x[jnn * d + c];
-                let rp = ap[0] * xm2 + ap[1] * xm1 + ap[2] * x0;
-                let rc = ac[0] * xm1 + ac[1] * x0 + ac[2] * xp1;
-                let rn = an[0] * x0 + an[1] * xp1 + an[2] * xp2;
+                // Difference form α₁(p_{i−1} − p_i) + α₃(p_{i+1} − p_i) (α₂ = −α₁ − α₃): the
+                // rounding error scales with the local spacing, not with |p|.
+                let rp = ap[0] * (xm2 - xm1) + ap[2] * (x0 - xm1);
+                let rc = ac[0] * (xm1 - x0) + ac[2] * (xp1 - x0);
+                let rn = an[0] * (x0 - xp1) + an[2] * (xp2 - xp1);
+                step = step.max((xp1 - x0).abs());
                 energy += rc * rc;
                 hp[c] = wp * rp + wc * rc + wn * rn;
                 extent = extent.max((x0 - center[c]).abs());
@@ -167,6 +173,7 @@ impl Stencil {
             data_gradient,
             h_norm,
             extent,
+            step,
         }
     }
 }

@@ -1,0 +1,429 @@
+//! Conditioning study of Kersey refinement (issue 8): badly scaled data, extreme span-length
+//! ratios, nearly collinear and nearly coincident points, radii from 0 to beyond the data, and
+//! bounded iterations. Every case either meets the documented tolerances — the certified
+//! relative KKT residual ([`refine::Refinement::kkt_residual`]) and the relative constraint
+//! violation, recomputed here — or fails with a typed error. The limits asserted here are the
+//! ones measured and tabulated in ROBUSTNESS.md (run with `--nocapture` to print the table).
+
+use divdiff::{Parametrization, Points, Topology};
+use energy::Hessian;
+use refine::{
+    ConicOptions, ConicProblem, Constraint, ConvexSet, Error, HalfSpace, Problem, Refinement,
+};
+
+/// Certified KKT residual met by well-scaled problems (the exact solver's acceptance level).
+const KKT_GOOD: f64 = 1e-9;
+/// Smallest ball radius (relative to the data's extent) certified to [`KKT_GOOD`] (measured).
+const RADIUS_CERTIFIED: f64 = 1e-9;
+
+/// The largest coordinate distance from the data's centroid.
+fn extent(q: &Points) -> f64 {
+    let n = q.len() as f64;
+    let d = q.dim();
+    let c: Vec<f64> = (0..d)
+        .map(|j| q.iter().map(|x| x[j]).sum::<f64>() / n)
+        .collect();
+    q.iter()
+        .flat_map(|x| {
+            x.iter()
+                .zip(&c)
+                .map(|(a, b)| (a - b).abs())
+                .collect::<Vec<_>>()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Relative constraint violation: max over data points of the distance outside the constraint
+/// set, over the data's extent.
+fn violation(p: &Problem, r: &Refinement) -> f64 {
+    let l = extent(&p.points);
+    let mut worst: f64 = 0.0;
+    for (i, &v) in r.data_vertex.iter().enumerate() {
+        let (pv, qi) = (r.points.point(v), p.points.point(i));
+        let dist = pv
+            .iter()
+            .zip(qi)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        let out = match &p.constraint {
+            Constraint::Interpolate => dist,
+            Constraint::Balls(radii) => dist - radii[i],
+            Constraint::Smoothing(_) => 0.0,
+            Constraint::HalfSpaces(sets) => sets[i]
+                .iter()
+                .map(|h| {
+                    let len = h.normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+                    (h.normal.iter().zip(pv).map(|(a, b)| a * b).sum::<f64>() - h.offset) / len
+                })
+                .fold(0.0, f64::max),
+        };
+        worst = worst.max(out / l);
+    }
+    worst
+}
+
+/// One row of the table: (label, Ok(kkt, violation, energy) or the error).
+type Row = (String, Result<(f64, f64, f64), Error>);
+
+fn run(label: String, p: &Problem) -> Row {
+    let r = p.solve().map(|r| {
+        assert!(
+            r.points.coords().iter().all(|x| x.is_finite()),
+            "{label}: non-finite point"
+        );
+        assert!(
+            r.energy.is_finite() && r.kkt_residual.is_finite(),
+            "{label}"
+        );
+        (r.kkt_residual, violation(p, &r), r.energy)
+    });
+    match &r {
+        Ok((k, v, e)) => eprintln!("| {label} | {k:.1e} | {v:.1e} | {e:.3e} |"),
+        Err(e) => eprintln!("| {label} | error: {e} | | |"),
+    }
+    (label, r)
+}
+
+/// Eight points on a perturbed ellipse (closed) or an arc (open), scaled by `s` about `centre`.
+fn data(n: usize, closed: bool, s: f64, centre: f64) -> Points {
+    let mut c = Vec::new();
+    for i in 0..n {
+        let th = if closed {
+            2.0 * std::f64::consts::PI * i as f64 / n as f64
+        } else {
+            0.9 * std::f64::consts::PI * i as f64 / (n - 1) as f64
+        };
+        let wobble = 0.1 * ((3 * i) as f64).sin();
+        c.push(centre + s * (2.0 + wobble) * th.cos());
+        c.push(centre + s * (1.0 - wobble) * th.sin());
+    }
+    Points::new(2, c).unwrap()
+}
+
+fn boxes(q: &Points, w: f64) -> Constraint {
+    Constraint::HalfSpaces(
+        q.iter()
+            .map(|x| {
+                let mut set = Vec::new();
+                for j in 0..2 {
+                    for sign in [1.0, -1.0] {
+                        let mut normal = vec![0.0; 2];
+                        normal[j] = sign;
+                        set.push(HalfSpace {
+                            offset: sign * x[j] + w,
+                            normal,
+                        });
+                    }
+                }
+                set
+            })
+            .collect(),
+    )
+}
+
+fn kinds(q: &Points, s: f64) -> Vec<(&'static str, Constraint)> {
+    let n = q.len();
+    let radii: Vec<f64> = (0..n)
+        .map(|i| if i % 3 == 0 { 0.0 } else { 0.2 * s })
+        .collect();
+    vec![
+        ("interpolate", Constraint::Interpolate),
+        ("balls", Constraint::Balls(radii)),
+        ("smoothing", Constraint::Smoothing(vec![1.0; n])),
+        ("half-spaces", boxes(q, 0.15 * s)),
+    ]
+}
+
+/// Data scale from 1e-8 to 1e8 (and translated far from the origin): every kind stays
+/// certified to [`KKT_GOOD`] with violation ≤ 1e-9, and E scales as s^{2−3e} (centripetal:
+/// s^{1/2}). Smoothing weights are scaled by s^{−3e} to keep the problem the same.
+#[test]
+fn data_scale_1e_minus8_to_1e8() {
+    eprintln!("| data scale s (centre) / kind | KKT | violation | E |");
+    for closed in [true, false] {
+        let base: Vec<f64> = kinds(&data(8, closed, 1.0, 0.0), 1.0)
+            .iter()
+            .map(|(_, c)| {
+                Problem::new(data(8, closed, 1.0, 0.0))
+                    .with_topology(if closed {
+                        Topology::Closed
+                    } else {
+                        Topology::Open
+                    })
+                    .with_constraint(c.clone())
+                    .solve()
+                    .unwrap()
+                    .energy
+            })
+            .collect();
+        for (s, centre) in [
+            (1e-8, 0.0),
+            (1e-4, 0.0),
+            (1.0, 0.0),
+            (1e4, 0.0),
+            (1e8, 0.0),
+            (1.0, 1e6),
+            (1e-3, 1e3),
+        ] {
+            let q = data(8, closed, s, centre);
+            for (k, (name, c)) in kinds(&q, s).into_iter().enumerate() {
+                let c = match c {
+                    Constraint::Smoothing(w) => {
+                        Constraint::Smoothing(w.iter().map(|x| x * s.powf(-1.5)).collect())
+                    }
+                    c => c,
+                };
+                let p = Problem::new(q.clone())
+                    .with_topology(if closed {
+                        Topology::Closed
+                    } else {
+                        Topology::Open
+                    })
+                    .with_constraint(c);
+                let (label, row) = run(
+                    format!(
+                        "{} s = {s:e} (centre {centre:e}) {name}",
+                        if closed { "closed" } else { "open" }
+                    ),
+                    &p,
+                );
+                let (kkt, viol, e) = row.unwrap_or_else(|e| panic!("{label}: {e}"));
+                assert!(kkt <= KKT_GOOD, "{label}: kkt {kkt:e}");
+                assert!(viol <= 1e-9, "{label}: violation {viol:e}");
+                let want = base[k] * s.powf(0.5);
+                assert!(
+                    (e - want).abs() <= 1e-6 * want,
+                    "{label}: E {e:e} vs {want:e}"
+                );
+            }
+        }
+    }
+}
+
+/// Open data whose consecutive spans differ by a ratio up to 1e6 (chordal knots: the knot
+/// spans differ as much), constraint sets of size 0.01·L. Measured: interpolation stays
+/// certified to ~1e-17 up to ratio 1e6, smoothing up to 1e4 (at 1e6 a typed
+/// `Energy(Singular)` error); balls and half-spaces stay feasible but their certificate
+/// degrades: balls ≤ 3e-13 up to 1e4 and 3.1e-3 at 1e6; half-spaces 3.8e-7 at 1e2, ~8e-3 at
+/// 1e4 and 1e6 (an earlier main read 2.6e-3 at 1e2 and ~45 beyond for both).
+#[test]
+fn span_ratios_up_to_1e6() {
+    eprintln!("| span ratio / kind | KKT | violation | E |");
+    let mut rows = Vec::new();
+    for ratio in [1e2, 1e4, 1e6] {
+        // Points on an arc with every other span shortened by `ratio`.
+        let mut pts = Vec::new();
+        let mut th = 0.0f64;
+        for i in 0..8 {
+            pts.push([2.0 * th.cos(), th.sin()]);
+            th += if i % 2 == 0 { 0.4 } else { 0.4 / ratio };
+        }
+        let q = Points::from_rows(&pts).unwrap();
+        let l = extent(&q);
+        for (name, c) in kinds(&q, 0.05 * l) {
+            let p = Problem::new(q.clone())
+                .with_topology(Topology::Open)
+                .with_parametrization(Parametrization::Chordal)
+                .with_knot_iterations(0)
+                .with_constraint(c);
+            rows.push(run(format!("ratio {ratio:e} {name}"), &p));
+        }
+    }
+    for (label, row) in rows {
+        let ratio: f64 = label
+            .split(' ')
+            .nth(1)
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0.0);
+        let conic = label.contains("balls") || label.contains("half-spaces");
+        match row {
+            Ok((kkt, viol, _)) => {
+                // Feasibility always holds; the conic kinds are NOT certified on these data
+                // (measured up to 8e-3, see above; Clarabel too stops at "almost solved" / its
+                // iteration limit): the residual is reported, but no error is raised
+                // (ROBUSTNESS.md, finding 3).
+                assert!(viol <= KKT_GOOD, "{label}: violation {viol:e}");
+                if !conic {
+                    assert!(kkt <= KKT_GOOD, "{label}: kkt {kkt:e}");
+                }
+            }
+            Err(e) => assert!(
+                ratio >= 1e6 && matches!(e, Error::Energy(_)),
+                "{label}: {e}"
+            ),
+        }
+    }
+}
+
+/// Nearly collinear data (a line bent by δ): E → 0 like δ², the certificate stays meaningful
+/// for interpolation (the reactions are exact linear algebra) down to δ = 1e-12.
+#[test]
+fn nearly_collinear_points() {
+    eprintln!("| collinear, bend δ / kind | KKT | violation | E |");
+    for delta in [1e-2, 1e-6, 1e-9, 1e-12] {
+        let rows: Vec<[f64; 2]> = (0..8)
+            .map(|i| {
+                let x = i as f64;
+                [x, if i == 4 { delta } else { 0.0 }]
+            })
+            .collect();
+        let q = Points::from_rows(&rows).unwrap();
+        for (name, c) in [
+            ("interpolate", Constraint::Interpolate),
+            ("smoothing", Constraint::Smoothing(vec![1.0; 8])),
+        ] {
+            let p = Problem::new(q.clone())
+                .with_topology(Topology::Open)
+                .with_constraint(c);
+            let (label, row) = run(format!("δ = {delta:e} {name}"), &p);
+            let (kkt, viol, e) = row.unwrap_or_else(|e| panic!("{label}: {e}"));
+            assert!(kkt <= KKT_GOOD, "{label}: kkt {kkt:e}");
+            assert!(viol <= 1e-12, "{label}: violation {viol:e}");
+            assert!(e <= 10.0 * delta * delta, "{label}: E {e:e}");
+        }
+    }
+}
+
+/// Nearly coincident consecutive points (distance δ against spans of ~1): exactly coincident
+/// points are refused ([`Error::CoincidentPoints`]); down to δ = 1e-8 interpolation stays
+/// certified; below, knot updates may meet coincident refined vertices
+/// ([`Error::DegenerateRefinedSpan`]) or the system may be numerically singular
+/// ([`Error::Energy`]) — typed errors, never NaN.
+#[test]
+fn nearly_coincident_points() {
+    eprintln!("| coincident, gap δ / kind | KKT | violation | E |");
+    for delta in [1e-4, 1e-8, 1e-12, 0.0] {
+        let mut rows: Vec<[f64; 2]> = (0..7)
+            .map(|i| {
+                let th = 2.0 * std::f64::consts::PI * i as f64 / 7.0;
+                [2.0 * th.cos(), th.sin()]
+            })
+            .collect();
+        rows.insert(3, [rows[2][0] + delta, rows[2][1]]);
+        let q = Points::from_rows(&rows).unwrap();
+        for (name, c) in kinds(&q, 1.0) {
+            let p = Problem::new(q.clone()).with_constraint(c);
+            let (label, row) = run(format!("δ = {delta:e} {name}"), &p);
+            match row {
+                Ok((kkt, viol, _)) => {
+                    assert!(delta > 0.0, "{label}: coincident points accepted");
+                    let tol = if delta >= 1e-8 { KKT_GOOD } else { 1e-6 };
+                    assert!(kkt <= tol, "{label}: kkt {kkt:e}");
+                    assert!(viol <= tol, "{label}: violation {viol:e}");
+                }
+                Err(e) => {
+                    if delta == 0.0 {
+                        assert!(
+                            matches!(e, Error::CoincidentPoints { index: 2, next: 3 }),
+                            "{label}: {e}"
+                        );
+                    } else {
+                        assert!(delta < 1e-8, "{label}: {e}");
+                        assert!(
+                            matches!(
+                                e,
+                                Error::DegenerateRefinedSpan { .. }
+                                    | Error::Energy(_)
+                                    | Error::NotConverged { .. }
+                            ),
+                            "{label}: {e}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Ball radii from 0 to larger than the data: radius 0 interpolates; radii larger than the
+/// data's extent make the balls share a point, and the constant curve (E = 0) is returned.
+#[test]
+fn radii_from_zero_to_beyond_the_data() {
+    eprintln!("| radius / extent | KKT | violation | E |");
+    for closed in [true, false] {
+        let q = data(8, closed, 1.0, 0.0);
+        let l = extent(&q);
+        let topo = if closed {
+            Topology::Closed
+        } else {
+            Topology::Open
+        };
+        let interp = Problem::new(q.clone()).with_topology(topo).solve().unwrap();
+        let mut rows = Vec::new();
+        for rel in [0.0, 1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 0.3, 1.0, 10.0] {
+            let p = Problem::new(q.clone())
+                .with_topology(topo)
+                .with_constraint(Constraint::Balls(vec![rel * l; 8]));
+            let (label, row) = run(
+                format!("{} ε/L = {rel:e}", if closed { "closed" } else { "open" }),
+                &p,
+            );
+            rows.push((rel, label, row));
+        }
+        for (rel, label, row) in rows {
+            let (kkt, viol, e) = row.unwrap_or_else(|e| panic!("{label}: {e}"));
+            assert!(viol <= 1e-9, "{label}: violation {viol:e}");
+            assert!(
+                e <= interp.energy * (1.0 + 1e-9),
+                "{label}: E {e} above interpolation's"
+            );
+            if rel >= 10.0 {
+                // The balls share a point: the constant curve, E = 0 exactly.
+                assert!(e.abs() <= 1e-12 * interp.energy, "{label}: E {e}");
+            } else if e <= 1e-12 * interp.energy {
+                // E* = 0 (a line or a point meets every ball): the certificate's duality gap
+                // relative to E is meaningless there (ROBUSTNESS.md, finding 2).
+            } else if rel == 0.0 || rel >= RADIUS_CERTIFIED {
+                assert!(kkt <= KKT_GOOD, "{label}: kkt {kkt:e}");
+            } else {
+                // Tiny radii (ε = 1e-12 L): the certificate's complementarity w·slack with
+                // w ~ force/ε reads 1.3e-5 (closed) / 4.9e-9 (open) although E equals
+                // interpolation's (ROBUSTNESS.md, finding 8).
+                assert!(kkt <= 1e-4, "{label}: kkt {kkt:e}");
+            }
+        }
+    }
+}
+
+/// Iterations are bounded: the interior-point method with an absurdly low iteration limit
+/// returns [`Error::NotConverged`] carrying the best residual it reached (finite, positive).
+#[test]
+fn iteration_limit_gives_not_converged_with_the_best_residual() {
+    let q = data(8, true, 1.0, 0.0);
+    let knots = divdiff::parametrize(&q, Topology::Closed, Parametrization::Centripetal).unwrap();
+    let h = Hessian::new(&knots);
+    let mut cp = ConicProblem::new(&h, 2).unwrap();
+    for i in 0..8 {
+        cp.add_constraint(
+            &[(i, 1.0)],
+            ConvexSet::Ball {
+                center: q.point(i).to_vec(),
+                radius: 0.2,
+            },
+        )
+        .unwrap();
+    }
+    let full = cp.solve(&ConicOptions::default()).unwrap();
+    assert!(full.kkt.total <= refine::CONIC_ACCEPT);
+    for limit in [0, 1, 2] {
+        let opts = ConicOptions {
+            max_iterations: limit,
+            ..ConicOptions::default()
+        };
+        match cp.solve(&opts) {
+            Err(Error::NotConverged {
+                iterations,
+                residual,
+                ..
+            }) => {
+                eprintln!(
+                    "limit {limit}: NotConverged after {iterations}, best residual {residual:e}"
+                );
+                assert!(iterations <= limit.max(1));
+                assert!(residual.is_finite() && residual > refine::CONIC_ACCEPT);
+            }
+            other => panic!("limit {limit}: expected NotConverged, got {other:?}"),
+        }
+    }
+}
