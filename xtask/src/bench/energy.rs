@@ -257,6 +257,19 @@ fn conic_only(spec: &str) -> anyhow::Result<()> {
         .min()
         .unwrap_or_default();
     let sol = p.solve(&ConicOptions::default())?;
+    // The Newton-system kernel alone: closed, N = 4n, d = 2, a 2×2 block at every 4th vertex.
+    let s = system(Topology::Closed, 4 * n, 2, true)?;
+    let b = rhs(4 * n, 2)?;
+    let f = s.factor()?;
+    let tf = time_median(reps, || s.factor().expect("nonsingular benchmark system"));
+    let ts = time_median(reps, || f.solve(&b).expect("sizes match"));
+    println!(
+        "block system N = {}: factor {:.3} ms ({:.0} ns/vertex), solve {:.3} ms",
+        4 * n,
+        tf.as_secs_f64() * 1e3,
+        tf.as_secs_f64() * 1e9 / (4 * n) as f64,
+        ts.as_secs_f64() * 1e3
+    );
     println!(
         "conic balls n = {n}: median {:.3} ms, min {:.3} ms, {} iterations, KKT {:.2e}, polished {}, objective {:.15e}",
         t.as_secs_f64() * 1e3,
