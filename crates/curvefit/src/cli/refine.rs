@@ -498,8 +498,15 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         ConstraintSpec::Smoothing { .. } => "smoothing",
         ConstraintSpec::Halfspaces { .. } => "convex polygons",
     };
+    let extras = match (&p.tangents, &p.boundary) {
+        (Some(_), BoundarySpec::Natural) => " + tangents",
+        (Some(_), _) => " + tangents + ends",
+        (None, BoundarySpec::Clamped { .. }) => ", clamped ends",
+        (None, BoundarySpec::NearClamped { .. }) => ", near-clamped ends",
+        (None, BoundarySpec::Natural) => "",
+    };
     let mut fig = Figure::new(&format!(
-        "Refinement: {kind} ({}, {} → {} vertices)",
+        "Refinement: {kind}{extras} ({}, {} → {} vertices)",
         if p.closed { "closed" } else { "open" },
         p.points.len(),
         r.points.len()
