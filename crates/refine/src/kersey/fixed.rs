@@ -58,6 +58,17 @@ fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result<Points, Er
     Ok(Points::new(d, rhs)?)
 }
 
+/// The ball multiplier w that makes (Hp)_v + w (p_v − q) = 0 hold in the least-squares sense:
+/// w = −(Hp)_v · (p_v − q) / |p_v − q|².
+fn ball_weight(hp_v: &[f64], p_v: &[f64], q: &[f64]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for ((h, x), y) in hp_v.iter().zip(p_v).zip(q) {
+        num -= h * (x - y);
+        den += (x - y) * (x - y);
+    }
+    num / den
+}
+
 /// The exact optimum of the fixed-knot problem.
 pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     let n = fp.q.len();
@@ -217,9 +228,7 @@ fn polish_balls(
             if radii[i] == 0.0 {
                 multipliers.push(h.iter().map(|x| -x).collect());
             } else if pin[i].is_some() {
-                let r: Vec<f64> = p.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
-                let rr: f64 = r.iter().map(|x| x * x).sum();
-                let w = -h.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+                let w = ball_weight(h, p.point(v), qi);
                 if w < 0.0 {
                     pin[i] = None;
                     changed = true;
@@ -569,9 +578,7 @@ fn tangential_newton(
         if radii[i] == 0.0 {
             m.push(hv.iter().map(|x| -x).collect());
         } else if pin[i].is_some() {
-            let r: Vec<f64> = p2.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
-            let rr: f64 = r.iter().map(|x| x * x).sum();
-            let wi = -hv.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+            let wi = ball_weight(hv, p2.point(v), qi);
             if wi < 0.0 {
                 return Ok(None);
             }
