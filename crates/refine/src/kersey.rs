@@ -8,6 +8,7 @@ mod fast;
 mod fixed;
 mod operator;
 mod problem;
+mod slots;
 mod split;
 
 pub use algorithm::{Iterations, Refinement, Stage};
@@ -23,6 +24,7 @@ pub use problem::{
     Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
     DEFAULT_PAPER_ITERATIONS,
 };
+pub use slots::halfplane_polygon;
 pub use split::{data_vertex, split};
 
 impl Problem {

@@ -1,6 +1,7 @@
 //! `cargo xtask figures [--out DIR]`: redraws the seeds' figures as SVG (default `figures-out/`).
 
 mod refine;
+mod refine_constraints;
 mod schemes;
 mod strip;
 
@@ -29,6 +30,7 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     std::fs::create_dir_all(&out)?;
     refine::draw(&out)?;
     refine::draw_free_knots(&out)?;
+    refine_constraints::draw(&out)?;
     schemes::draw(&out)?;
     strip::draw(&out)?;
     Ok(true)

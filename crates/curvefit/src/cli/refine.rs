@@ -441,42 +441,21 @@ fn draw_tangents(
     fig.legend("Df at vertex", Style::stroke(palette::SECOND, 2.0));
 }
 
-/// Clips a big box by the half-planes `n · x ≤ c` (Sutherland–Hodgman); the polygon of a 2-D set.
+/// The 2-D polygon of a JSON half-space set, clipped to a square (see
+/// [`refine::halfplane_polygon`]).
 pub fn halfplane_polygon(
     halfspaces: &[HalfSpaceSpec],
     around: [f64; 2],
     extent: f64,
 ) -> Vec<[f64; 2]> {
-    let (x, y, e) = (around[0], around[1], extent);
-    let mut poly = vec![
-        [x - e, y - e],
-        [x + e, y - e],
-        [x + e, y + e],
-        [x - e, y + e],
-    ];
-    for h in halfspaces {
-        if h.normal.len() < 2 {
-            continue;
-        }
-        let f = |p: &[f64; 2]| h.normal[0] * p[0] + h.normal[1] * p[1] - h.offset;
-        let mut out = Vec::with_capacity(poly.len() + 1);
-        for i in 0..poly.len() {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            let (fa, fb) = (f(&a), f(&b));
-            if fa <= 0.0 {
-                out.push(a);
-            }
-            if (fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0) {
-                let s = fa / (fa - fb);
-                out.push([a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]);
-            }
-        }
-        poly = out;
-        if poly.is_empty() {
-            break;
-        }
-    }
-    poly
+    let set: Vec<refine::HalfSpace> = halfspaces
+        .iter()
+        .map(|h| refine::HalfSpace {
+            normal: h.normal.clone(),
+            offset: h.offset,
+        })
+        .collect();
+    refine::halfplane_polygon(&set, around, extent)
 }
 
 /// The picture of a refinement: data points, their tolerance regions (active ones highlighted),
@@ -498,8 +477,15 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         ConstraintSpec::Smoothing { .. } => "smoothing",
         ConstraintSpec::Halfspaces { .. } => "convex polygons",
     };
+    let extras = match (&p.tangents, &p.boundary) {
+        (Some(_), BoundarySpec::Natural) => " + tangents",
+        (Some(_), _) => " + tangents + ends",
+        (None, BoundarySpec::Clamped { .. }) => ", clamped ends",
+        (None, BoundarySpec::NearClamped { .. }) => ", near-clamped ends",
+        (None, BoundarySpec::Natural) => "",
+    };
     let mut fig = Figure::new(&format!(
-        "Refinement: {kind} ({}, {} → {} vertices)",
+        "Refinement: {kind}{extras} ({}, {} → {} vertices)",
         if p.closed { "closed" } else { "open" },
         p.points.len(),
         r.points.len()

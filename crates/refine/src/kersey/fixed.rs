@@ -58,6 +58,17 @@ fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result<Points, Er
     Ok(Points::new(d, rhs)?)
 }
 
+/// The ball multiplier w that makes (Hp)_v + w (p_v − q) = 0 hold in the least-squares sense:
+/// w = −(Hp)_v · (p_v − q) / |p_v − q|².
+fn ball_weight(hp_v: &[f64], p_v: &[f64], q: &[f64]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for ((h, x), y) in hp_v.iter().zip(p_v).zip(q) {
+        num -= h * (x - y);
+        den += (x - y) * (x - y);
+    }
+    num / den
+}
+
 /// The exact optimum of the fixed-knot problem.
 pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     let n = fp.q.len();
@@ -217,9 +228,7 @@ fn polish_balls(
             if radii[i] == 0.0 {
                 multipliers.push(h.iter().map(|x| -x).collect());
             } else if pin[i].is_some() {
-                let r: Vec<f64> = p.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
-                let rr: f64 = r.iter().map(|x| x * x).sum();
-                let w = -h.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+                let w = ball_weight(h, p.point(v), qi);
                 if w < 0.0 {
                     pin[i] = None;
                     changed = true;
@@ -367,12 +376,133 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 solver_kkt: None,
             })
         }
-        Constraint::HalfSpaces(_) => Err(Error::Unsupported {
-            field: "solver",
-            reason:
-                "the paper's slot iteration (Fig. 4.1) is not implemented; use the exact solver",
-        }),
+        Constraint::HalfSpaces(sets) => paper_slots(fp, sets),
     }
+}
+
+/// The paper's slot iteration for polygonal constraints in the plane (Fig. 4.1; see
+/// [`super::slots`]): one d×d spring block per slot at its data vertex, weights updated by
+/// w := w |u·p − m| / ε.
+fn paper_slots(
+    fp: &FixedProblem<'_>,
+    sets: &[Vec<super::problem::HalfSpace>],
+) -> Result<FixedSolution, Error> {
+    let d = fp.q.dim();
+    if d != 2 {
+        return Err(Error::Unsupported {
+            field: "solver",
+            reason: "the paper's slot iteration (Fig. 4.1) is planar; use the exact solver for half-spaces in R^d, d ≠ 2",
+        });
+    }
+    let n = fp.q.len();
+    let extent =
+        fp.q.iter()
+            .flat_map(|x| x.iter().map(|v| v.abs()))
+            .fold(1.0f64, f64::max)
+            * 4.0;
+    let mut all: Vec<Vec<super::slots::Slot>> = Vec::with_capacity(n);
+    for (i, set) in sets.iter().enumerate() {
+        let q = fp.q.point(i);
+        let s =
+            super::slots::slots(set, [q[0], q[1]], extent).ok_or(Error::InfeasibleConstraint {
+                field: "sets",
+                point: i,
+            })?;
+        all.push(s);
+    }
+    let h = Hessian::new(fp.knots);
+    let floor = PAPER_WEIGHT_FLOOR * h.bands().0.iter().sum::<f64>() / h.len() as f64;
+    let mut w: Vec<Vec<f64>> = all.iter().map(|s| vec![1.0; s.len()]).collect();
+    let solve = |w: &[Vec<f64>]| -> Result<Points, Error> {
+        let mut sys = hessian_system(fp.knots, d)?;
+        let mut rhs = vec![0.0; fp.knots.vertex_count() * d];
+        for (i, slots) in all.iter().enumerate() {
+            let v = fp.data_vertex[i];
+            for (slot, &wij) in slots.iter().zip(&w[i]) {
+                let u = slot.unit;
+                sys.add_block(
+                    v,
+                    &[
+                        wij * u[0] * u[0],
+                        wij * u[0] * u[1],
+                        wij * u[1] * u[0],
+                        wij * u[1] * u[1],
+                    ],
+                )?;
+                rhs[v * 2] += wij * slot.centre * u[0];
+                rhs[v * 2 + 1] += wij * slot.centre * u[1];
+            }
+        }
+        let f = sys.factor()?;
+        f.solve_flat(&mut rhs)?;
+        Ok(Points::new(d, rhs)?)
+    };
+    let iters = fp.problem.paper_iterations.max(1);
+    let mut p = solve(&w)?;
+    for _ in 1..iters {
+        for (i, slots) in all.iter().enumerate() {
+            let x = p.point(fp.data_vertex[i]);
+            for (slot, wij) in slots.iter().zip(w[i].iter_mut()) {
+                let off = (slot.unit[0] * x[0] + slot.unit[1] * x[1] - slot.centre).abs();
+                *wij = (*wij * off / slot.half_width).max(floor);
+            }
+        }
+        p = solve(&w)?;
+    }
+    // Multipliers in the convention of (3.8): (Hp)_v + Σ_j λ_j n_j = 0 over the active edges.
+    // A slot pushes from both of its sides, so the slot forces do not map one-to-one onto the
+    // half-planes; the multipliers are recovered from the final point instead: one active edge
+    // (λ = −(Hp)_v·n / |n|²) or a corner (a 2×2 solve), clamped at 0.
+    let hp = operator::apply_h(fp.knots, &p);
+    let active_tol = 1e-6 * extent;
+    let multipliers = sets
+        .iter()
+        .enumerate()
+        .map(|(i, set)| {
+            let v = fp.data_vertex[i];
+            let x = p.point(v);
+            let g = [-hp[v * 2], -hp[v * 2 + 1]];
+            let act: Vec<usize> = (0..set.len())
+                .filter(|&j| {
+                    let nrm = &set[j].normal;
+                    (nrm[0] * x[0] + nrm[1] * x[1] - set[j].offset) / nrm[0].hypot(nrm[1])
+                        >= -active_tol
+                })
+                .collect();
+            let mut lam = vec![0.0; set.len()];
+            match act.as_slice() {
+                [j] => {
+                    let nrm = &set[*j].normal;
+                    lam[*j] = ((g[0] * nrm[0] + g[1] * nrm[1])
+                        / (nrm[0] * nrm[0] + nrm[1] * nrm[1]))
+                        .max(0.0);
+                }
+                [a, b] => {
+                    let (na, nb) = (&set[*a].normal, &set[*b].normal);
+                    let det = na[0] * nb[1] - na[1] * nb[0];
+                    if det.abs() > f64::EPSILON * na[0].hypot(na[1]) * nb[0].hypot(nb[1]) {
+                        lam[*a] = ((g[0] * nb[1] - g[1] * nb[0]) / det).max(0.0);
+                        lam[*b] = ((na[0] * g[1] - na[1] * g[0]) / det).max(0.0);
+                    }
+                }
+                _ => {
+                    for (j, (s, &wij)) in all[i].iter().zip(&w[i]).enumerate() {
+                        lam[j] = (wij * (s.unit[0] * x[0] + s.unit[1] * x[1] - s.centre) / s.norm)
+                            .max(0.0);
+                    }
+                }
+            }
+            lam
+        })
+        .collect();
+    Ok(FixedSolution {
+        points: p,
+        multipliers: Some(multipliers),
+        iterations: iters,
+        stencil: None,
+        extra: Vec::new(),
+        solver_kkt: None,
+    })
 }
 
 /// A curve with its multipliers.
@@ -448,9 +578,7 @@ fn tangential_newton(
         if radii[i] == 0.0 {
             m.push(hv.iter().map(|x| -x).collect());
         } else if pin[i].is_some() {
-            let r: Vec<f64> = p2.point(v).iter().zip(qi).map(|(a, b)| a - b).collect();
-            let rr: f64 = r.iter().map(|x| x * x).sum();
-            let wi = -hv.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / rr;
+            let wi = ball_weight(hv, p2.point(v), qi);
             if wi < 0.0 {
                 return Ok(None);
             }
