@@ -158,7 +158,18 @@ pub(crate) fn certify(
                 active[i] = true;
             }
             Constraint::Balls(radii) => {
-                let (eps, w, gap) = (radii[i], m[0], dist(pv, qi));
+                let (eps, gap) = (radii[i], dist(pv, qi));
+                // Multipliers projected onto complementarity: a clearly inactive ball carries no
+                // force, so an interior-point method's leftover multiplier there is charged to
+                // stationarity (where a wrong active set still shows) rather than to a duality
+                // gap that, relative to E, blows up when the optimum has E* = 0.
+                // "Clearly inactive": the slack exceeds the tolerance in length units, so tiny
+                // radii (ε ≲ tol·length) always keep their multiplier.
+                let w = if eps - gap <= active_tol * length {
+                    m[0]
+                } else {
+                    0.0
+                };
                 for c in 0..d {
                     r[c] += w * (pv[c] - qi[c]);
                 }
@@ -177,10 +188,11 @@ pub(crate) fn certify(
             Constraint::HalfSpaces(sets) => {
                 let mut any = false;
                 for (j, h) in sets[i].iter().enumerate() {
-                    let w = m[j];
                     let norm = h.normal.iter().map(|x| x * x).sum::<f64>().sqrt();
                     let g = (h.normal.iter().zip(pv).map(|(a, b)| a * b).sum::<f64>() - h.offset)
                         / norm;
+                    // Projected onto complementarity, as for balls.
+                    let w = if g >= -active_tol * length { m[j] } else { 0.0 };
                     for (rc, nc) in r.iter_mut().zip(&h.normal) {
                         *rc += w * nc;
                     }
