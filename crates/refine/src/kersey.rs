@@ -49,7 +49,7 @@ impl Problem {
             }
         }
         if centroid.iter().all(|&c| c == 0.0) {
-            return algorithm::run(self);
+            return self.accept(algorithm::run(self)?);
         }
         let mut centred = self.clone();
         for i in 0..n {
@@ -73,9 +73,29 @@ impl Problem {
                 *x += c;
             }
         }
+        self.accept(r)
+    }
+
+    /// Refuses an exact result whose independent certificate is above [`EXACT_ACCEPT_KKT`]:
+    /// an answer that is not (nearly) optimal is an error carrying the best residual reached,
+    /// never a result.
+    fn accept(&self, r: Refinement) -> Result<Refinement, crate::Error> {
+        let certified = r.kkt_residual <= EXACT_ACCEPT_KKT; // false for NaN too
+        if self.solver == Solver::Exact && !certified {
+            return Err(crate::Error::NotConverged {
+                solver: "exact refinement",
+                iterations: r.iterations.solver,
+                residual: r.kkt_residual,
+            });
+        }
         Ok(r)
     }
 }
+
+/// Largest relative KKT residual with which an exact refinement is returned. The solver aims at
+/// 1e-12 and normally certifies below 1e-9; between 1e-9 and this level the result is returned
+/// with its residual; above it, [`crate::Error::NotConverged`] with the best residual reached.
+pub const EXACT_ACCEPT_KKT: f64 = 1e-6;
 
 /// One exact fixed-knot solve of stage 0 (the near-interpolatory k-level step) on the given
 /// refined knots, certified: the points, E, and the relative KKT residual. Used by the free-knot

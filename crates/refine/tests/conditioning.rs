@@ -362,7 +362,19 @@ fn radii_from_zero_to_beyond_the_data() {
             rows.push((rel, label, row));
         }
         for (rel, label, row) in rows {
-            let (kkt, viol, e) = row.unwrap_or_else(|e| panic!("{label}: {e}"));
+            // Radii ≤ 1e-10·L may certify only to ~1e-6…1e-5 (finding 8): then the exact solver
+            // refuses with NotConverged and the best residual instead of returning the result.
+            let (kkt, viol, e) = match row {
+                Ok(r) => r,
+                Err(Error::NotConverged { residual, .. }) if rel <= 1e-10 => {
+                    assert!(
+                        residual > refine::EXACT_ACCEPT_KKT,
+                        "{label}: refused at {residual:e}"
+                    );
+                    continue;
+                }
+                Err(e) => panic!("{label}: {e}"),
+            };
             assert!(viol <= 1e-9, "{label}: violation {viol:e}");
             assert!(
                 e <= interp.energy * (1.0 + 1e-9),
