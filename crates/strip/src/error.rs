@@ -45,6 +45,15 @@ pub enum Error {
     /// too badly scaled for double precision. Rescale t and y.
     #[error("numerical overflow: the data are too badly scaled (rescale t and y)")]
     Overflow,
+    /// Newton's method ran out of iterations ([`crate::Options::max_iterations`]) without
+    /// converging; `gradient_norm` is the projected gradient norm of the best iterate.
+    #[error("not converged in {iterations} iterations (gradient norm {gradient_norm:e})")]
+    NotConverged {
+        /// Iterations performed.
+        iterations: usize,
+        /// Projected gradient norm at the last iterate.
+        gradient_norm: f64,
+    },
     /// Data sites not strictly increasing: t\[index\] ≤ t\[index − 1\].
     #[error("t[{index}] is not greater than t[{}]", index - 1)]
     NonIncreasingSites {

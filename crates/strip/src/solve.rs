@@ -1050,9 +1050,24 @@ fn newton(
         Some(d) => 0.5 * pg.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
         None => newton_decrement,
     };
+    // Out of iterations with neither the gradient nor the decrement (the estimate of Φ − min Φ)
+    // converged: an error carrying the best iterate's gradient norm, never a silent answer.
+    let gradient_norm = inf_norm(&pg);
+    let decrement_ok = newton_decrement <= ACCEPT_DECREMENT * (1.0 + ev.phi.abs());
+    if it >= opts.max_iterations && gradient_norm > tol && !decrement_ok {
+        return Err(Error::NotConverged {
+            iterations: it,
+            gradient_norm,
+        });
+    }
     let g = ev.grad.clone();
     Ok((newton_decrement, it, (ev.sols, x, g)))
 }
+
+/// Relative Newton decrement below which a solve that ran out of iterations is still accepted
+/// (Φ is within this fraction of its minimum: the gradient can stall at kinks of polyline bounds
+/// while Φ has converged).
+pub const ACCEPT_DECREMENT: f64 = 1e-9;
 
 #[allow(clippy::too_many_arguments)]
 fn assemble(

@@ -242,9 +242,9 @@ fn strip_widths_from_zero_to_huge() {
     }
 }
 
-/// Iterations are bounded: with `max_iterations` = 0 or 1 the solver stops. Measured: it
-/// returns `Ok` with the iterate's gradient norm (no `NotConverged` error exists in `strip`;
-/// ROBUSTNESS.md, finding 9) — checked here: the gradient norm reports the shortfall.
+/// Iterations are bounded: with `max_iterations` = 0 or 1 the solver stops, and a solve that
+/// has not converged is an error carrying the best iterate's gradient norm (ROBUSTNESS.md,
+/// finding 9, fixed), never a silent answer.
 #[test]
 fn iteration_limit_is_respected_and_reported() {
     let p = base(0.05);
@@ -254,15 +254,28 @@ fn iteration_limit_is_respected_and_reported() {
             max_iterations: limit,
             ..Options::default()
         };
-        let s = solve(&p, &opts).unwrap();
-        eprintln!(
-            "limit {limit}: {} iterations, gradient norm {:.1e} (converged: {:.1e}), energy {:.6e} vs {:.6e}",
-            s.iterations, s.gradient_norm, full.gradient_norm, s.energy, full.energy
-        );
-        assert!(s.iterations <= limit);
-        assert!(s.energy >= full.energy * (1.0 - 1e-12));
-        if s.energy > full.energy * (1.0 + 1e-9) {
-            assert!(s.gradient_norm > 1e3 * full.gradient_norm.max(1e-14));
+        match solve(&p, &opts) {
+            Ok(s) => {
+                // Converged within the limit: then it is the optimum.
+                assert!(s.iterations <= limit);
+                assert!(
+                    (s.energy - full.energy).abs() <= 1e-9 * full.energy,
+                    "limit {limit}: {} vs {}",
+                    s.energy,
+                    full.energy
+                );
+            }
+            Err(strip::Error::NotConverged {
+                iterations,
+                gradient_norm,
+            }) => {
+                assert!(iterations <= limit);
+                assert!(
+                    gradient_norm.is_finite()
+                        && gradient_norm > 1e3 * full.gradient_norm.max(1e-14)
+                );
+            }
+            Err(e) => panic!("limit {limit}: unexpected {e}"),
         }
     }
 }
