@@ -166,8 +166,9 @@ pub fn run(
     }
     html.push_str("</body></html>\n");
     files.push((out.join("index.html"), html.into_bytes()));
-    super::write_files(&files)?;
-    let _ = writeln!(stdout, "wrote {} files to {}", files.len(), out.display());
+    let written = files.len();
+    super::write_files(files)?;
+    let _ = writeln!(stdout, "wrote {written} files to {}", out.display());
     Ok(())
 }
 

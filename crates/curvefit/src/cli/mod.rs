@@ -96,7 +96,7 @@ fn run_scheme_cmd(
     let t2 = Instant::now();
     let json = value.to_string() + "\n";
     match &a.output {
-        Some(path) => write_files(&[(path.clone(), json.into_bytes())])?,
+        Some(path) => write_files(vec![(path.clone(), json.into_bytes())])?,
         None => stdout
             .write_all(json.as_bytes())
             .map_err(|e| InputError::new("-o", format!("cannot write to standard output: {e}")))?,
@@ -557,11 +557,11 @@ fn bytes_writer<'a>(bytes: Vec<u8>) -> Writer<'a> {
 
 /// Writes every `(path, bytes)` to a temporary sibling first, then renames them all; on any
 /// failure the temporaries are removed and no target file is created or changed.
-pub fn write_files(files: &[(PathBuf, Vec<u8>)]) -> Result<(), InputError> {
+pub fn write_files(files: Vec<(PathBuf, Vec<u8>)>) -> Result<(), InputError> {
     write_files_with(
         files
-            .iter()
-            .map(|(p, b)| (p.clone(), bytes_writer(b.clone())))
+            .into_iter()
+            .map(|(p, b)| (p, bytes_writer(b)))
             .collect(),
     )
 }

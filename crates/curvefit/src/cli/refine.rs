@@ -335,14 +335,14 @@ pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
 }
 
 /// Converts the library's refinement into the JSON result.
-pub fn to_result(r: &refine::Refinement) -> RefineResult {
+pub fn to_result(r: refine::Refinement) -> RefineResult {
     RefineResult {
-        points: Rows(r.points.clone()),
+        points: Rows(r.points),
         knots: r.knots.values().to_vec(),
-        data_vertex: r.data_vertex.clone(),
+        data_vertex: r.data_vertex,
         energy: r.energy,
         multipliers: serde_json::json!(r.multipliers),
-        active: r.active.clone(),
+        active: r.active,
         kkt_residual: r.kkt_residual,
         iterations: serde_json::json!({
             "solves": r.iterations.solves,
@@ -363,7 +363,7 @@ impl super::Command for RefineCmd {
         validate(problem)?;
         let prob = to_library(problem)?;
         let r = prob.solve().map_err(|e| InputError::new("", e))?;
-        Ok(to_result(&r))
+        Ok(to_result(r))
     }
 
     fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
