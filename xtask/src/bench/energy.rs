@@ -154,10 +154,13 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Issue 3's balls problem: n data points on a noisy closed curve, k = 3 (N = 4n vertices),
-/// d = 2, centripetal data knots split uniformly, a ball of random radius about every data point.
-fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
-    let k = 3;
+/// Points per span in issue 3's balls problem.
+const BALLS_K: usize = 3;
+
+/// The data of issue 3's balls problem: n points on a noisy closed curve and the refined knots
+/// (centripetal data knots split uniformly into k + 1 pieces).
+fn balls_data(n: usize) -> anyhow::Result<(Vec<[f64; 2]>, divdiff::Knots)> {
+    let k = BALLS_K;
     let q: Vec<[f64; 2]> = (0..n)
         .map(|i| {
             let a = std::f64::consts::TAU * i as f64 / n as f64;
@@ -176,7 +179,14 @@ fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
             t.push(t0 + span * j as f64 / (k + 1) as f64);
         }
     }
-    let knots = divdiff::Knots::closed(t)?;
+    Ok((q, divdiff::Knots::closed(t)?))
+}
+
+/// Issue 3's balls problem: n data points on a noisy closed curve, k = 3 (N = 4n vertices),
+/// d = 2, centripetal data knots split uniformly, a ball of random radius about every data point.
+fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
+    let k = BALLS_K;
+    let (q, knots) = balls_data(n)?;
     let h = energy::Hessian::new(&knots);
     let mut p = ConicProblem::new(&h, 2)?;
     let spacing = std::f64::consts::TAU / n as f64;
@@ -290,26 +300,8 @@ fn clarabel_balls(n: usize) -> anyhow::Result<(std::time::Duration, f64)> {
     let nv = p.len();
     let d = 2;
     // Rebuild H from the same knots through the problem's own definition: ½ pᵀ H p.
-    let k = 3;
-    let q: Vec<[f64; 2]> = (0..n)
-        .map(|i| {
-            let a = std::f64::consts::TAU * i as f64 / n as f64;
-            let wobble = 1.0 + 0.2 * (7.0 * a).sin() + 0.01 * ((i * 7919 % 97) as f64 / 97.0 - 0.5);
-            [wobble * a.cos(), 0.7 * wobble * a.sin()]
-        })
-        .collect();
-    let mut t = vec![0.0];
-    for i in 0..n {
-        let (a, b) = (q[i], q[(i + 1) % n]);
-        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2))
-            .sqrt()
-            .sqrt();
-        let t0 = *t.last().unwrap_or(&0.0);
-        for j in 1..=k + 1 {
-            t.push(t0 + span * j as f64 / (k + 1) as f64);
-        }
-    }
-    let h = energy::Hessian::new(&divdiff::Knots::closed(t)?);
+    let (_, knots) = balls_data(n)?;
+    let h = energy::Hessian::new(&knots);
     let (dg, o1, o2) = h.bands();
     let (mut pi, mut pj, mut pv) = (vec![], vec![], vec![]);
     let mut push = |a: usize, b: usize, v: f64| {
