@@ -9,24 +9,43 @@ use argmin::solver::quasinewton::BFGS;
 
 use crate::cell::{CellSolution, CellStats};
 use crate::error::Error;
-use crate::solve::{Hints, Options, OuterRef};
+use crate::solve::{Hints, Options, OuterRef, DECREMENT_TOL};
+
+/// Evaluations of Φ allowed per permitted iteration (argmin's Moré–Thuente line search has no
+/// iteration limit of its own; this bounds the whole solve).
+const EVALUATIONS_PER_ITERATION: usize = 100;
 
 struct Phi<'a> {
     outer: &'a OuterRef<'a>,
     hints: &'a RefCell<Hints>,
     stats: &'a RefCell<(CellStats, usize)>,
+    /// The cost reported outside Φ's domain (no feasible candidate in some interval).
+    outside: f64,
+    /// Evaluations so far and the budget.
+    evaluations: &'a RefCell<(usize, usize)>,
 }
 
 impl Phi<'_> {
     fn vg(&self, x: &[f64]) -> Result<(f64, Vec<f64>), argmin::core::Error> {
+        {
+            let mut e = self.evaluations.borrow_mut();
+            e.0 += 1;
+            if e.0 > e.1 {
+                return Err(argmin::core::Error::msg(format!(
+                    "evaluation budget of {} exhausted",
+                    e.1
+                )));
+            }
+        }
         let mut h = self.hints.borrow_mut();
         let mut st = self.stats.borrow_mut();
         let (s, n) = &mut *st;
         match self.outer.value_grad(x, &mut h, s, n) {
             Ok((f, g, _)) => Ok((f, g)),
-            // outside the domain (no feasible candidate): an infinite cost makes the line
-            // search step back
-            Err(_) => Ok((f64::INFINITY, vec![0.0; x.len()])),
+            // outside the domain (no feasible candidate): a cost far above Φ(x₀) makes the line
+            // search step back. It must be finite: an infinite cost turns the Moré–Thuente
+            // cubic interpolation into NaN, and the search then never terminates.
+            Err(_) => Ok((self.outside, vec![0.0; x.len()])),
         }
     }
 }
@@ -47,6 +66,9 @@ impl Gradient for Phi<'_> {
     }
 }
 
+/// Outside Φ's domain BFGS sees the cost `OUTSIDE_FACTOR`·(1 + |Φ(x₀)|).
+const OUTSIDE_FACTOR: f64 = 1e6;
+
 type Out = (f64, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
 
 pub(crate) fn bfgs(
@@ -59,14 +81,27 @@ pub(crate) fn bfgs(
     let nv = x0.len();
     let hints = RefCell::new(vec![None; outer.cells()]);
     let counters = RefCell::new((CellStats::default(), 0));
-    let phi = Phi {
+    let budget = EVALUATIONS_PER_ITERATION * (opts.max_iterations + 1);
+    let evaluations = RefCell::new((0, budget));
+    let mut phi = Phi {
         outer,
         hints: &hints,
         stats: &counters,
+        outside: f64::INFINITY,
+        evaluations: &evaluations,
     };
-    let (_, g0) = phi.vg(&x0).map_err(|e| Error::Bfgs {
+    let (f0, g0) = phi.vg(&x0).map_err(|e| Error::Bfgs {
         message: e.to_string(),
     })?;
+    if !f0.is_finite() {
+        // the start is outside Φ's domain
+        let mut h = hints.borrow().clone();
+        return match outer.value_grad(&x0, &mut h, stats, solves) {
+            Err(interval) => Err(Error::NoFeasibleCandidate { interval }),
+            Ok(_) => Err(Error::Overflow),
+        };
+    }
+    phi.outside = OUTSIDE_FACTOR * (1.0 + f0.abs());
     let g0n = g0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut best = x0.clone();
     let mut iters = 0;
@@ -74,7 +109,9 @@ pub(crate) fn bfgs(
         let ls = MoreThuenteLineSearch::new();
         let solver = BFGS::new(ls)
             .with_tolerance_grad(opts.gradient_tol * (1.0 + g0n))
-            .and_then(|s| s.with_tolerance_cost(0.0))
+            // stop when an iteration no longer changes Φ beyond rounding (the gradient can stall
+            // above its tolerance along stiff directions; the line search would then loop)
+            .and_then(|s| s.with_tolerance_cost(DECREMENT_TOL * (1.0 + f0.abs())))
             .map_err(|e| Error::Bfgs {
                 message: e.to_string(),
             })?;

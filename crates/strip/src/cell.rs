@@ -248,7 +248,7 @@ pub(crate) fn build(cell: &Cell, th: &[f64; 4], shape: Shape, tau: &[f64; 2]) ->
 }
 
 /// min over [0, l] of the cubic c (in s ∈ [0, l]).
-fn cubic_min(c: &[f64; 4], l: f64) -> f64 {
+pub(crate) fn cubic_min(c: &[f64; 4], l: f64) -> f64 {
     let mut m = c[0].min(cubic3(c, l).0);
     // critical points: c1 + 2 c2 s + 3 c3 s² = 0
     for s in roots::find_roots_quadratic(3.0 * c[3], 2.0 * c[2], c[1]).as_ref() {

@@ -54,7 +54,23 @@ pub enum Error {
         /// Projected gradient norm at the last iterate.
         gradient_norm: f64,
     },
-    /// Data sites not strictly increasing: t\[index\] ≤ t\[index − 1\].
+    /// The returned pieces leave the strip by more than the documented tolerance
+    /// ([`crate::RESULT_FEASIBILITY_TOL`] times the value scale plus the rounding allowance
+    /// [`crate::ROUNDING_TOL`] times the magnitude of the values): the answer is refused.
+    #[error("the solution leaves the {side} bound by {by:e} in interval {interval} (tolerance {tolerance:e})")]
+    StripViolated {
+        /// The data interval (0-based).
+        interval: usize,
+        /// Which bound.
+        side: Side,
+        /// By how much (caller's units).
+        by: f64,
+        /// The tolerance it exceeds.
+        tolerance: f64,
+    },
+    /// Data sites not strictly increasing: t\[index\] ≤ t\[index − 1\] (or, for sites that
+    /// are distinct, so close that t − t_1 rounds them to the same number at the scale of the
+    /// whole range t_n − t_1).
     #[error("t[{index}] is not greater than t[{}]", index - 1)]
     NonIncreasingSites {
         /// Index of the offending site.

@@ -70,6 +70,7 @@ mod bfgs;
 mod cell;
 mod error;
 pub mod examples;
+mod frame;
 mod poly;
 mod qp;
 mod solve;
@@ -80,7 +81,7 @@ pub use qp::{lower_bound_qp, LowerBoundQp};
 pub use solve::{
     solve, Bound, ExtraKnot, KnotKind, Method, Options, Problem, Solution, CONTACT_TOL,
     DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS, FEASIBILITY_TOL,
-    MAX_MAGNITUDE,
+    MAX_MAGNITUDE, RESULT_FEASIBILITY_TOL, ROUNDING_TOL,
 };
 
 #[doc(hidden)]

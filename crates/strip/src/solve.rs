@@ -6,6 +6,7 @@ use crate::cell::{
     hessian, solve_cell, Cell, CellSolution, CellStats, CellTol, Pruning, Shape, Side,
 };
 use crate::error::Error;
+use crate::frame::Frame;
 
 /// A bound of the strip.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -76,8 +77,19 @@ pub const DEFAULT_GRADIENT_TOL: f64 = 1e-11;
 /// Default margin ε of Remark 4.2 and problem (10), relative to the local strip width: data on a
 /// bound are moved inside by ε·width, and free grid values stay ε·width inside the strip.
 pub const DEFAULT_BOUNDARY_MARGIN: f64 = 1e-7;
-/// Feasibility tolerance of a candidate, relative to the value scale 1 + max|y|.
+/// Feasibility tolerance of a candidate in an interval, relative to the value scale V (the
+/// largest deviation of the data, the end slopes or the bounds from the line through the first
+/// and last data point; see the crate documentation).
 pub const FEASIBILITY_TOL: f64 = 1e-10;
+/// The returned pieces satisfy the strip to this fraction of the value scale V, plus the
+/// rounding allowance [`ROUNDING_TOL`] (checked exactly on every cubic piece in the caller's
+/// frame; a larger violation is [`Error::StripViolated`]). Ten times [`FEASIBILITY_TOL`]: room
+/// for the rounding of the map back from the normalized frame.
+pub const RESULT_FEASIBILITY_TOL: f64 = 1e-9;
+/// Rounding allowance of the returned pieces relative to the magnitude of the values
+/// M = max|y_i| + |ℓ'|·(t_n − t_1) + V (ℓ the line through the first and last data point):
+/// values of size M carry rounding errors of this order whatever the solver does.
+pub const ROUNDING_TOL: f64 = 1e-14;
 /// Relative tolerance of the f'' continuity equations solved for the extra knots.
 pub const CONTACT_TOL: f64 = 1e-12;
 
@@ -168,6 +180,11 @@ pub struct Solution {
     /// Grid intervals whose chosen candidate lacks the optimality certificate (empty for linear
     /// bounds; see [`Pruning::Certificate`]).
     pub uncertified: Vec<usize>,
+    /// The largest violation of the strip by the returned pieces in the caller's units (exact
+    /// extrema of every cubic piece; ≤ 0 when the pieces are inside, 0 without bounds). At most
+    /// [`RESULT_FEASIBILITY_TOL`]·V + [`ROUNDING_TOL`]·M, else [`solve`] returns
+    /// [`Error::StripViolated`].
+    pub violation: f64,
 }
 
 impl Solution {
@@ -214,7 +231,7 @@ fn shift_cubic(c: &[f64; 4], d: f64) -> [f64; 4] {
     [v, d1, 0.5 * d2, c[3]]
 }
 
-fn polyline_at(p: &[[f64; 2]], t: f64) -> f64 {
+pub(crate) fn polyline_at(p: &[[f64; 2]], t: f64) -> f64 {
     let k = p.partition_point(|v| v[0] <= t).clamp(1, p.len() - 1);
     let (a, b) = (p[k - 1], p[k]);
     a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
@@ -347,6 +364,9 @@ struct Outer {
     nvar: usize,
     tol: CellTol,
     pruning: Pruning,
+    /// Factor from each unknown's gradient component to the caller's frame (see `frame.rs`):
+    /// c/λ² for slopes, c/λ³ for grid values (ones when solving in the caller's frame).
+    unit: Vec<f64>,
 }
 
 struct Eval {
@@ -543,17 +563,88 @@ fn hermite_eval(t0: f64, t1: f64, y0: f64, y1: f64, z0: f64, z1: f64, t: f64) ->
 
 /// Solves the strip problem.
 ///
+/// The solver works on the normalized problem (sites over a unit-order range starting at 0, the
+/// line through the first and last data point subtracted, values divided by the value scale V;
+/// see the crate documentation), so the answer is equivariant under t ↦ t₀ + λt, values ↦ c·v
+/// and adding a line, and every tolerance is relative to V or the site range. The returned
+/// pieces are checked against the strip in the caller's frame (exact extrema of every cubic
+/// piece): a violation above [`RESULT_FEASIBILITY_TOL`]·V plus the rounding allowance
+/// [`ROUNDING_TOL`]·M (M the magnitude of the values, see [`Solution::violation`]) is an
+/// [`Error::StripViolated`], never an answer.
+///
 /// # Errors
 /// Invalid input (lengths, non-finite numbers, non-increasing sites or polylines, data outside
 /// the bounds, an empty strip) and an interval without a feasible candidate give an [`Error`]
-/// naming the field or interval.
+/// naming the field or interval; numbers too badly scaled for double precision give
+/// [`Error::Overflow`]; running out of iterations gives [`Error::NotConverged`].
 pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
+    validate(problem)?;
+    let frame = Frame::of(problem)?;
+    let normalized = frame.forward(problem)?;
+    let sol = solve_normalized(problem, &normalized, &frame, opts).map_err(|e| match e {
+        Error::DataOutsideBounds {
+            index,
+            interval,
+            side,
+            by,
+        } => Error::DataOutsideBounds {
+            index,
+            interval,
+            side,
+            by: by * frame.c,
+        },
+        Error::EmptyStrip { interval, t } => Error::EmptyStrip {
+            interval,
+            t: frame.time(t),
+        },
+        other => other,
+    })?;
+    let finite = sol.energy.is_finite()
+        && sol.slopes.iter().all(|z| z.is_finite())
+        && sol.coefficients.iter().flatten().all(|c| c.is_finite())
+        && sol.breaks.iter().all(|b| b.is_finite());
+    if !finite {
+        return Err(Error::Overflow);
+    }
+    let mut sol = sol;
+    let tolerance = RESULT_FEASIBILITY_TOL * frame.scale + ROUNDING_TOL * frame.magnitude;
+    if let Some((by, interval, side)) = worst_violation(problem, &sol) {
+        sol.violation = by;
+        if !(by <= tolerance) {
+            return Err(Error::StripViolated {
+                interval,
+                side,
+                by,
+                tolerance,
+            });
+        }
+    }
+    Ok(sol)
+}
+
+/// Solves `q`, the normalized form of `problem` in `frame`, and returns the solution in the
+/// caller's frame.
+fn solve_normalized(
+    problem: &Problem,
+    q: &Problem,
+    frame: &Frame,
+    opts: &Options,
+) -> Result<Solution, Error> {
     let Setup {
-        outer,
+        mut outer,
         grid,
         x0: x,
         shifted,
-    } = setup(problem, opts)?;
+    } = setup(q, opts, frame.scale / frame.c)?;
+    let ef = frame.energy_factor();
+    for j in 0..grid.len() {
+        if let Some(k) = outer.sv[j] {
+            outer.unit[k] = ef / frame.c;
+        }
+        if let Some(k) = outer.zv[j] {
+            outer.unit[k] = ef * frame.lam / frame.c;
+        }
+    }
     let m = grid.len();
     let mut stats = CellStats::default();
     let mut solves = 0usize;
@@ -568,18 +659,151 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
         }
     };
     let pg = projected_grad(&outer, &ev.1, &ev.2);
+    let gradient_norm = pg
+        .iter()
+        .zip(&outer.unit)
+        .map(|(g, u)| (g * u) * (g * u))
+        .sum::<f64>()
+        .sqrt();
     let mut sol = assemble(
-        problem, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
+        q, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
     )?;
     sol.newton_decrement = decrement;
-    let finite = sol.energy.is_finite()
-        && sol.slopes.iter().all(|z| z.is_finite())
-        && sol.coefficients.iter().flatten().all(|c| c.is_finite())
-        && sol.breaks.iter().all(|b| b.is_finite());
-    if !finite {
-        return Err(Error::Overflow);
-    }
+    let mut sol = to_caller(problem, q, frame, &grid, sol);
+    sol.gradient_norm = gradient_norm;
     Ok(sol)
+}
+
+/// Maps a solution of the normalized problem `q` back to the caller's frame: abscissae
+/// t₀ + λu (data sites and polyline vertices exactly as given), values ℓ(t) + c·v (unshifted
+/// data values exactly), slopes ℓ' + c·z/λ, cubic coefficients c_k·c/λ^k (plus ℓ in the first
+/// two), energies ·c²/λ³.
+fn to_caller(
+    p: &Problem,
+    q: &Problem,
+    fr: &Frame,
+    grid: &[(f64, Option<usize>)],
+    s: Solution,
+) -> Solution {
+    let vertex = |u: f64| -> Option<f64> {
+        for (bq, bp) in [(&q.lower, &p.lower), (&q.upper, &p.upper)] {
+            if let (Bound::Polyline(vq), Bound::Polyline(vp)) = (bq, bp) {
+                if let Some(k) = vq.iter().position(|v| v[0].to_bits() == u.to_bits()) {
+                    return Some(vp[k][0]);
+                }
+            }
+        }
+        None
+    };
+    let gt: Vec<f64> = grid
+        .iter()
+        .map(|(u, i)| match i {
+            Some(i) => p.t[*i],
+            None => vertex(*u).unwrap_or_else(|| fr.time(*u)),
+        })
+        .collect();
+    let find = |u: f64| grid.binary_search_by(|g| g.0.total_cmp(&u)).ok();
+    let at = |u: f64| find(u).map_or_else(|| fr.time(u), |j| gt[j]);
+    // the exact data value at a grid point that is a data site not moved by Remark 4.2
+    let data_at = |j: usize| {
+        grid[j]
+            .1
+            .filter(|i| !s.shifted_data.contains(i))
+            .map(|i| p.y[i])
+    };
+    let breaks: Vec<f64> = s.breaks.iter().map(|u| at(*u)).collect();
+    let (c, lam) = (fr.c, fr.lam);
+    let r = c / lam;
+    let coefficients = s
+        .coefficients
+        .iter()
+        .zip(&s.breaks)
+        .zip(&breaks)
+        .map(|((k, u), t)| {
+            let c0 = find(*u)
+                .and_then(data_at)
+                .unwrap_or_else(|| fr.value(*t, k[0]));
+            [c0, fr.b + r * k[1], r * k[2] / lam, r * k[3] / lam / lam]
+        })
+        .collect();
+    let grid_values = s
+        .grid_values
+        .iter()
+        .enumerate()
+        .map(|(j, v)| data_at(j).unwrap_or_else(|| fr.value(gt[j], *v)))
+        .collect();
+    let n = s.slopes.len();
+    let slopes = s
+        .slopes
+        .iter()
+        .enumerate()
+        .map(|(i, z)| match (i, p.end_slopes) {
+            (0, [Some(v), _]) => v,
+            (i, [_, Some(v)]) if i + 1 == n => v,
+            _ => fr.slope(*z),
+        })
+        .collect();
+    let extra_knots = s
+        .extra_knots
+        .iter()
+        .map(|k| ExtraKnot { t: at(k.t), ..*k })
+        .collect();
+    let ef = fr.energy_factor();
+    let energy = s.energy * ef;
+    Solution {
+        breaks,
+        coefficients,
+        slopes,
+        grid: gt,
+        grid_values,
+        extra_knots,
+        energy,
+        norm: energy.sqrt(),
+        newton_decrement: s.newton_decrement * ef,
+        ..s
+    }
+}
+
+/// The largest violation of the strip by the pieces of `s` (exact extrema of the cubic
+/// difference on every piece, split at polyline vertices), with its data interval and side;
+/// `None` without bounds.
+fn worst_violation(p: &Problem, s: &Solution) -> Option<(f64, usize, Side)> {
+    let n = p.t.len();
+    let mut worst: Option<(f64, usize, Side)> = None;
+    for j in 0..s.coefficients.len() {
+        let (x0, x1) = (s.breaks[j], s.breaks[j + 1]);
+        if x1 <= x0 {
+            continue;
+        }
+        let i = p.t.partition_point(|t| *t <= x0).clamp(1, n - 1) - 1;
+        for (side, b) in [(Side::Lower, &p.lower), (Side::Upper, &p.upper)] {
+            let mut cuts = vec![x0];
+            if let Bound::Polyline(v) = b {
+                cuts.extend(v.iter().map(|q| q[0]).filter(|x| *x > x0 && *x < x1));
+            }
+            cuts.push(x1);
+            for w in cuts.windows(2) {
+                let g = match b {
+                    Bound::None => continue,
+                    Bound::Pieces(pc) => shift_cubic(&pc[i], w[0] - p.t[i]),
+                    Bound::Polyline(v) => {
+                        let (ga, gb) = (polyline_at(v, w[0]), polyline_at(v, w[1]));
+                        [ga, (gb - ga) / (w[1] - w[0]), 0.0, 0.0]
+                    }
+                };
+                let f = shift_cubic(&s.coefficients[j], w[0] - x0);
+                let d: [f64; 4] = std::array::from_fn(|k| match side {
+                    Side::Lower => f[k] - g[k],
+                    Side::Upper => g[k] - f[k],
+                });
+                let by = -crate::cell::cubic_min(&d, w[1] - w[0]);
+                if worst.is_none_or(|(m, _, _)| by > m || by.is_nan()) {
+                    worst = Some((by, i, side));
+                }
+            }
+        }
+    }
+    worst
 }
 
 /// `x` clamped to [lo, hi]; unlike `f64::clamp` never panics: when the bounds are NaN or
@@ -604,7 +828,8 @@ pub const MAX_MAGNITUDE: f64 = 1e100;
 /// # Errors
 /// As [`solve`]; `NoFeasibleCandidate` when x is outside Φ's domain.
 pub fn objective(problem: &Problem, x: Option<&[f64]>) -> Result<(f64, Vec<f64>, Vec<f64>), Error> {
-    let st = setup(problem, &Options::default())?;
+    let vscale = 1.0 + problem.y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let st = setup(problem, &Options::default(), vscale)?;
     let x = x.map_or_else(|| st.x0.clone(), <[f64]>::to_vec);
     if x.len() != st.outer.nvar {
         return Err(Error::LengthMismatch {
@@ -628,7 +853,9 @@ struct Setup {
     shifted: Vec<usize>,
 }
 
-fn setup(problem: &Problem, opts: &Options) -> Result<Setup, Error> {
+/// The grid, cells and starting point of `problem`; `vscale` is its value scale (tolerances on
+/// values are relative to it).
+fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Setup, Error> {
     validate(problem)?;
     if !(0.0..0.5).contains(&opts.boundary_margin) {
         return Err(Error::BadOption {
@@ -660,9 +887,14 @@ fn setup(problem: &Problem, opts: &Options) -> Result<Setup, Error> {
         }
     }
     grid.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // a polyline vertex within 1e-12 of the range of a site (or of another vertex) is merged
+    // into it, keeping the site's abscissa; two data sites are never merged (they are distinct,
+    // however close: merging them paired cells with the wrong data intervals)
     grid.dedup_by(|a, b| {
-        if (a.0 - b.0).abs() <= 1e-12 * range {
-            b.1 = b.1.or(a.1);
+        if (a.0 - b.0).abs() <= 1e-12 * range && (a.1.is_none() || b.1.is_none()) {
+            if b.1.is_none() {
+                *b = *a;
+            }
             true
         } else {
             false
@@ -703,7 +935,6 @@ fn setup(problem: &Problem, opts: &Options) -> Result<Setup, Error> {
             }
         }
     }
-    let vscale = 1.0 + problem.y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let on_bound_tol = 1e-12 * vscale;
     // data feasibility (condition (4)) and Remark 4.2
     let mut y = problem.y.clone();
@@ -826,6 +1057,7 @@ fn setup(problem: &Problem, opts: &Options) -> Result<Setup, Error> {
             c2: CONTACT_TOL,
         },
         pruning: opts.pruning,
+        unit: vec![1.0; nvar],
     };
     // initial point: the natural (or clamped) spline through the data
     let z0 = spline_slopes(t, &y, problem.end_slopes);
@@ -1057,7 +1289,10 @@ fn newton(
     if it >= opts.max_iterations && gradient_norm > tol && !decrement_ok {
         return Err(Error::NotConverged {
             iterations: it,
-            gradient_norm,
+            gradient_norm: pg
+                .iter()
+                .zip(&o.unit)
+                .fold(0.0f64, |m, (g, u)| m.max((g * u).abs())),
         });
     }
     let g = ev.grad.clone();
@@ -1187,6 +1422,7 @@ fn assemble(
         candidates: stats.candidates,
         shifted_data: shifted,
         uncertified,
+        violation: 0.0,
     })
 }
 

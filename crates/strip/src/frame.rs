@@ -1,0 +1,244 @@
+//! The normalized frame in which [`crate::solve`] works (ROBUSTNESS.md, finding 7).
+//!
+//! The strip problem is exactly equivariant: f solves (t, y, e, d) if and only if
+//! t ↦ ℓ(t) + c·f((t − t₀)/λ) solves the problem with sites t₀ + λt, values ℓ + c·y and bounds
+//! ℓ + c·e, ℓ + c·d for every line ℓ, c > 0 and λ > 0, and ∫f''² scales by c²/λ³. The solver's
+//! stopping and feasibility tests are therefore applied to a normalized problem: sites shifted to
+//! start at 0 and divided by λ (the power of two at or below the site range), the line ℓ through
+//! the first and the last data point subtracted from values, bounds and end slopes, and values
+//! divided by c (the power of two at or below the value scale V). Powers of two make the scalings
+//! exact; only the subtraction of ℓ rounds (at the level of the input's own rounding).
+//!
+//! The value scale V is the largest of
+//! * max |y_i − ℓ(t_i)| (how far the data are from the line),
+//! * (t_n − t_1)·max |s − ℓ'| over prescribed end slopes s,
+//! * max(e − ℓ, ℓ − d, 0) at the ends of every bound piece and at polyline vertices (how far the
+//!   bounds force f away from the line);
+//!
+//! when all three vanish (data on a line that the strip contains at every site), the largest
+//! distance |e − ℓ|, |d − ℓ| at those points, and 1 when there are no bounds either (the answer is
+//! then ℓ itself). Every tolerance of the solver is relative to V (values), the site range
+//! (sites) and the derived scales, so the answer is the same for every equivalent problem up to
+//! rounding.
+
+use crate::error::Error;
+use crate::solve::{Bound, Problem, MAX_MAGNITUDE};
+
+/// The change of frame t = t₀ + λ·u, value = ℓ(t) + c·ṽ with ℓ(t) = a + b·(t − t₀).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frame {
+    /// First site.
+    pub t0: f64,
+    /// Site scale (a power of two).
+    pub lam: f64,
+    /// ℓ(t₀) = y₁.
+    pub a: f64,
+    /// Slope of ℓ.
+    pub b: f64,
+    /// Value scale used for the division (a power of two, V/2 < c ≤ V).
+    pub c: f64,
+    /// The value scale V.
+    pub scale: f64,
+    /// Magnitude of the values in the caller's frame (max |y_i| + |b|·(t_n − t_1) + V): the
+    /// rounding of the returned coefficients is relative to it.
+    pub magnitude: f64,
+}
+
+/// The largest power of two ≤ x (x > 0 finite), from the bits (exact, subnormals included).
+fn pow2_at_or_below(x: f64) -> f64 {
+    let bits = x.to_bits();
+    if x >= f64::MIN_POSITIVE {
+        f64::from_bits(bits & 0xFFF0_0000_0000_0000)
+    } else {
+        let m = bits & 0x000F_FFFF_FFFF_FFFF;
+        f64::from_bits(1u64 << (63 - m.leading_zeros()))
+    }
+}
+
+/// Value of a cubic piece c0 + c1 s + c2 s² + c3 s³.
+fn cubic(c: &[f64; 4], s: f64) -> f64 {
+    c[0] + s * (c[1] + s * (c[2] + s * c[3]))
+}
+
+/// (t, bound value) at the ends of every piece and at every polyline vertex inside the range.
+fn bound_points(b: &Bound, t: &[f64]) -> Vec<(f64, f64)> {
+    let n = t.len();
+    match b {
+        Bound::None => Vec::new(),
+        Bound::Pieces(p) => p
+            .iter()
+            .enumerate()
+            .flat_map(|(i, c)| [(t[i], c[0]), (t[i + 1], cubic(c, t[i + 1] - t[i]))])
+            .collect(),
+        Bound::Polyline(v) => {
+            let mut out: Vec<(f64, f64)> = v
+                .iter()
+                .filter(|p| p[0] >= t[0] && p[0] <= t[n - 1])
+                .map(|p| (p[0], p[1]))
+                .collect();
+            for &x in [t[0], t[n - 1]].iter() {
+                out.push((x, crate::solve::polyline_at(v, x)));
+            }
+            out
+        }
+    }
+}
+
+impl Frame {
+    /// ℓ(t).
+    pub fn line(&self, t: f64) -> f64 {
+        self.a + self.b * (t - self.t0)
+    }
+
+    /// The frame of a validated problem.
+    pub fn of(p: &Problem) -> Result<Frame, Error> {
+        let n = p.t.len();
+        let t0 = p.t[0];
+        let range = p.t[n - 1] - t0;
+        if !(range.is_finite() && range > 0.0) {
+            return Err(Error::Overflow);
+        }
+        let a = p.y[0];
+        let b = (p.y[n - 1] - p.y[0]) / range;
+        if !b.is_finite() {
+            return Err(Error::Overflow);
+        }
+        let mut frame = Frame {
+            t0,
+            lam: pow2_at_or_below(range),
+            a,
+            b,
+            c: 1.0,
+            scale: 1.0,
+            magnitude: 0.0,
+        };
+        let l = |t: f64| frame.line(t);
+        let data =
+            p.t.iter()
+                .zip(&p.y)
+                .fold(0.0f64, |m, (t, y)| m.max((y - l(*t)).abs()));
+        let slopes = p
+            .end_slopes
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, s| m.max(range * (s - b).abs()));
+        let lower = bound_points(&p.lower, &p.t);
+        let upper = bound_points(&p.upper, &p.t);
+        let forcing = lower
+            .iter()
+            .map(|(t, e)| e - l(*t))
+            .chain(upper.iter().map(|(t, d)| l(*t) - d))
+            .fold(0.0f64, f64::max);
+        let mut v = data.max(slopes).max(forcing);
+        if v.is_nan() {
+            return Err(Error::Overflow);
+        }
+        if v <= 0.0 {
+            v = lower
+                .iter()
+                .chain(&upper)
+                .fold(0.0f64, |m, (t, g)| m.max((g - l(*t)).abs()));
+        }
+        if v.is_nan() {
+            return Err(Error::Overflow);
+        }
+        if v <= 0.0 {
+            v = 1.0;
+        }
+        if !v.is_finite() {
+            return Err(Error::Overflow);
+        }
+        frame.scale = v;
+        frame.c = pow2_at_or_below(v);
+        frame.magnitude = p.y.iter().fold(0.0f64, |m, y| m.max(y.abs())) + b.abs() * range + v;
+        if !frame.magnitude.is_finite() {
+            return Err(Error::Overflow);
+        }
+        Ok(frame)
+    }
+
+    /// The normalized problem. Errors: `Overflow` when a normalized number is not finite or
+    /// exceeds [`MAX_MAGNITUDE`] (bounds enormous compared with V), `NonIncreasingSites` /
+    /// `NonIncreasingPolyline` when two abscissae closer than the rounding of t − t₁ merge.
+    pub fn forward(&self, p: &Problem) -> Result<Problem, Error> {
+        let (lam, c) = (self.lam, self.c);
+        let u = |t: f64| (t - self.t0) / lam;
+        let v = |t: f64, y: f64| (y - self.line(t)) / c;
+        let map_bound = |bd: &Bound| match bd {
+            Bound::None => Bound::None,
+            Bound::Pieces(pc) => Bound::Pieces(
+                pc.iter()
+                    .enumerate()
+                    .map(|(i, k)| {
+                        [
+                            v(p.t[i], k[0]),
+                            (k[1] - self.b) * lam / c,
+                            k[2] * lam * lam / c,
+                            k[3] * lam * lam * lam / c,
+                        ]
+                    })
+                    .collect(),
+            ),
+            Bound::Polyline(pl) => {
+                Bound::Polyline(pl.iter().map(|q| [u(q[0]), v(q[0], q[1])]).collect())
+            }
+        };
+        let q = Problem {
+            t: p.t.iter().map(|t| u(*t)).collect(),
+            y: p.t.iter().zip(&p.y).map(|(t, y)| v(*t, *y)).collect(),
+            lower: map_bound(&p.lower),
+            upper: map_bound(&p.upper),
+            end_slopes: p.end_slopes.map(|s| s.map(|s| (s - self.b) * lam / c)),
+        };
+        let ok = |x: &f64| x.is_finite() && x.abs() <= MAX_MAGNITUDE;
+        let bound_ok = |bd: &Bound| match bd {
+            Bound::None => true,
+            Bound::Pieces(pc) => pc.iter().flatten().all(ok),
+            Bound::Polyline(pl) => pl.iter().flatten().all(ok),
+        };
+        if !(q.t.iter().all(ok)
+            && q.y.iter().all(ok)
+            && q.end_slopes.iter().flatten().all(ok)
+            && bound_ok(&q.lower)
+            && bound_ok(&q.upper))
+        {
+            return Err(Error::Overflow);
+        }
+        Ok(q)
+    }
+
+    /// The caller's abscissa of a normalized one.
+    pub fn time(&self, u: f64) -> f64 {
+        self.t0 + self.lam * u
+    }
+
+    /// The caller's value at t of a normalized value.
+    pub fn value(&self, t: f64, v: f64) -> f64 {
+        self.line(t) + self.c * v
+    }
+
+    /// The caller's slope of a normalized slope.
+    pub fn slope(&self, z: f64) -> f64 {
+        self.b + self.c * z / self.lam
+    }
+
+    /// ∫f''² in the caller's frame per unit of the normalized one: c²/λ³.
+    pub fn energy_factor(&self) -> f64 {
+        let r = self.c / self.lam;
+        r * r / self.lam
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn powers_of_two() {
+        for x in [5e-324, 1e-310, 1e-300, 3e-9, 0.7, 1.0, 5.0, 1e8, 1.7e300] {
+            let p = pow2_at_or_below(x);
+            assert!(p <= x && 2.0 * p > x, "{x}: {p}");
+            assert!((p.log2() - p.log2().round()).abs() < 1e-12);
+        }
+    }
+}
