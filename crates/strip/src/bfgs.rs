@@ -3,7 +3,7 @@
 
 use std::cell::RefCell;
 
-use argmin::core::{CostFunction, Executor, Gradient, State};
+use argmin::core::{CostFunction, Executor, Gradient, State, TerminationReason};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::BFGS;
 
@@ -105,6 +105,7 @@ pub(crate) fn bfgs(
     let g0n = g0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut best = x0.clone();
     let mut iters = 0;
+    let mut out_of_iterations = false;
     if nv > 0 {
         let ls = MoreThuenteLineSearch::new();
         let solver = BFGS::new(ls)
@@ -133,6 +134,10 @@ pub(crate) fn bfgs(
             best = p.clone();
         }
         iters = res.state().get_iter() as usize;
+        out_of_iterations = matches!(
+            res.state().get_termination_reason(),
+            Some(TerminationReason::MaxItersReached)
+        );
     }
     let mut h = hints.borrow().clone();
     let (st, n) = *counters.borrow();
@@ -141,5 +146,14 @@ pub(crate) fn bfgs(
     let (_, g, sols) = outer
         .value_grad(&best, &mut h, stats, solves)
         .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+    // out of iterations with neither the gradient (argmin's 2-norm test) nor Φ converged: an
+    // error with the gradient norm in the caller's units (as for Newton), never a silent answer
+    let g2 = g.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if out_of_iterations && g2 > opts.gradient_tol * (1.0 + g0n) {
+        return Err(Error::NotConverged {
+            iterations: iters,
+            gradient_norm: outer.caller_gradient_norm(&g),
+        });
+    }
     Ok((f64::NAN, iters, (sols, best, g)))
 }

@@ -1112,6 +1112,12 @@ impl OuterRef<'_> {
     pub(crate) fn cells(&self) -> usize {
         self.outer.cells.len()
     }
+    /// ‖g‖∞ in the caller's frame.
+    pub(crate) fn caller_gradient_norm(&self, g: &[f64]) -> f64 {
+        g.iter()
+            .zip(&self.outer.unit)
+            .fold(0.0f64, |m, (g, u)| m.max((g * u).abs()))
+    }
 }
 
 fn projected_grad(o: &Outer, x: &[f64], g: &[f64]) -> Vec<f64> {
