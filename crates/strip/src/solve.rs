@@ -1140,8 +1140,16 @@ fn inf_norm(v: &[f64]) -> f64 {
 
 /// Free grid values start at least this fraction of the strip width inside the strip.
 const INITIAL_INSET: f64 = 0.01;
-/// Stop when the Newton decrement ½ gᵀH⁻¹g is below this fraction of 1 + Φ.
+/// Stop when the Newton decrement ½ gᵀH⁻¹g is below this fraction of 1 + Φ and the Newton step
+/// below [`STEP_TOL`] (normalized frame: Φ, unknowns and steps are of unit order).
 pub const DECREMENT_TOL: f64 = 1e-15;
+/// Newton steps below this fraction of 1 + ‖x‖∞ are negligible (with [`DECREMENT_TOL`]).
+pub const STEP_TOL: f64 = 1e-12;
+/// Once the decrement is below [`DECREMENT_TOL`], full Newton steps are taken without a line
+/// search as long as Φ rises by at most this fraction of 1 + |Φ| (its rounding level) …
+const PHI_ROUNDING: f64 = 1e-14;
+/// … and at most this many of them.
+const POLISH_STEPS: usize = 3;
 /// Line-search backtracking steps before giving up.
 const LINE_SEARCH_STEPS: usize = 60;
 /// Armijo sufficient-decrease constant.
@@ -1166,6 +1174,7 @@ fn newton(
     let g0 = inf_norm(&projected_grad(o, &x, &ev.grad));
     let tol = opts.gradient_tol * (1.0 + g0);
     let mut it = 0;
+    let mut polished = 0;
     let mut newton_decrement = 0.0;
     while it < opts.max_iterations {
         let pg = projected_grad(o, &x, &ev.grad);
@@ -1217,11 +1226,29 @@ fn newton(
             }
         };
         // Newton decrement: ½ gᵀH⁻¹g estimates Φ − min Φ; along very stiff directions (contacts
-        // next to a grid point) it is the meaningful convergence measure, not ‖g‖
+        // next to a grid point) it is the meaningful convergence measure, not ‖g‖. But
+        // Φ − min Φ ~ 1e-15 Φ still leaves the unknowns off by up to ~√1e-15 along soft
+        // directions, and Φ can no longer see progress there (Armijo tests at rounding level
+        // accept or refuse at random). So once the decrement is that small, full Newton steps
+        // are taken as long as Φ does not rise beyond rounding (at most POLISH_STEPS of them;
+        // Newton converges quadratically), and the solve stops when the step is negligible.
+        let mut polish = None;
         if lambda == 0.0 {
             newton_decrement = 0.5 * (0..nv).map(|k| rhs[k] * dir[k]).sum::<f64>();
             if newton_decrement <= DECREMENT_TOL * (1.0 + ev.phi.abs()) {
-                break;
+                if inf_norm(&dir) <= STEP_TOL * (1.0 + inf_norm(&x)) || polished >= POLISH_STEPS {
+                    break;
+                }
+                polished += 1;
+                let mut xn: Vec<f64> = (0..nv).map(|k| x[k] + dir[k]).collect();
+                o.project(&mut xn);
+                let mut h2 = hints.clone();
+                match o.eval(&xn, &mut h2, None, stats, solves) {
+                    Ok(e) if e.phi <= ev.phi + PHI_ROUNDING * (1.0 + ev.phi.abs()) => {
+                        polish = Some((xn, h2, e.phi));
+                    }
+                    _ => break,
+                }
             }
         }
         // projected backtracking line search along the Newton direction; if it cannot decrease
@@ -1240,8 +1267,11 @@ fn newton(
         let grad_dir: Vec<f64> = (0..nv)
             .map(|k| if active[k] { 0.0 } else { -ev.grad[k] })
             .collect();
-        let mut accepted = None;
+        let mut accepted = polish;
         for dir in [&dir, &diag_dir, &grad_dir] {
+            if accepted.is_some() {
+                break;
+            }
             let mut alpha = 1.0;
             for _ in 0..LINE_SEARCH_STEPS {
                 let mut xn: Vec<f64> = (0..nv).map(|k| x[k] + alpha * dir[k]).collect();
