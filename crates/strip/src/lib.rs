@@ -33,6 +33,19 @@
 //! Newton's method on the two original equations polishes every start. Spurious starts are
 //! discarded by ordering, convergence and the exact feasibility test.
 //!
+//! **Normalized frame.** The problem is exactly equivariant: adding a line ℓ to y, e and d,
+//! scaling values by c and mapping sites by t ↦ t₀ + λt map solutions to solutions (∫f''² scales
+//! by c²/λ³). [`solve`] therefore works on a normalized copy — sites from 0 over a unit-order
+//! range, the line through the first and last data point subtracted, values divided by the value
+//! scale V (the largest deviation of the data, of the end slopes and of the bounds that push f
+//! off that line), all scalings powers of two — and maps the answer back exactly (data sites,
+//! polyline vertices and unshifted data values as given). Every stopping and feasibility
+//! tolerance is relative to these scales, so the answer does not depend on the units: scaled
+//! problems agree to rounding for c ∈ \[1e-8, 1e8\], λ ∈ \[1e-4, 1e4\] (ROBUSTNESS.md). The
+//! returned pieces are then checked exactly against the strip in the caller's units: a violation
+//! above [`RESULT_FEASIBILITY_TOL`]·V (+ rounding, [`ROUNDING_TOL`]) is
+//! [`Error::StripViolated`], never an answer ([`Solution::violation`] reports it).
+//!
 //! **Optimality certificate.** A feasible candidate whose f''' jumps up at every lower contact
 //! and down at every upper contact is *the* minimizer of its interval: for any feasible g,
 //! ∫g''² − ∫f''² = ∫(g − f)''² + 2 Σ jump·(g − f)(τ) ≥ 0. Every interval of a [`Solution`] is

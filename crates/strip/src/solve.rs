@@ -72,7 +72,8 @@ pub enum Method {
 
 /// Default iteration limit of the outer solver.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
-/// Default gradient tolerance: stop when ‖∇Φ‖∞ ≤ tol · (1 + ‖∇Φ(z₀)‖∞) (projected for boxes).
+/// Default gradient tolerance: stop when ‖∇Φ‖∞ ≤ tol · (1 + ‖∇Φ(z₀)‖∞) (projected for boxes),
+/// in the normalized frame of [`solve`] (where Φ and its gradient are of unit order).
 pub const DEFAULT_GRADIENT_TOL: f64 = 1e-11;
 /// Default margin ε of Remark 4.2 and problem (10), relative to the local strip width: data on a
 /// bound are moved inside by ε·width, and free grid values stay ε·width inside the strip.
@@ -165,9 +166,11 @@ pub struct Solution {
     pub energy: f64,
     /// ‖f''‖_{L²} = √energy.
     pub norm: f64,
-    /// Final (projected) gradient norm ‖∇Φ‖₂.
+    /// Final (projected) gradient norm ‖∇Φ‖₂ in the caller's units (∂Φ/∂z_i for slopes,
+    /// ∂Φ/∂s_j for free grid values).
     pub gradient_norm: f64,
-    /// Newton decrement ½ gᵀH⁻¹g at the solution (≈ Φ − min Φ; NaN for BFGS).
+    /// Newton decrement ½ gᵀH⁻¹g at the solution (≈ Φ − min Φ, in the units of ∫f''²; NaN for
+    /// BFGS).
     pub newton_decrement: f64,
     /// Outer iterations.
     pub iterations: usize,
@@ -610,7 +613,7 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     let tolerance = RESULT_FEASIBILITY_TOL * frame.scale + ROUNDING_TOL * frame.magnitude;
     if let Some((by, interval, side)) = worst_violation(problem, &sol) {
         sol.violation = by;
-        if !(by <= tolerance) {
+        if by.is_nan() || by > tolerance {
             return Err(Error::StripViolated {
                 interval,
                 side,
