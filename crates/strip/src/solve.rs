@@ -652,6 +652,22 @@ fn solve_normalized(
     let mut stats = CellStats::default();
     let mut solves = 0usize;
     let mut hints: Hints = vec![None; m - 1];
+    // the natural spline's slopes may lie outside Φ's domain (hair-thin strips, very short
+    // spans): then the first alternative start inside it
+    let mut x = x;
+    let inside = |x: &[f64], stats: &mut CellStats, solves: &mut usize| {
+        outer
+            .eval(x, &mut vec![None; m - 1], None, stats, solves)
+            .is_ok()
+    };
+    if !inside(&x, &mut stats, &mut solves) {
+        if let Some(alt) = alternative_starts(&outer, &grid, &x)
+            .into_iter()
+            .find(|alt| inside(alt, &mut stats, &mut solves))
+        {
+            x = alt;
+        }
+    }
     let (decrement, iterations, ev) = match opts.method {
         Method::Newton => newton(&outer, x, opts, &mut hints, &mut stats, &mut solves)?,
         Method::Bfgs => {
@@ -668,26 +684,81 @@ fn solve_normalized(
         .map(|(g, u)| (g * u) * (g * u))
         .sum::<f64>()
         .sqrt();
+    // abscissae in the caller's frame, placed from their grid point (a break or knot inside a
+    // short interval keeps its offset exactly; t₀ + λu would round it to ulp(u))
+    let gt = caller_grid(problem, q, frame, &grid);
+    let place = |j: usize, offset: f64| gt[j] + frame.lam * offset;
+    // how far the rounded abscissa lies from the exact one, in normalized units: pieces are
+    // re-expanded about the abscissa actually returned (a bound of slope 1e12 moves by 2.6e-4
+    // over the 2e-16 rounding of a break near t = 2.5)
+    let error =
+        |j: usize, offset: f64| ((place(j, offset) - gt[j]) - frame.lam * offset) / frame.lam;
     let mut sol = assemble(
-        q, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
+        &place, &error, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
     )?;
     sol.newton_decrement = decrement;
-    let mut sol = to_caller(problem, q, frame, &grid, sol);
+    let mut sol = to_caller(problem, frame, &grid, sol);
     sol.gradient_norm = gradient_norm;
     Ok(sol)
 }
 
-/// Maps a solution of the normalized problem `q` back to the caller's frame: abscissae
-/// t₀ + λu (data sites and polyline vertices exactly as given), values ℓ(t) + c·v (unshifted
-/// data values exactly), slopes ℓ' + c·z/λ, cubic coefficients c_k·c/λ^k (plus ℓ in the first
-/// two), energies ·c²/λ³.
-fn to_caller(
-    p: &Problem,
-    q: &Problem,
-    fr: &Frame,
-    grid: &[(f64, Option<usize>)],
-    s: Solution,
-) -> Solution {
+/// Starting points other than the natural spline, tried in turn when its slopes lie outside Φ's
+/// domain: the slopes at the data sites replaced by Bessel's three-point slopes, by the
+/// Fritsch–Carlson slopes (weighted harmonic means of the chord slopes, zero at extrema) and by
+/// the slopes of the data polygon on either side (prescribed end slopes and free grid values
+/// stay as they are).
+fn alternative_starts(o: &Outer, grid: &[(f64, Option<usize>)], x0: &[f64]) -> Vec<Vec<f64>> {
+    let sites: Vec<(usize, f64, f64)> = grid
+        .iter()
+        .enumerate()
+        .filter_map(|(j, g)| Some((j, g.0, o.fixed_val[j]?)))
+        .filter(|(j, _, _)| grid[*j].1.is_some())
+        .collect();
+    let n = sites.len();
+    if n < 2 {
+        return Vec::new();
+    }
+    let h: Vec<f64> = (0..n - 1).map(|i| sites[i + 1].1 - sites[i].1).collect();
+    let d: Vec<f64> = (0..n - 1)
+        .map(|i| (sites[i + 1].2 - sites[i].2) / h[i])
+        .collect();
+    let interior = |f: &dyn Fn(usize) -> f64| -> Vec<f64> {
+        (0..n)
+            .map(|i| match i {
+                0 => d[0],
+                _ if i == n - 1 => d[n - 2],
+                _ => f(i),
+            })
+            .collect()
+    };
+    let bessel = interior(&|i| (h[i] * d[i - 1] + h[i - 1] * d[i]) / (h[i - 1] + h[i]));
+    let fritsch_carlson = interior(&|i| {
+        if d[i - 1] * d[i] <= 0.0 {
+            0.0
+        } else {
+            let (w1, w2) = (2.0 * h[i] + h[i - 1], h[i] + 2.0 * h[i - 1]);
+            (w1 + w2) / (w1 / d[i - 1] + w2 / d[i])
+        }
+    });
+    let left = interior(&|i| d[i - 1]);
+    let right = interior(&|i| d[i]);
+    [bessel, fritsch_carlson, left, right]
+        .into_iter()
+        .map(|z| {
+            let mut x = x0.to_vec();
+            for (k, (j, _, _)) in sites.iter().enumerate() {
+                if let Some(v) = o.zv[*j] {
+                    x[v] = z[k];
+                }
+            }
+            x
+        })
+        .collect()
+}
+
+/// The grid in the caller's frame: data sites and polyline vertices exactly as given, other
+/// points t₀ + λu.
+fn caller_grid(p: &Problem, q: &Problem, fr: &Frame, grid: &[(f64, Option<usize>)]) -> Vec<f64> {
     let vertex = |u: f64| -> Option<f64> {
         for (bq, bp) in [(&q.lower, &p.lower), (&q.upper, &p.upper)] {
             if let (Bound::Polyline(vq), Bound::Polyline(vp)) = (bq, bp) {
@@ -698,34 +769,40 @@ fn to_caller(
         }
         None
     };
-    let gt: Vec<f64> = grid
-        .iter()
+    grid.iter()
         .map(|(u, i)| match i {
             Some(i) => p.t[*i],
             None => vertex(*u).unwrap_or_else(|| fr.time(*u)),
         })
-        .collect();
-    let find = |u: f64| grid.binary_search_by(|g| g.0.total_cmp(&u)).ok();
-    let at = |u: f64| find(u).map_or_else(|| fr.time(u), |j| gt[j]);
-    // the exact data value at a grid point that is a data site not moved by Remark 4.2
+        .collect()
+}
+
+/// Maps the values of a solution of the normalized problem (abscissae already placed in the
+/// caller's frame by `assemble`) back: values ℓ(t) + c·v (unshifted data values exactly),
+/// slopes ℓ' + c·z/λ (prescribed end slopes exactly), cubic coefficients c_k·c/λ^k (plus ℓ in
+/// the first two), energies ·c²/λ³.
+fn to_caller(p: &Problem, fr: &Frame, grid: &[(f64, Option<usize>)], s: Solution) -> Solution {
+    // the exact data value at grid point j when it is a data site not moved by Remark 4.2
     let data_at = |j: usize| {
         grid[j]
             .1
             .filter(|i| !s.shifted_data.contains(i))
             .map(|i| p.y[i])
     };
-    let breaks: Vec<f64> = s.breaks.iter().map(|u| at(*u)).collect();
+    let at_grid = |t: f64| {
+        s.grid
+            .binary_search_by(|g| g.total_cmp(&t))
+            .ok()
+            .and_then(data_at)
+    };
     let (c, lam) = (fr.c, fr.lam);
     let r = c / lam;
     let coefficients = s
         .coefficients
         .iter()
         .zip(&s.breaks)
-        .zip(&breaks)
-        .map(|((k, u), t)| {
-            let c0 = find(*u)
-                .and_then(data_at)
-                .unwrap_or_else(|| fr.value(*t, k[0]));
+        .map(|(k, t)| {
+            let c0 = at_grid(*t).unwrap_or_else(|| fr.value(*t, k[0]));
             [c0, fr.b + r * k[1], r * k[2] / lam, r * k[3] / lam / lam]
         })
         .collect();
@@ -733,7 +810,7 @@ fn to_caller(
         .grid_values
         .iter()
         .enumerate()
-        .map(|(j, v)| data_at(j).unwrap_or_else(|| fr.value(gt[j], *v)))
+        .map(|(j, v)| data_at(j).unwrap_or_else(|| fr.value(s.grid[j], *v)))
         .collect();
     let n = s.slopes.len();
     let slopes = s
@@ -746,20 +823,12 @@ fn to_caller(
             _ => fr.slope(*z),
         })
         .collect();
-    let extra_knots = s
-        .extra_knots
-        .iter()
-        .map(|k| ExtraKnot { t: at(k.t), ..*k })
-        .collect();
     let ef = fr.energy_factor();
     let energy = s.energy * ef;
     Solution {
-        breaks,
         coefficients,
         slopes,
-        grid: gt,
         grid_values,
-        extra_knots,
         energy,
         norm: energy.sqrt(),
         newton_decrement: s.newton_decrement * ef,
@@ -1345,7 +1414,8 @@ pub const ACCEPT_DECREMENT: f64 = 1e-9;
 
 #[allow(clippy::too_many_arguments)]
 fn assemble(
-    problem: &Problem,
+    place: &dyn Fn(usize, f64) -> f64,
+    error: &dyn Fn(usize, f64) -> f64,
     o: &Outer,
     grid: &[(f64, Option<usize>)],
     sols: &[CellSolution],
@@ -1371,11 +1441,12 @@ fn assemble(
         }
         let pw = &sol.pw;
         for k in 0..pw.n - 1 {
-            breaks.push(c.a + h * pw.x[k]);
+            breaks.push(place(j, h * pw.x[k]));
             let cn = pw.coeffs(k);
-            coefficients.push([cn[0], cn[1] / h, cn[2] / (h * h), cn[3] / (h * h * h)]);
+            let piece = [cn[0], cn[1] / h, cn[2] / (h * h), cn[3] / (h * h * h)];
+            coefficients.push(shift_cubic(&piece, error(j, h * pw.x[k])));
         }
-        let at = |k: usize| c.a + h * sol.tau[k];
+        let at = |k: usize| place(j, h * sol.tau[k]);
         match sol.shape {
             Shape::Free => {}
             Shape::Touch(sd) => extra.push(ExtraKnot {
@@ -1414,7 +1485,7 @@ fn assemble(
             }
         }
     }
-    breaks.push(*problem.t.last().unwrap_or(&0.0));
+    breaks.push(place(grid.len() - 1, 0.0));
     // contacts at grid vertices (§4): a free grid value held on its (ε-shrunk) box bound
     for (j, v) in o.sv.iter().enumerate() {
         if let Some(k) = *v {
@@ -1429,7 +1500,7 @@ fn assemble(
             };
             if let Some(side) = side {
                 extra.push(ExtraKnot {
-                    t: grid[j].0,
+                    t: place(j, 0.0),
                     kind: KnotKind::Touch(side),
                     interval: j.min(sols.len() - 1),
                 });
@@ -1448,7 +1519,7 @@ fn assemble(
         breaks,
         coefficients,
         slopes,
-        grid: grid.iter().map(|g| g.0).collect(),
+        grid: (0..grid.len()).map(|j| place(j, 0.0)).collect(),
         grid_values: s,
         shapes: sols.iter().map(|s| s.shape).collect(),
         extra_knots: extra,
