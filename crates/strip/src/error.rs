@@ -68,6 +68,18 @@ pub enum Error {
         /// The tolerance it exceeds.
         tolerance: f64,
     },
+    /// The returned pieces do not join at `at` to the tolerance of [`Error::StripViolated`]: the
+    /// cubic coefficients c·v/λ^k underflow or lose their precision (values tiny against the
+    /// site scale). Rescale t and y.
+    #[error("the solution's pieces do not join at t = {at} (by {by:e}, tolerance {tolerance:e}): rescale t and y")]
+    Discontinuous {
+        /// Where (a break).
+        at: f64,
+        /// By how much (caller's units).
+        by: f64,
+        /// The tolerance it exceeds.
+        tolerance: f64,
+    },
     /// Data sites not strictly increasing: t\[index\] ≤ t\[index − 1\] (or, for sites that
     /// are distinct, so close that t − t_1 rounds them to the same number at the scale of the
     /// whole range t_n − t_1).

@@ -89,7 +89,9 @@ pub const FEASIBILITY_TOL: f64 = 1e-10;
 pub const RESULT_FEASIBILITY_TOL: f64 = 1e-9;
 /// Rounding allowance of the returned pieces relative to the magnitude of the values
 /// M = max|y_i| + |ℓ'|·(t_n − t_1) + V (ℓ the line through the first and last data point):
-/// values of size M carry rounding errors of this order whatever the solver does.
+/// values of size M carry rounding errors of this order whatever the solver does. (The check
+/// that the pieces join also allows this fraction of Σ|c_k|h^k + |f'|·|t|, the terms of each
+/// end value and the rounding of its abscissa.)
 pub const ROUNDING_TOL: f64 = 1e-14;
 /// Relative tolerance of the f'' continuity equations solved for the extra knots.
 pub const CONTACT_TOL: f64 = 1e-12;
@@ -611,6 +613,36 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     }
     let mut sol = sol;
     let tolerance = RESULT_FEASIBILITY_TOL * frame.scale + ROUNDING_TOL * frame.magnitude;
+    // the pieces must join (each starts at its exact value): coefficients c·v/λ^k that
+    // underflow (values tiny against the site scale) break this, and the answer would not
+    // interpolate
+    let last = sol.coefficients.len() - 1;
+    for j in 0..=last {
+        let (k, h) = (&sol.coefficients[j], sol.breaks[j + 1] - sol.breaks[j]);
+        let (end, slope, _) = crate::cell::cubic3(k, h);
+        // the end value carries the rounding of its terms c_k h^k and of the abscissa (steep
+        // next to short spans: slope × ulp(t))
+        let terms = k[0].abs()
+            + h * (k[1].abs() + h * (k[2].abs() + h * k[3].abs()))
+            + slope.abs() * sol.breaks[j + 1].abs();
+        let next = if j < last {
+            Some(sol.coefficients[j + 1][0])
+        } else {
+            let n = problem.y.len();
+            (!sol.shifted_data.contains(&(n - 1))).then_some(problem.y[n - 1])
+        };
+        if let Some(next) = next {
+            let by = (end - next).abs();
+            let tolerance = tolerance + ROUNDING_TOL * terms;
+            if by.is_nan() || by > tolerance {
+                return Err(Error::Discontinuous {
+                    at: sol.breaks[j + 1],
+                    by,
+                    tolerance,
+                });
+            }
+        }
+    }
     if let Some((by, interval, side)) = worst_violation(problem, &sol) {
         sol.violation = by;
         if by.is_nan() || by > tolerance {
