@@ -429,3 +429,17 @@ proptest::proptest! {
         }
     }
 }
+
+/// Values 1e-268 on sites spaced 1e34 (a strip 1e4 times wider than the data): the answer's
+/// cubic coefficients c·v/λ² underflow, so the returned pieces would not interpolate. It was
+/// returned as Ok (found by `extreme_magnitudes_never_panic`); now the typed `Discontinuous`.
+#[test]
+fn underflowing_coefficients_are_refused() {
+    let p = scaled(&base(1.1e4), 6.4e-269, 1.03e34);
+    match solve(&p, &Options::default()) {
+        Err(Error::Discontinuous { by, tolerance, .. }) => assert!(by > tolerance),
+        other => panic!("expected Discontinuous, got {other:?}"),
+    }
+    // the same problem at a representable scale solves
+    assert!(solve(&scaled(&base(1.1e4), 6.4e-69, 1.03e34), &Options::default()).is_ok());
+}
