@@ -815,12 +815,11 @@ fn caller_grid(p: &Problem, q: &Problem, fr: &Frame, grid: &[(f64, Option<usize>
 /// the first two), energies ·c²/λ³.
 fn to_caller(p: &Problem, fr: &Frame, grid: &[(f64, Option<usize>)], s: Solution) -> Solution {
     // the exact data value at grid point j when it is a data site not moved by Remark 4.2
-    let data_at = |j: usize| {
-        grid[j]
-            .1
-            .filter(|i| !s.shifted_data.contains(i))
-            .map(|i| p.y[i])
-    };
+    let mut shifted = vec![false; p.y.len()];
+    for &i in &s.shifted_data {
+        shifted[i] = true;
+    }
+    let data_at = |j: usize| grid[j].1.filter(|i| !shifted[*i]).map(|i| p.y[i]);
     let at_grid = |t: f64| {
         s.grid
             .binary_search_by(|g| g.total_cmp(&t))
