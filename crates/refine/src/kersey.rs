@@ -2,6 +2,7 @@
 
 mod algorithm;
 mod certify;
+mod condensed;
 mod degenerate;
 mod exact;
 mod fast;
@@ -13,6 +14,10 @@ mod split;
 
 pub use algorithm::{Iterations, Refinement, Stage};
 pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
+pub use condensed::{
+    CONDENSED_MAX_ITERATIONS, CONDENSED_REFINEMENT_STEPS, CONDENSED_REFINE_FROM,
+    CONDENSED_STEP_FRACTION, CONDENSED_TOLERANCE,
+};
 pub use degenerate::{COMMON_POINT_STAGNATION, COMMON_POINT_SWEEPS, COMMON_POINT_TOL};
 pub use divdiff::{DerivativeRule, Parametrization};
 pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};

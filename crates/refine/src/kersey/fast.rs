@@ -192,12 +192,16 @@ impl Condensation {
         }
     }
 
-    /// out = K y (row j, d columns), y with n × d entries.
+    /// out = K y (row j, d columns), y with n × d entries. Evaluated in difference form,
+    /// K_{j,0}(y_a − y_b) + K_{j,2}(y_c − y_b): K annihilates constants (constant data are
+    /// interpolated with zero energy), so the rounding error scales with the steps between data
+    /// points rather than with |y|.
     pub(crate) fn apply_k(&self, y: &[f64], d: usize, out: &mut [f64]) {
         for (j, kr) in self.krows.iter().enumerate() {
             let (a, b, c) = (self.col(j, 0), self.col(j, 1), self.col(j, 2));
             for e in 0..d {
-                out[j * d + e] = kr[0] * y[a * d + e] + kr[1] * y[b * d + e] + kr[2] * y[c * d + e];
+                let yb = y[b * d + e];
+                out[j * d + e] = kr[0] * (y[a * d + e] - yb) + kr[2] * (y[c * d + e] - yb);
             }
         }
     }

@@ -1,0 +1,1129 @@
+//! The balls problem (3.4) on fixed knots, condensed exactly onto the n data vertices and solved
+//! by a primal–dual interior-point method (Mehrotra predictor–corrector, Nesterov–Todd scaling).
+//!
+//! Only the data vertices are constrained, so the free vertices are eliminated exactly
+//! ([`super::fast::Condensation`]): with the data vertices at y, the energy minimized over the
+//! free vertices is E(y) = ½ Σ_coords (Ky)ᵀ T⁻¹ (Ky), T symmetric positive definite tridiagonal
+//! and K tridiagonal on the data rows (both cyclic for a closed curve). The problem is
+//!
+//!   min_y ½ yᵀ Q y,  Q = Kᵀ T⁻¹ K ⊗ I_d,   s.t. s_i = (ε_i, q_i − y_i) ∈ SOC_{d+1}  (ε_i > 0),
+//!
+//! with y_i = q_i for ε_i = 0. Q is dense but applied in O(n d) (one tridiagonal solve). Each
+//! Newton system (Q + D)Δy = r, D block diagonal with the lower-right d × d block of V⁻² per cone
+//! (V the NT scaling, V z = V⁻¹ s = λ), is solved through the augmented form
+//! [[D, Kᵀ], [K, −T]]: (T + K D⁻¹ Kᵀ) w = K D⁻¹ r, then Δy = D⁻¹(r − Kᵀ w) — a block
+//! pentadiagonal (cyclic) positive definite system of n blocks of size d, factored by a banded
+//! block Cholesky (a cyclic band becomes an ordinary band of twice the width in the zig-zag order
+//! 0, n−1, 1, n−2, …). Fixed vertices have D⁻¹ = 0 and Δy = 0. For the cone
+//! (η, w̄) of the NT scaling, D = η⁻²(I + 2 w̄₁w̄₁ᵀ) and D⁻¹ = η²(I − 2 w̄₁w̄₁ᵀ / (1 + 2|w̄₁|²)).
+//!
+//! The start y = q is strictly feasible (s = (ε, 0), the centre of the cone) and every step keeps
+//! s = h − Gy exactly (G y = (0, y)), so only the dual residual Qy + z₁ and the gap sᵀz have to
+//! be driven to zero. The multiplier of ball i in the convention of (3.5) is w_i = z_{i,0}/ε_i:
+//! complementarity s∘z = 0 gives z₁ = (z₀/ε)(y − q), so Qy + z₁ = 0 reads
+//! (Hp)_{i_k} + w_i (p_{i_k} − q_i) = 0. The interior is then recovered by the second pass of
+//! [`super::fast`] with the data vertices at y.
+
+use divdiff::{Knots, Points};
+
+use super::fast::Condensation;
+use super::operator::Stencil;
+use crate::conic::{apply_v, jordan, jordan_div, max_step, scaling, Kind};
+use crate::Error;
+
+use super::fixed::dist;
+
+/// Iteration limit of the condensed interior-point method.
+pub const CONDENSED_MAX_ITERATIONS: usize = 80;
+/// Target of the condensed interior-point method: the dual residual ‖Qy + z₁‖_∞ relative to the
+/// force scale (the largest of ‖Qy‖_∞, ‖z₁‖_∞), and the duality gap sᵀz relative to the energy
+/// (it bounds E(y) − E*), both at most this.
+pub const CONDENSED_TOLERANCE: f64 = 1e-13;
+/// Fraction of the step to the boundary of the cones taken.
+pub const CONDENSED_STEP_FRACTION: f64 = 0.99;
+/// Iterative-refinement steps of each Newton solve (against Q + D applied exactly) before the
+/// iterate's residual is below [`CONDENSED_REFINE_FROM`]; after, up to
+/// [`CONDENSED_MAX_REFINEMENT_STEPS`].
+pub const CONDENSED_REFINEMENT_STEPS: usize = 1;
+/// Newton solves are refined once the relative residual is below this.
+pub const CONDENSED_REFINE_FROM: f64 = 1e-6;
+/// Static regularization of the Newton systems: D + ρI is factored instead of D, with ρ this
+/// times the largest diagonal entry of Q, so D⁻¹ stays below 1/ρ. Without it the elimination
+/// through D⁻¹ cancels catastrophically on inactive cones (D → 0 makes T + K D⁻¹ Kᵀ as
+/// ill-conditioned as D⁻¹ is large: K has the constants in its kernel). Iterative refinement
+/// against Q + D removes the regularization from the directions.
+pub const CONDENSED_REGULARIZATION: f64 = 1e-8;
+/// Iterative refinement stops when the residual of the Newton system is below this times its
+/// right-hand side (or after [`CONDENSED_MAX_REFINEMENT_STEPS`]).
+pub const CONDENSED_REFINEMENT_RTOL: f64 = 1e-14;
+/// Upper limit of iterative-refinement steps per Newton solve.
+pub const CONDENSED_MAX_REFINEMENT_STEPS: usize = 6;
+/// Newton steps of the active-set polish after the interior-point method: its iterates approach
+/// the optimum only like √μ in the directions tangent to active spheres (the vector part of s∘z
+/// is not driven below √μ off the central path), which the certificate's stationarity with the
+/// multiplier w = z₀/ε of (3.5) measures. The polish fixes the active set (slack ≤
+/// [`CONDENSED_POLISH_ACTIVE_RTOL`] ε), takes Newton steps on Qy + w(y − q) = 0,
+/// |y_i − q_i| = ε_i with the normal direction held by a penalty
+/// [`CONDENSED_POLISH_STIFFNESS`] · max Q_ii, re-projects onto the spheres and keeps a step only
+/// if it lowers the stationarity residual, keeps every inactive vertex inside its ball and every
+/// multiplier non-negative.
+pub const CONDENSED_POLISH_STEPS: usize = 3;
+/// A ball counts as active in the polish when its slack is at most this times its radius.
+pub const CONDENSED_POLISH_ACTIVE_RTOL: f64 = 1e-6;
+/// Normal stiffness of the polish's penalty, relative to the largest diagonal entry of Q.
+pub const CONDENSED_POLISH_STIFFNESS: f64 = 1e8;
+/// When the iteration limit is reached or a step fails, the best iterate is still returned (for
+/// the independent certificate to judge) if its own residual is at most this.
+pub const CONDENSED_ACCEPT: f64 = 1e-9;
+
+/// A symmetric positive definite block-banded matrix (blocks of `bs` × `bs`, `bw` blocks below
+/// the diagonal after the ordering) and its Cholesky factor, in place.
+struct Banded {
+    nb: usize,
+    bs: usize,
+    bw: usize,
+    /// Position of each block in the factored order.
+    pos: Vec<usize>,
+    /// Block (p, p − t) at [(p (bw + 1) + t) bs², …), row-major.
+    a: Vec<f64>,
+    /// Solve workspace (positions × columns).
+    work: Vec<f64>,
+}
+
+impl Banded {
+    /// `nb` blocks coupled within `band` (cyclically when `cyclic`), solves with up to
+    /// `ncols` right-hand sides.
+    fn new(nb: usize, bs: usize, band: usize, cyclic: bool, ncols: usize) -> Self {
+        let half = nb.div_ceil(2);
+        let pos: Vec<usize> = if cyclic {
+            (0..nb)
+                .map(|i| if i < half { 2 * i } else { 2 * (nb - 1 - i) + 1 })
+                .collect()
+        } else {
+            (0..nb).collect()
+        };
+        let bw = if cyclic { 2 * band } else { band }.min(nb.saturating_sub(1));
+        Banded {
+            nb,
+            bs,
+            bw,
+            pos,
+            a: vec![0.0; nb * (bw + 1) * bs * bs],
+            work: vec![0.0; nb * bs * ncols],
+        }
+    }
+
+    fn clear(&mut self) {
+        self.a.fill(0.0);
+    }
+
+    #[inline]
+    fn at(&self, p: usize, t: usize) -> usize {
+        (p * (self.bw + 1) + t) * self.bs * self.bs
+    }
+
+    /// Adds `f · blk` to block (i, j) of the symmetric matrix (and so its transpose to (j, i));
+    /// `blk(r, c)` is the entry of row r of block i and column c of block j.
+    #[inline]
+    fn add(&mut self, i: usize, j: usize, f: f64, blk: &[f64]) {
+        let bs = self.bs;
+        let (pi, pj) = (self.pos[i], self.pos[j]);
+        if pi >= pj {
+            let o = self.at(pi, pi - pj);
+            for (x, b) in self.a[o..o + bs * bs].iter_mut().zip(blk) {
+                *x += f * b;
+            }
+        } else {
+            let o = self.at(pj, pj - pi);
+            for r in 0..bs {
+                for c in 0..bs {
+                    self.a[o + r * bs + c] += f * blk[c * bs + r];
+                }
+            }
+        }
+    }
+
+    /// Adds f to the scalar-identity part of block (i, j): f I_bs.
+    #[inline]
+    fn add_identity(&mut self, i: usize, j: usize, f: f64) {
+        let bs = self.bs;
+        let (pi, pj) = (self.pos[i], self.pos[j]);
+        let (p, t) = if pi >= pj { (pi, pi - pj) } else { (pj, pj - pi) };
+        let o = self.at(p, t);
+        for r in 0..bs {
+            self.a[o + r * bs + r] += f;
+        }
+    }
+
+    /// Block Cholesky in place. Returns the (original) block index of a non-positive pivot.
+    fn factor(&mut self) -> Result<(), usize> {
+        let (bs, bw) = (self.bs, self.bw);
+        let bb = bs * bs;
+        let mut inv_pos = vec![0; self.nb];
+        for (i, &p) in self.pos.iter().enumerate() {
+            inv_pos[p] = i;
+        }
+        let mut m = vec![0.0; bb];
+        for p in 0..self.nb {
+            let lo = p.saturating_sub(bw);
+            for c in lo..=p {
+                // M = A[p][c] − Σ_{c' < c} L[p][c'] L[c][c']ᵀ.
+                let o = self.at(p, p - c);
+                m.copy_from_slice(&self.a[o..o + bb]);
+                for cp in lo.max(c.saturating_sub(bw))..c {
+                    let x = self.at(p, p - cp);
+                    let y = self.at(c, c - cp);
+                    for r in 0..bs {
+                        for s in 0..bs {
+                            let mut acc = 0.0;
+                            for t in 0..bs {
+                                acc += self.a[x + r * bs + t] * self.a[y + s * bs + t];
+                            }
+                            m[r * bs + s] -= acc;
+                        }
+                    }
+                }
+                if c < p {
+                    // L[p][c] = M L[c][c]⁻ᵀ: each row solves L[c][c] xᵀ = mᵀ.
+                    let dgo = self.at(c, 0);
+                    for r in 0..bs {
+                        for s in 0..bs {
+                            let mut v = m[r * bs + s];
+                            for t in 0..s {
+                                v -= m[r * bs + t] * self.a[dgo + s * bs + t];
+                            }
+                            m[r * bs + s] = v / self.a[dgo + s * bs + s];
+                        }
+                    }
+                    self.a[o..o + bb].copy_from_slice(&m);
+                } else {
+                    // Dense Cholesky of the diagonal block (lower triangle stored).
+                    for s in 0..bs {
+                        let mut v = m[s * bs + s];
+                        for t in 0..s {
+                            v -= m[s * bs + t] * m[s * bs + t];
+                        }
+                        if v.is_nan() || v <= 0.0 {
+                            return Err(inv_pos[p]);
+                        }
+                        let piv = v.sqrt();
+                        m[s * bs + s] = piv;
+                        for r in s + 1..bs {
+                            let mut w = m[r * bs + s];
+                            for t in 0..s {
+                                w -= m[r * bs + t] * m[s * bs + t];
+                            }
+                            m[r * bs + s] = w / piv;
+                        }
+                        for r in 0..s {
+                            m[r * bs + s] = 0.0;
+                        }
+                    }
+                    self.a[o..o + bb].copy_from_slice(&m);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves A x = b in place for `ncols` columns (b in the original block order, unknown-major).
+    fn solve(&mut self, b: &mut [f64], ncols: usize) {
+        let (bs, bw, nb) = (self.bs, self.bw, self.nb);
+        let row = bs * ncols;
+        let w = &mut self.work[..nb * row];
+        for i in 0..nb {
+            let p = self.pos[i];
+            w[p * row..(p + 1) * row].copy_from_slice(&b[i * row..(i + 1) * row]);
+        }
+        let a = &self.a;
+        let at = |p: usize, t: usize| (p * (bw + 1) + t) * bs * bs;
+        // Forward: L x = b.
+        for p in 0..nb {
+            for c in p.saturating_sub(bw)..p {
+                let o = at(p, p - c);
+                for r in 0..bs {
+                    for e in 0..ncols {
+                        let mut acc = 0.0;
+                        for t in 0..bs {
+                            acc += a[o + r * bs + t] * w[(c * bs + t) * ncols + e];
+                        }
+                        w[(p * bs + r) * ncols + e] -= acc;
+                    }
+                }
+            }
+            let o = at(p, 0);
+            for r in 0..bs {
+                for e in 0..ncols {
+                    let mut v = w[(p * bs + r) * ncols + e];
+                    for t in 0..r {
+                        v -= a[o + r * bs + t] * w[(p * bs + t) * ncols + e];
+                    }
+                    w[(p * bs + r) * ncols + e] = v / a[o + r * bs + r];
+                }
+            }
+        }
+        // Backward: Lᵀ x = y.
+        for p in (0..nb).rev() {
+            for rr in p + 1..(p + bw + 1).min(nb) {
+                let o = at(rr, rr - p);
+                for s in 0..bs {
+                    for e in 0..ncols {
+                        let mut acc = 0.0;
+                        for t in 0..bs {
+                            acc += a[o + t * bs + s] * w[(rr * bs + t) * ncols + e];
+                        }
+                        w[(p * bs + s) * ncols + e] -= acc;
+                    }
+                }
+            }
+            let o = at(p, 0);
+            for r in (0..bs).rev() {
+                for e in 0..ncols {
+                    let mut v = w[(p * bs + r) * ncols + e];
+                    for t in r + 1..bs {
+                        v -= a[o + t * bs + r] * w[(p * bs + t) * ncols + e];
+                    }
+                    w[(p * bs + r) * ncols + e] = v / a[o + r * bs + r];
+                }
+            }
+        }
+        for i in 0..nb {
+            let p = self.pos[i];
+            b[i * row..(i + 1) * row].copy_from_slice(&w[p * row..(p + 1) * row]);
+        }
+    }
+}
+
+/// The optimum of the condensed balls problem.
+pub(crate) struct CondensedSolution {
+    /// The refined vertices (data vertices at y, free vertices by the second pass).
+    pub points: Points,
+    /// Multipliers in the conventions of [`crate::Refinement::multipliers`]: `[w_i]` for
+    /// ε_i > 0, the reaction −(Hp)_{i_k} for ε_i = 0.
+    pub multipliers: Vec<Vec<f64>>,
+    /// Interior-point iterations.
+    pub iterations: usize,
+}
+
+/// Q = Kᵀ T⁻¹ K ⊗ I_d applied to y, with T's factor; returns E(y) = ½ yᵀ Q y.
+struct QOp<'a> {
+    cond: &'a Condensation,
+    t: Banded,
+    u: Vec<f64>,
+    s: Vec<f64>,
+    d: usize,
+}
+
+impl QOp<'_> {
+    /// out = Q y; afterwards `self.s` = T⁻¹ K y (the data-row values).
+    fn apply(&mut self, y: &[f64], out: &mut [f64]) -> f64 {
+        let d = self.d;
+        self.cond.apply_k(y, d, &mut self.u);
+        self.s.copy_from_slice(&self.u);
+        self.t.solve(&mut self.s, d);
+        self.cond.apply_kt(&self.s, d, out);
+        0.5 * self.u.iter().zip(&self.s).map(|(a, b)| a * b).sum::<f64>()
+    }
+}
+
+/// Solves the balls problem with radii `radii` (0 = interpolate) at the data vertices
+/// 0, stride, 2·stride, … of `knots`.
+///
+/// # Errors
+/// [`Error::Energy`] (`Singular`) if a pivot fails (impossible for valid knots and positive
+/// radii; reported rather than assumed); [`Error::NotConverged`] with the best residual when the
+/// method does not reach [`CONDENSED_TOLERANCE`] within [`CONDENSED_MAX_ITERATIONS`].
+pub(crate) fn solve_balls(
+    knots: &Knots,
+    stencil: &Stencil,
+    q: &Points,
+    radii: &[f64],
+    stride: usize,
+) -> Result<CondensedSolution, Error> {
+    let n = q.len();
+    let d = q.dim();
+    let m = d + 1;
+    let cond = Condensation::new(knots, stencil, n, stride)?;
+    let size = cond.len();
+    let closed = cond.closed;
+    let singular = |j: usize| Error::from(energy::Error::Singular { vertex: j * stride });
+    let ball: Vec<bool> = radii.iter().map(|&e| e > 0.0).collect();
+    let nballs = ball.iter().filter(|&&b| b).count();
+    let qc = q.coords();
+
+    // T (scalar, d columns) for applying Q.
+    let mut t = Banded::new(size, 1, 1, closed, d);
+    for j in 0..size {
+        t.add_identity(j, j, cond.diag[j]);
+        if closed || j + 1 < size {
+            t.add_identity(j, (j + 1) % size, cond.off[j]);
+        }
+    }
+    t.factor().map_err(|j| singular(cond.first + j))?;
+    let mut qop = QOp {
+        cond: &cond,
+        t,
+        u: vec![0.0; size * d],
+        s: vec![0.0; size * d],
+        d,
+    };
+    // S = T + K D⁻¹ Kᵀ (blocks of d).
+    let mut sm = Banded::new(size, d, 2, closed, 1);
+    // Rows of K touching each data point: (row, coefficient).
+    let mut touching: Vec<[(usize, f64); 3]> = vec![[(usize::MAX, 0.0); 3]; n];
+    let mut ntouch = vec![0usize; n];
+    for (j, kr) in cond.krows.iter().enumerate() {
+        for (tt, &kv) in kr.iter().enumerate() {
+            let c = cond.col(j, tt);
+            touching[c][ntouch[c]] = (j, kv);
+            ntouch[c] += 1;
+        }
+    }
+
+    // Length and force scales.
+    let mut centroid = vec![0.0; d];
+    for x in q.iter() {
+        for (c, v) in centroid.iter_mut().zip(x) {
+            *c += v / n as f64;
+        }
+    }
+    let length = q
+        .iter()
+        .flat_map(|x| x.iter().zip(&centroid).map(|(a, b)| (a - b).abs()))
+        .fold(0.0f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+
+    // ρ of CONDENSED_REGULARIZATION: Q_ii = Σ_j K_ji² (T⁻¹)_jj, estimated with 1/T_jj.
+    let mut qdiag = vec![0.0; n];
+    for (j, kr) in cond.krows.iter().enumerate() {
+        for (tt, &kv) in kr.iter().enumerate() {
+            qdiag[cond.col(j, tt)] += kv * kv / cond.diag[j];
+        }
+    }
+    let qmax = qdiag
+        .iter()
+        .fold(0.0f64, |a, &v| a.max(v))
+        .max(f64::MIN_POSITIVE);
+    let rho = CONDENSED_REGULARIZATION * qmax;
+
+    let mut step: f64 = 0.0;
+    for i in 0..n {
+        let j = if i + 1 == n { 0 } else { i + 1 };
+        if j > i || closed {
+            for c in 0..d {
+                step = step.max((qc[j * d + c] - qc[i * d + c]).abs());
+            }
+        }
+    }
+    let step = step.max(f64::MIN_POSITIVE);
+
+    let mut y = qc.to_vec();
+    let mut g = vec![0.0; n * d];
+    qop.apply(&y, &mut g);
+    let f0 = g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let f_init = if f0 > 0.0 { f0 } else { qmax * step };
+    // s = (ε, 0) (the centre of each cone, y = q) and z = (F, 0): s∘z = (ε F, 0).
+    let mut s = vec![0.0; n * m];
+    let mut z = vec![0.0; n * m];
+    for i in 0..n {
+        if ball[i] {
+            s[i * m] = radii[i];
+            z[i * m] = f_init;
+        }
+    }
+
+    let mut rd = vec![0.0; n * d];
+    let mut rp = vec![0.0; n * m];
+    let mut sc = vec![0.0; n * (m + 1)];
+    let mut lam = vec![0.0; n * m];
+    let mut dinv = vec![0.0; n * d * d];
+    let mut dfac = vec![0.0; n * d * d]; // D itself, for the refinement residual
+    let mut scv: Vec<f64> = Vec::with_capacity(m + 1);
+    let mut xi = vec![0.0; n * m];
+    let (mut dy, mut dz, mut ds) = (vec![0.0; n * d], vec![0.0; n * m], vec![0.0; n * m]);
+    let (mut dya, mut dza, mut dsa) = (vec![0.0; n * d], vec![0.0; n * m], vec![0.0; n * m]);
+    let mut ns = NewtonWork {
+        r: vec![0.0; n * d],
+        w: vec![0.0; size * d],
+        kt: vec![0.0; n * d],
+        res: vec![0.0; n * d],
+        corr: vec![0.0; n * d],
+        qd: vec![0.0; n * d],
+        tm: vec![0.0; m],
+        tm2: vec![0.0; m],
+    };
+    let (mut ca, mut cc, mut t1, mut t2) = (vec![0.0; m], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    let mut best = f64::INFINITY;
+    let (mut best_y, mut best_z) = (y.clone(), z.clone());
+    let mut stalled = false;
+    let mut iterations = 0;
+    let mut residual;
+    let cone = |v: &[f64], i: usize| -> std::ops::Range<usize> {
+        let _ = v;
+        i * m..(i + 1) * m
+    };
+    loop {
+        // Residuals at (y, s, z): r_d = Qy + z₁, r_p = s − (ε, q − y).
+        let energy = qop.apply(&y, &mut g);
+        let (mut rdn, mut rpn): (f64, f64) = (0.0, 0.0);
+        let mut fscale: f64 = 0.0;
+        let mut gap = 0.0;
+        for i in 0..n {
+            for c in 0..d {
+                fscale = fscale.max(g[i * d + c].abs());
+            }
+            if !ball[i] {
+                rd[i * d..(i + 1) * d].fill(0.0);
+                continue;
+            }
+            let o = i * m;
+            rp[o] = s[o] - radii[i];
+            rpn = rpn.max(rp[o].abs());
+            gap += s[o] * z[o];
+            for c in 0..d {
+                let z1 = z[o + 1 + c];
+                rd[i * d + c] = g[i * d + c] + z1;
+                rdn = rdn.max(rd[i * d + c].abs());
+                fscale = fscale.max(z1.abs());
+                rp[o + 1 + c] = s[o + 1 + c] - (qc[i * d + c] - y[i * d + c]);
+                rpn = rpn.max(rp[o + 1 + c].abs());
+                gap += s[o + 1 + c] * z1;
+            }
+        }
+        // Floors from fixed scales, as in the certificate: forces ‖Q‖ δ (δ the largest
+        // coordinate step between consecutive data points; Qy is computed from such
+        // differences), energies at rounding level of forces × lengths — for optima with E* = 0
+        // (e.g. data within reach of a straight open curve).
+        let fscale = fscale.max(qmax * step);
+        let mu = gap / nballs.max(1) as f64;
+        residual = (rdn / fscale)
+            .max(rpn / length)
+            .max(gap.abs() / energy.max(f64::EPSILON * fscale * length));
+        if residual < best {
+            best = residual;
+            best_y.copy_from_slice(&y);
+            best_z.copy_from_slice(&z);
+        }
+        if residual <= CONDENSED_TOLERANCE || nballs == 0 {
+            break;
+        }
+        if iterations >= CONDENSED_MAX_ITERATIONS {
+            stalled = true;
+            break;
+        }
+        iterations += 1;
+
+        // NT scalings, λ = V z, D⁻¹, and S = T + K D⁻¹ Kᵀ.
+        sm.clear();
+        for j in 0..size {
+            sm.add_identity(j, j, cond.diag[j]);
+            if closed || j + 1 < size {
+                sm.add_identity(j, (j + 1) % size, cond.off[j]);
+            }
+        }
+        for i in 0..n {
+            if !ball[i] {
+                continue;
+            }
+            let zi = &z[cone(&z, i)];
+            scaling(Kind::Soc, &s[cone(&s, i)], zi, &mut scv);
+            sc[i * (m + 1)..(i + 1) * (m + 1)].copy_from_slice(&scv);
+            let l = &mut lam[i * m..(i + 1) * m];
+            l.copy_from_slice(zi);
+            apply_v(Kind::Soc, &scv, l, false);
+            // D = a I + b w̄₁w̄₁ᵀ, a = η⁻², b = 2η⁻²; D + ρI has the eigenvalue a + ρ + b|w̄₁|²
+            // along u = w̄₁/|w̄₁| and a + ρ across it, inverted per eigenspace (no cancellation
+            // when b|w̄₁|² ≫ a, on active cones).
+            let eta2 = scv[0] * scv[0];
+            let w1 = &scv[2..];
+            let w2: f64 = w1.iter().map(|v| v * v).sum();
+            let (da, db) = (1.0 / eta2, 2.0 / eta2);
+            let ar = da + rho;
+            let (inv_across, inv_along) = (1.0 / ar, 1.0 / (ar + db * w2));
+            let wn = w2.sqrt();
+            let di = &mut dinv[i * d * d..(i + 1) * d * d];
+            let df = &mut dfac[i * d * d..(i + 1) * d * d];
+            for a in 0..d {
+                for b in 0..d {
+                    let id = if a == b { 1.0 } else { 0.0 };
+                    let uu = if wn > 0.0 {
+                        (w1[a] / wn) * (w1[b] / wn)
+                    } else {
+                        0.0
+                    };
+                    di[a * d + b] = inv_across * (id - uu) + inv_along * uu;
+                    df[a * d + b] = da * id + db * w1[a] * w1[b];
+                }
+            }
+            let nt = ntouch[i];
+            for x in 0..nt {
+                let (jx, kx) = touching[i][x];
+                sm.add(jx, jx, kx * kx, di);
+                for &(jy, ky) in &touching[i][x + 1..nt] {
+                    sm.add(jx, jy, kx * ky, di);
+                }
+            }
+        }
+        if sm.factor().is_err() {
+            stalled = true;
+            break;
+        }
+        let refine = if residual <= CONDENSED_REFINE_FROM {
+            CONDENSED_MAX_REFINEMENT_STEPS
+        } else {
+            CONDENSED_REFINEMENT_STEPS
+        };
+        let ctx = NewtonCtx {
+            cond: &cond,
+            ball: &ball,
+            sc: &sc,
+            dinv: &dinv,
+            dfac: &dfac,
+            rp: &rp,
+            d,
+            refine,
+        };
+
+        // Predictor: ξ = −λ.
+        for (x, l) in xi.iter_mut().zip(&lam) {
+            *x = -l;
+        }
+        ctx.solve(&mut sm, &mut qop, &rd, &xi, &mut dya, &mut dsa, &mut dza, &mut ns);
+        let mut alpha_a: f64 = 1.0;
+        for i in (0..n).filter(|&i| ball[i]) {
+            let r = cone(&s, i);
+            alpha_a = max_step(Kind::Soc, &s[r.clone()], &dsa[r.clone()], alpha_a);
+            alpha_a = max_step(Kind::Soc, &z[r.clone()], &dza[r], alpha_a);
+        }
+        let mut gap_a = 0.0;
+        for i in (0..n).filter(|&i| ball[i]) {
+            for k in cone(&s, i) {
+                gap_a += (s[k] + alpha_a * dsa[k]) * (z[k] + alpha_a * dza[k]);
+            }
+        }
+        let sigma = if gap > 0.0 {
+            (gap_a / gap).clamp(0.0, 1.0).powi(3)
+        } else {
+            0.0
+        };
+        // Corrector: ξ = λ⁻¹ ∘ (σμe − λ∘λ − (V⁻¹Δs_a)∘(VΔz_a)).
+        for i in (0..n).filter(|&i| ball[i]) {
+            let scv = &sc[i * (m + 1)..(i + 1) * (m + 1)];
+            let r = cone(&s, i);
+            ca.copy_from_slice(&dsa[r.clone()]);
+            apply_v(Kind::Soc, scv, &mut ca, true);
+            cc.copy_from_slice(&dza[r.clone()]);
+            apply_v(Kind::Soc, scv, &mut cc, false);
+            jordan(Kind::Soc, &ca, &cc, &mut t1);
+            let l = &lam[r.clone()];
+            jordan(Kind::Soc, l, l, &mut t2);
+            for k in 0..m {
+                t2[k] = -t2[k] - t1[k];
+            }
+            t2[0] += sigma * mu;
+            jordan_div(Kind::Soc, l, &t2, &mut xi[r]);
+        }
+        ctx.solve(&mut sm, &mut qop, &rd, &xi, &mut dy, &mut ds, &mut dz, &mut ns);
+        let mut alpha: f64 = 1.0 / CONDENSED_STEP_FRACTION;
+        for i in (0..n).filter(|&i| ball[i]) {
+            let r = cone(&s, i);
+            alpha = max_step(Kind::Soc, &s[r.clone()], &ds[r.clone()], alpha);
+            alpha = max_step(Kind::Soc, &z[r.clone()], &dz[r], alpha);
+        }
+        let alpha = (CONDENSED_STEP_FRACTION * alpha).min(1.0);
+        if !(alpha.is_finite() && alpha > 0.0) || dy.iter().any(|v| !v.is_finite()) {
+            stalled = true;
+            break;
+        }
+        for (a, b) in y.iter_mut().zip(&dy) {
+            *a += alpha * b;
+        }
+        for i in (0..n).filter(|&i| ball[i]) {
+            for k in cone(&s, i) {
+                s[k] += alpha * ds[k];
+                z[k] += alpha * dz[k];
+            }
+        }
+    }
+
+    if stalled {
+        if best > CONDENSED_ACCEPT {
+            return Err(Error::NotConverged {
+                solver: "condensed balls interior-point method",
+                iterations,
+                residual: best,
+            });
+        }
+        y.copy_from_slice(&best_y);
+        z.copy_from_slice(&best_z);
+        qop.apply(&y, &mut g);
+    }
+    // Active-set polish (see CONDENSED_POLISH_STEPS).
+    let mut w: Vec<f64> = (0..n)
+        .map(|i| if ball[i] { z[i * m] / radii[i] } else { 0.0 })
+        .collect();
+    {
+        let active: Vec<bool> = (0..n)
+            .map(|i| {
+                ball[i]
+                    && radii[i] - dist(&y[i * d..(i + 1) * d], &qc[i * d..(i + 1) * d])
+                        <= CONDENSED_POLISH_ACTIVE_RTOL * radii[i]
+            })
+            .collect();
+        let stationarity = |g: &[f64], y: &[f64], w: &[f64]| -> f64 {
+            let mut r: f64 = 0.0;
+            for i in (0..n).filter(|&i| ball[i]) {
+                for c in 0..d {
+                    let v = g[i * d + c] + w[i] * (y[i * d + c] - qc[i * d + c]);
+                    r = r.max(v.abs());
+                }
+            }
+            r
+        };
+        qop.apply(&y, &mut g);
+        let mut current = stationarity(&g, &y, &w);
+        let mut yp = y.clone();
+        let mut wp = w.clone();
+        let mut rhs = vec![0.0; n * d];
+        let mut u = vec![0.0; d];
+        for _ in 0..CONDENSED_POLISH_STEPS {
+            // Newton step on Qy + w(y − q) = 0, |y_i − q_i| = ε_i (active), with the normal
+            // direction held by the penalty M: (Q + W + M uuᵀ)Δy = −(Qy + w(y − q)).
+            qop.apply(&yp, &mut g);
+            let stiff = CONDENSED_POLISH_STIFFNESS * qmax;
+            sm.clear();
+            for j in 0..size {
+                sm.add_identity(j, j, cond.diag[j]);
+                if closed || j + 1 < size {
+                    sm.add_identity(j, (j + 1) % size, cond.off[j]);
+                }
+            }
+            for i in 0..n {
+                let o = i * d;
+                if !ball[i] {
+                    rhs[o..o + d].fill(0.0);
+                    continue;
+                }
+                let di = &mut dinv[i * d * d..(i + 1) * d * d];
+                let df = &mut dfac[i * d * d..(i + 1) * d * d];
+                if active[i] {
+                    let gap = dist(&yp[o..o + d], &qc[o..o + d]);
+                    for c in 0..d {
+                        u[c] = (yp[o + c] - qc[o + c]) / gap;
+                    }
+                    // Least-squares multiplier at the current point.
+                    let wi = (-(0..d).map(|c| g[o + c] * u[c]).sum::<f64>() / gap).max(0.0);
+                    wp[i] = wi;
+                    let (across, along) = (wi + rho, wi + rho + stiff);
+                    for a in 0..d {
+                        for b in 0..d {
+                            let id = if a == b { 1.0 } else { 0.0 };
+                            di[a * d + b] = (id - u[a] * u[b]) / across + u[a] * u[b] / along;
+                            df[a * d + b] = wi * id + stiff * u[a] * u[b];
+                        }
+                        rhs[o + a] = -(g[o + a] + wi * (yp[o + a] - qc[o + a]))
+                            + stiff * (radii[i] - gap) * u[a];
+                    }
+                } else {
+                    wp[i] = 0.0;
+                    for a in 0..d {
+                        for b in 0..d {
+                            let id = if a == b { 1.0 } else { 0.0 };
+                            di[a * d + b] = id / rho;
+                            df[a * d + b] = 0.0;
+                        }
+                        rhs[o + a] = -g[o + a];
+                    }
+                }
+                let di = &dinv[i * d * d..(i + 1) * d * d];
+                let nt = ntouch[i];
+                for x in 0..nt {
+                    let (jx, kx) = touching[i][x];
+                    sm.add(jx, jx, kx * kx, di);
+                    for &(jy, ky) in &touching[i][x + 1..nt] {
+                        sm.add(jx, jy, kx * ky, di);
+                    }
+                }
+            }
+            if sm.factor().is_err() {
+                break;
+            }
+            let ctx = NewtonCtx {
+                cond: &cond,
+                ball: &ball,
+                sc: &sc,
+                dinv: &dinv,
+                dfac: &dfac,
+                rp: &rp,
+                d,
+                refine: CONDENSED_MAX_REFINEMENT_STEPS,
+            };
+            ctx.refined(&mut sm, &mut qop, &rhs, &mut dy, &mut ns);
+            for (a, b) in yp.iter_mut().zip(&dy) {
+                *a += b;
+            }
+            // Back onto the spheres; an inactive vertex outside its ball means a wrong active
+            // set: the polish is abandoned.
+            let mut ok = true;
+            for i in (0..n).filter(|&i| ball[i]) {
+                let o = i * d;
+                let gap = dist(&yp[o..o + d], &qc[o..o + d]);
+                if active[i] {
+                    for c in 0..d {
+                        yp[o + c] = qc[o + c] + radii[i] * (yp[o + c] - qc[o + c]) / gap;
+                    }
+                } else if gap > radii[i] {
+                    ok = false;
+                }
+            }
+            if !ok {
+                break;
+            }
+            qop.apply(&yp, &mut g);
+            for i in (0..n).filter(|&i| active[i]) {
+                let o = i * d;
+                let gap = dist(&yp[o..o + d], &qc[o..o + d]);
+                let wi = -(0..d)
+                    .map(|c| g[o + c] * (yp[o + c] - qc[o + c]))
+                    .sum::<f64>()
+                    / (gap * gap);
+                if wi < 0.0 {
+                    ok = false;
+                }
+                wp[i] = wi.max(0.0);
+            }
+            if !ok {
+                break;
+            }
+            let next = stationarity(&g, &yp, &wp);
+            if next < current {
+                current = next;
+                y.copy_from_slice(&yp);
+                w.copy_from_slice(&wp);
+            } else {
+                break;
+            }
+        }
+        qop.apply(&y, &mut g);
+    }
+    // The curve: data-row values at the final y (left in qop.s by the last Q y) and the
+    // second pass.
+    let points = cond.reconstruct(knots, stencil, &y, &qop.s, d)?;
+    let multipliers = (0..n)
+        .map(|i| {
+            if ball[i] {
+                vec![w[i]]
+            } else {
+                g[i * d..(i + 1) * d].iter().map(|v| -v).collect()
+            }
+        })
+        .collect();
+    Ok(CondensedSolution {
+        points,
+        multipliers,
+        iterations,
+    })
+}
+
+/// Buffers of the Newton solves.
+struct NewtonWork {
+    r: Vec<f64>,
+    w: Vec<f64>,
+    kt: Vec<f64>,
+    res: Vec<f64>,
+    corr: Vec<f64>,
+    qd: Vec<f64>,
+    tm: Vec<f64>,
+    tm2: Vec<f64>,
+}
+
+/// One Newton system's data: scalings, D⁻¹ and D per cone, the primal residual.
+struct NewtonCtx<'a> {
+    cond: &'a Condensation,
+    ball: &'a [bool],
+    sc: &'a [f64],
+    dinv: &'a [f64],
+    dfac: &'a [f64],
+    rp: &'a [f64],
+    d: usize,
+    refine: usize,
+}
+
+impl NewtonCtx<'_> {
+    /// Δy = (Q + D)⁻¹ r for r on the ball vertices (zero elsewhere), through S = T + K D⁻¹ Kᵀ
+    /// (factored in `sm`).
+    fn reduced(&self, sm: &mut Banded, r: &[f64], dy: &mut [f64], nw: &mut NewtonWork) {
+        let d = self.d;
+        let n = self.ball.len();
+        // dy ← D⁻¹ r (temporarily), w = K D⁻¹ r.
+        for i in 0..n {
+            let o = i * d;
+            if !self.ball[i] {
+                dy[o..o + d].fill(0.0);
+                continue;
+            }
+            let di = &self.dinv[i * d * d..(i + 1) * d * d];
+            for a in 0..d {
+                dy[o + a] = (0..d).map(|b| di[a * d + b] * r[o + b]).sum();
+            }
+        }
+        self.cond.apply_k(dy, d, &mut nw.w);
+        sm.solve(&mut nw.w, 1);
+        self.cond.apply_kt(&nw.w, d, &mut nw.kt);
+        for i in 0..n {
+            let o = i * d;
+            if !self.ball[i] {
+                continue;
+            }
+            let di = &self.dinv[i * d * d..(i + 1) * d * d];
+            for a in 0..d {
+                dy[o + a] = (0..d)
+                    .map(|b| di[a * d + b] * (r[o + b] - nw.kt[o + b]))
+                    .sum();
+            }
+        }
+    }
+
+    /// Δy = (Q + D)⁻¹ r with iterative refinement against Q + D (D unregularized).
+    fn refined(
+        &self,
+        sm: &mut Banded,
+        qop: &mut QOp<'_>,
+        r: &[f64],
+        dy: &mut [f64],
+        nw: &mut NewtonWork,
+    ) {
+        let d = self.d;
+        let n = self.ball.len();
+        self.reduced(sm, &r, dy, nw);
+        let rnorm = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for _ in 0..self.refine {
+            // res = r − (Q + D) dy.
+            let mut qd = std::mem::take(&mut nw.qd);
+            qop.apply(dy, &mut qd);
+            for i in 0..n {
+                let o = i * d;
+                if !self.ball[i] {
+                    nw.res[o..o + d].fill(0.0);
+                    continue;
+                }
+                let df = &self.dfac[i * d * d..(i + 1) * d * d];
+                for a in 0..d {
+                    let ddy: f64 = (0..d).map(|b| df[a * d + b] * dy[o + b]).sum();
+                    nw.res[o + a] = r[o + a] - qd[o + a] - ddy;
+                }
+            }
+            nw.qd = qd;
+            if nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs())) <= CONDENSED_REFINEMENT_RTOL * rnorm
+            {
+                break;
+            }
+            let res = std::mem::take(&mut nw.res);
+            let mut corr = std::mem::take(&mut nw.corr);
+            self.reduced(sm, &res, &mut corr, nw);
+            for (a, b) in dy.iter_mut().zip(&corr) {
+                *a += b;
+            }
+            nw.res = res;
+            nw.corr = corr;
+        }
+    }
+
+    /// Solves the Newton system for (Δy, Δz) given the dual residual `rd` and ξ (Δs = (0, −Δy)).
+    #[allow(clippy::too_many_arguments)]
+    fn solve(
+        &self,
+        sm: &mut Banded,
+        qop: &mut QOp<'_>,
+        rd: &[f64],
+        xi: &[f64],
+        dy: &mut [f64],
+        ds: &mut [f64],
+        dz: &mut [f64],
+        nw: &mut NewtonWork,
+    ) {
+        let d = self.d;
+        let m = d + 1;
+        let n = self.ball.len();
+        // r = −r_d − (V⁻¹(ξ + V⁻¹ r_p))₁.
+        for i in 0..n {
+            let o = i * d;
+            if !self.ball[i] {
+                nw.r[o..o + d].fill(0.0);
+                continue;
+            }
+            let scv = &self.sc[i * (m + 1)..(i + 1) * (m + 1)];
+            nw.tm2.copy_from_slice(&self.rp[i * m..(i + 1) * m]);
+            apply_v(Kind::Soc, scv, &mut nw.tm2, true);
+            for k in 0..m {
+                nw.tm[k] = xi[i * m + k] + nw.tm2[k];
+            }
+            apply_v(Kind::Soc, scv, &mut nw.tm, true);
+            for c in 0..d {
+                nw.r[o + c] = -rd[o + c] - nw.tm[1 + c];
+            }
+        }
+        let r = std::mem::take(&mut nw.r);
+        self.refined(sm, qop, &r, dy, nw);
+        nw.r = r;
+        // Δs = −r_p − (0, Δy), Δz = V⁻¹(ξ − V⁻¹ Δs).
+        for i in 0..n {
+            if !self.ball[i] {
+                continue;
+            }
+            let scv = &self.sc[i * (m + 1)..(i + 1) * (m + 1)];
+            let rp = &self.rp[i * m..(i + 1) * m];
+            ds[i * m] = -rp[0];
+            for c in 0..d {
+                ds[i * m + 1 + c] = -rp[1 + c] - dy[i * d + c];
+            }
+            for k in 0..m {
+                nw.tm2[k] = -ds[i * m + k];
+            }
+            apply_v(Kind::Soc, scv, &mut nw.tm2, true);
+            let out = &mut dz[i * m..(i + 1) * m];
+            for k in 0..m {
+                out[k] = xi[i * m + k] + nw.tm2[k];
+            }
+            apply_v(Kind::Soc, scv, out, true);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use divdiff::{Knots, Points, Topology};
+    use proptest::prelude::*;
+
+    use super::super::algorithm::FixedProblem;
+    use super::super::certify::{certify, ACTIVE_REL_TOL};
+    use super::super::exact::EXACT_KKT_TARGET;
+    use super::super::fast::Condensation;
+    use super::super::operator::Stencil;
+    use super::super::problem::{Constraint, Problem};
+    use super::{solve_balls, Banded};
+
+    /// Energies below this times the interpolation energy count as E* = 0.
+    const ZERO_ENERGY_RTOL: f64 = 1e-12;
+
+    /// Knots with spacings `h` (closed: one span per vertex; open: one fewer).
+    fn knots(h: &[f64], topo: Topology) -> Knots {
+        let mut t = vec![0.0];
+        for x in h {
+            t.push(t.last().unwrap() + x);
+        }
+        Knots::new(topo, t).unwrap()
+    }
+
+    /// (knots, n, stride, data, topology) with n data points, k free vertices per span.
+    fn case() -> impl Strategy<Value = (Knots, usize, usize, Vec<f64>, usize)> {
+        (3usize..9, 1usize..5, 1usize..4, any::<bool>()).prop_flat_map(|(n, k, d, closed)| {
+            let m = k + 1;
+            let topo = if closed {
+                Topology::Closed
+            } else {
+                Topology::Open
+            };
+            let spans = if closed { m * n } else { m * (n - 1) };
+            (
+                proptest::collection::vec(0.2f64..2.0, spans),
+                proptest::collection::vec(-1.0f64..1.0, n * d),
+            )
+                .prop_map(move |(h, y)| (knots(&h, topo), n, m, y, d))
+        })
+    }
+
+    fn condensed_energy(cond: &Condensation, y: &[f64], d: usize) -> (f64, Vec<f64>) {
+        let size = cond.len();
+        let mut t = Banded::new(size, 1, 1, cond.closed, d);
+        for j in 0..size {
+            t.add_identity(j, j, cond.diag[j]);
+            if cond.closed || j + 1 < size {
+                t.add_identity(j, (j + 1) % size, cond.off[j]);
+            }
+        }
+        t.factor().unwrap();
+        let mut u = vec![0.0; size * d];
+        cond.apply_k(y, d, &mut u);
+        let mut s = u.clone();
+        t.solve(&mut s, d);
+        (0.5 * u.iter().zip(&s).map(|(a, b)| a * b).sum::<f64>(), s)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// E(y) = ½ (Ky)ᵀ T⁻¹ (Ky) is the energy (2.1) of the reconstructed curve (computed
+        /// by `energy::energy`), that curve is stationary at its free vertices, and Kᵀs is
+        /// its gradient (Hp) at the data vertices.
+        #[test]
+        fn condensed_energy_is_the_minimal_energy((kn, n, m, y, d) in case()) {
+            let stencil = Stencil::new(&kn);
+            let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
+            let (e, s) = condensed_energy(&cond, &y, d);
+            let p = cond.reconstruct(&kn, &stencil, &y, &s, d).unwrap();
+            let e_full = energy::energy(&kn, &p).unwrap();
+            prop_assert!((e - e_full).abs() <= 1e-11 * e_full.max(1.0), "{e} vs {e_full}");
+            let (hp, _) = stencil.apply_h(&p);
+            let mut kts = vec![0.0; n * d];
+            cond.apply_kt(&s, d, &mut kts);
+            let scale = hp.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+            for v in 0..p.len() {
+                for c in 0..d {
+                    let want = if v % m == 0 { kts[(v / m) * d + c] } else { 0.0 };
+                    prop_assert!((hp[v * d + c] - want).abs() <= 1e-10 * scale,
+                        "vertex {v}: Hp {} vs {want}", hp[v * d + c]);
+                }
+            }
+        }
+
+        /// The condensed interior-point optimum is certified at the exact target and agrees
+        /// with the full-vertex conic solver's optimum (energies to 1e-8 relative), with
+        /// radius-0 (fixed) data points mixed among the balls.
+        #[test]
+        fn condensed_balls_match_the_conic_solver(
+            (kn, n, m, y, d) in case(),
+            r in proptest::collection::vec(0.0f64..0.6, 9),
+            fixed in proptest::collection::vec(any::<bool>(), 9),
+        ) {
+            let q = Points::new(d, y).unwrap();
+            let radii: Vec<f64> = (0..n).map(|i| if fixed[i] { 0.0 } else { r[i] + 0.01 }).collect();
+            prop_assume!(radii.iter().any(|&e| e > 0.0));
+            // Valid problems have distinct consecutive data points (Problem::validate).
+            prop_assume!((0..n - 1).all(|i| super::super::fixed::dist(q.point(i), q.point(i + 1)) > 0.05));
+            let stencil = Stencil::new(&kn);
+            let sol = solve_balls(&kn, &stencil, &q, &radii, m).unwrap();
+            let data_vertex: Vec<usize> = (0..n).map(|i| i * m).collect();
+            let c = Constraint::Balls(radii.clone());
+            let (cert, _) = certify(&stencil, &sol.points, &q, &data_vertex, &c,
+                Some(sol.multipliers.clone()), ACTIVE_REL_TOL, &[]);
+            prop_assert!(cert.kkt_residual <= EXACT_KKT_TARGET, "kkt {:e}", cert.kkt_residual);
+            let problem = Problem::new(q.clone()).with_constraint(c.clone());
+            let fp = FixedProblem {
+                knots: &kn,
+                q: &q,
+                data_vertex: &data_vertex,
+                constraint: &c,
+                problem: &problem,
+                stride: m,
+            };
+            let (conic, _, _) = super::super::exact::solve(&fp, crate::CONIC_TOLERANCE).unwrap();
+            let e_conic = energy::energy(&kn, &conic.points).unwrap();
+            // Optima with E* = 0 (data within reach of a straight open curve) are reached by
+            // each solver only to its tolerance: both must then be below 1e-12 × the energy of
+            // interpolating the centres.
+            let e_interp = energy::energy(
+                &kn,
+                &super::super::fast::interpolate(&kn, &stencil, &q, m).unwrap(),
+            )
+            .unwrap();
+            if e_conic <= ZERO_ENERGY_RTOL * e_interp {
+                prop_assert!(cert.energy <= ZERO_ENERGY_RTOL * e_interp,
+                    "condensed {} vs conic {e_conic} (E* = 0)", cert.energy);
+            } else {
+                prop_assert!((cert.energy - e_conic).abs() <= 1e-8 * e_conic,
+                    "condensed {} vs conic {e_conic}", cert.energy);
+            }
+        }
+    }
+}
