@@ -52,10 +52,10 @@ pub const CONDENSED_REFINE_FROM: f64 = 1e-6;
 /// through D⁻¹ cancels catastrophically on inactive cones (D → 0 makes T + K D⁻¹ Kᵀ as
 /// ill-conditioned as D⁻¹ is large: K has the constants in its kernel). Iterative refinement
 /// against Q + D removes the regularization from the directions.
-pub const CONDENSED_REGULARIZATION: f64 = 1e-8;
+pub const CONDENSED_REGULARIZATION: f64 = 1e-10;
 /// Iterative refinement stops when the residual of the Newton system is below this times its
 /// right-hand side (or after [`CONDENSED_MAX_REFINEMENT_STEPS`]).
-pub const CONDENSED_REFINEMENT_RTOL: f64 = 1e-14;
+pub const CONDENSED_REFINEMENT_RTOL: f64 = 1e-12;
 /// Upper limit of iterative-refinement steps per Newton solve.
 pub const CONDENSED_MAX_REFINEMENT_STEPS: usize = 6;
 /// Newton steps of the active-set polish after the interior-point method: its iterates approach
@@ -97,7 +97,13 @@ impl Banded {
         let half = nb.div_ceil(2);
         let pos: Vec<usize> = if cyclic {
             (0..nb)
-                .map(|i| if i < half { 2 * i } else { 2 * (nb - 1 - i) + 1 })
+                .map(|i| {
+                    if i < half {
+                        2 * i
+                    } else {
+                        2 * (nb - 1 - i) + 1
+                    }
+                })
                 .collect()
         } else {
             (0..nb).collect()
@@ -148,7 +154,11 @@ impl Banded {
     fn add_identity(&mut self, i: usize, j: usize, f: f64) {
         let bs = self.bs;
         let (pi, pj) = (self.pos[i], self.pos[j]);
-        let (p, t) = if pi >= pj { (pi, pi - pj) } else { (pj, pj - pi) };
+        let (p, t) = if pi >= pj {
+            (pi, pi - pj)
+        } else {
+            (pj, pj - pi)
+        };
         let o = self.at(p, t);
         for r in 0..bs {
             self.a[o + r * bs + r] += f;
@@ -157,7 +167,18 @@ impl Banded {
 
     /// Block Cholesky in place. Returns the (original) block index of a non-positive pivot.
     fn factor(&mut self) -> Result<(), usize> {
-        let (bs, bw) = (self.bs, self.bw);
+        match self.bs {
+            1 => self.factor_impl::<1>(),
+            2 => self.factor_impl::<2>(),
+            3 => self.factor_impl::<3>(),
+            _ => self.factor_impl::<0>(),
+        }
+    }
+
+    /// [`Banded::factor`] with the block size a compile-time constant (`BS` = 0: `self.bs`).
+    fn factor_impl<const BS: usize>(&mut self) -> Result<(), usize> {
+        let bs = if BS == 0 { self.bs } else { BS };
+        let bw = self.bw;
         let bb = bs * bs;
         let mut inv_pos = vec![0; self.nb];
         for (i, &p) in self.pos.iter().enumerate() {
@@ -228,7 +249,29 @@ impl Banded {
 
     /// Solves A x = b in place for `ncols` columns (b in the original block order, unknown-major).
     fn solve(&mut self, b: &mut [f64], ncols: usize) {
-        let (bs, bw, nb) = (self.bs, self.bw, self.nb);
+        match (self.bs, ncols) {
+            (1, 1) => self.solve_impl::<1, 1>(b),
+            (1, 2) => self.solve_impl::<1, 2>(b),
+            (1, 3) => self.solve_impl::<1, 3>(b),
+            (2, 1) => self.solve_impl::<2, 1>(b),
+            (3, 1) => self.solve_impl::<3, 1>(b),
+            _ => self.solve_general(b, ncols),
+        }
+    }
+
+    fn solve_general(&mut self, b: &mut [f64], ncols: usize) {
+        // Block size and column count at run time (d > 3).
+        self.solve_inner(b, self.bs, ncols);
+    }
+
+    /// [`Banded::solve`] with block size and column count compile-time constants.
+    fn solve_impl<const BS: usize, const NC: usize>(&mut self, b: &mut [f64]) {
+        self.solve_inner(b, BS, NC);
+    }
+
+    #[inline(always)]
+    fn solve_inner(&mut self, b: &mut [f64], bs: usize, ncols: usize) {
+        let (bw, nb) = (self.bw, self.nb);
         let row = bs * ncols;
         let w = &mut self.work[..nb * row];
         for i in 0..nb {
@@ -588,7 +631,9 @@ pub(crate) fn solve_balls(
         for (x, l) in xi.iter_mut().zip(&lam) {
             *x = -l;
         }
-        ctx.solve(&mut sm, &mut qop, &rd, &xi, &mut dya, &mut dsa, &mut dza, &mut ns);
+        ctx.solve(
+            &mut sm, &mut qop, &rd, &xi, &mut dya, &mut dsa, &mut dza, &mut ns,
+        );
         let mut alpha_a: f64 = 1.0;
         for i in (0..n).filter(|&i| ball[i]) {
             let r = cone(&s, i);
@@ -623,7 +668,9 @@ pub(crate) fn solve_balls(
             t2[0] += sigma * mu;
             jordan_div(Kind::Soc, l, &t2, &mut xi[r]);
         }
-        ctx.solve(&mut sm, &mut qop, &rd, &xi, &mut dy, &mut ds, &mut dz, &mut ns);
+        ctx.solve(
+            &mut sm, &mut qop, &rd, &xi, &mut dy, &mut ds, &mut dz, &mut ns,
+        );
         let mut alpha: f64 = 1.0 / CONDENSED_STEP_FRACTION;
         for i in (0..n).filter(|&i| ball[i]) {
             let r = cone(&s, i);
@@ -914,7 +961,8 @@ impl NewtonCtx<'_> {
                 }
             }
             nw.qd = qd;
-            if nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs())) <= CONDENSED_REFINEMENT_RTOL * rnorm
+            if nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+                <= CONDENSED_REFINEMENT_RTOL * rnorm
             {
                 break;
             }

@@ -315,8 +315,13 @@ pub(crate) fn interpolate(
     if size > 0 {
         cond.apply_k(q.coords(), d, &mut s);
         let (mut diag, mut off) = (cond.diag.clone(), cond.off.clone());
-        solve_tridiagonal(&mut diag, &mut off, &mut s, d, cond.closed && size >= 3)
-            .map_err(|j| Error::from(energy::Error::Singular { vertex: (cond.first + j) * stride }))?;
+        solve_tridiagonal(&mut diag, &mut off, &mut s, d, cond.closed && size >= 3).map_err(
+            |j| {
+                Error::from(energy::Error::Singular {
+                    vertex: (cond.first + j) * stride,
+                })
+            },
+        )?;
     }
     cond.reconstruct(knots, stencil, q.coords(), &s, d)
 }
