@@ -161,8 +161,10 @@ fn deeply_nested_json_is_refused_without_a_stack_overflow() {
     for depth in [200usize, 100_000] {
         let nested = format!("{}{}", "[".repeat(depth), "]".repeat(depth));
         for sub in ["refine", "strip", "natural", "surface"] {
-            refused(sub, &format!(r#"{{"points": {nested}}}"#), "problem");
-            refused(sub, &nested, "problem");
+            // The typed parser stops at the first level that cannot be a point (`points[0][0]`;
+            // `strip` has no such field) — no `Value` tree is built (ROBUSTNESS.md finding 10).
+            refused(sub, &format!(r#"{{"points": {nested}}}"#), "points");
+            refused(sub, &nested, "invalid type");
         }
         // Nested objects inside a field the parser would otherwise descend into.
         let objs = format!("{}1{}", r#"{"a":"#.repeat(depth), "}".repeat(depth));
@@ -241,4 +243,30 @@ fn extreme_but_valid_coordinates_give_finite_results_or_a_refusal() {
     );
     let kkt = v["kkt_residual"].as_f64().unwrap();
     assert!(kkt <= 1e-9, "kkt {kkt}");
+}
+
+/// A regular file above the input limit is refused from its size alone (ROBUSTNESS.md finding
+/// 10): a sparse file of 1 GiB + 1 bytes would take seconds and a gigabyte to read; the refusal
+/// reads nothing. The same for `--points` CSV files.
+#[test]
+fn oversized_files_are_refused_before_reading() {
+    let dir = scratch_dir("hostile-size");
+    let big = dir.join("big.json");
+    let f = std::fs::File::create(&big).unwrap();
+    f.set_len(curvefit::cli::MAX_INPUT_BYTES + 1).unwrap();
+    let out = dir.join("out.json");
+    let (b, o) = (big.to_string_lossy(), out.to_string_lossy());
+    for args in [
+        vec!["refine", &*b, "-o", &*o],
+        vec!["refine", "--points", &*b, "-o", &*o],
+        vec!["strip", &*b, "-o", &*o],
+    ] {
+        let (code, stdout, stderr) = run_cli(&args, "");
+        assert_eq!(code, 2, "{args:?}: {stderr}");
+        assert!(stdout.is_empty());
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("larger than"), "{stderr}");
+        assert!(!out.exists());
+    }
+    std::fs::remove_file(&big).unwrap();
 }

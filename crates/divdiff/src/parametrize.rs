@@ -77,10 +77,16 @@ pub fn parametrize(
         Topology::Open => n - 1,
         Topology::Closed => n,
     };
+    // The common exponents without a general power (both correctly rounded, so the same values).
+    let power = |x: f64| match parametrization {
+        Parametrization::Centripetal => x.sqrt(),
+        Parametrization::Chordal => x,
+        _ => x.powf(e),
+    };
     let mut t = Vec::with_capacity(spans + 1);
     t.push(0.0);
     for i in 0..spans {
-        let next = (i + 1) % n;
+        let next = if i + 1 == n { 0 } else { i + 1 };
         let dist = points
             .point(i)
             .iter()
@@ -92,7 +98,7 @@ pub fn parametrize(
             return Err(Error::ZeroLengthSpan { index: i, next });
         }
         let last = t[t.len() - 1];
-        t.push(last + dist.powf(e));
+        t.push(last + power(dist));
     }
     Knots::new(topology, t)
 }

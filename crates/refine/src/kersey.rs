@@ -11,6 +11,7 @@ mod operator;
 mod problem;
 mod slots;
 mod split;
+mod uniform;
 
 pub use algorithm::{Iterations, Refinement, Stage};
 pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
@@ -81,6 +82,43 @@ impl Problem {
         self.accept(r)
     }
 
+    /// The interpolatory k-level refinement (3.3) of the data on their knots (the given knots or
+    /// the parametrization), from data to refined vertices in closed form and without the
+    /// certificate: O(N) with one streaming write of the N vertices (see the `uniform` module:
+    /// every span of the split is a cubic). The points and knots are those of
+    /// [`Problem::solve`] with `knot_iterations = 0` and no further levels, to rounding
+    /// (tested); use `solve` for the energy, reactions and the KKT certificate.
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`]; [`crate::Error::Unsupported`] unless the
+    /// constraint is [`Constraint::Interpolate`] with no tangents and natural ends.
+    ///
+    /// ```
+    /// use divdiff::Points;
+    /// use refine::Problem;
+    /// let square = Points::from_rows(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]).unwrap();
+    /// let (p, t) = Problem::new(square).with_k(3).refine_points().unwrap();
+    /// assert_eq!((p.len(), t.values().len()), (16, 17));
+    /// assert_eq!(p.point(4), &[1.0, 0.0]); // the data are interpolated
+    /// ```
+    pub fn refine_points(&self) -> Result<(divdiff::Points, divdiff::Knots), crate::Error> {
+        self.validate()?;
+        let derivatives = self
+            .tangents
+            .as_ref()
+            .is_some_and(|t| t.iter().any(Option::is_some))
+            || self.boundary != Boundary::Natural;
+        if self.constraint != Constraint::Interpolate || derivatives {
+            return Err(crate::Error::Unsupported {
+                field: "constraint",
+                reason: "refine_points is interpolation with natural ends; use solve",
+            });
+        }
+        let knots = algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)?;
+        let points = uniform::interpolate(&knots, &self.points, self.k + 1)?;
+        Ok((points, knots))
+    }
+
     /// Refuses an exact result whose independent certificate is above [`EXACT_ACCEPT_KKT`]:
     /// an answer that is not (nearly) optimal is an error carrying the best residual reached,
     /// never a result.
@@ -119,6 +157,7 @@ pub(crate) fn solve_stage0_on(
         constraint: &problem.constraint,
         problem,
         stride,
+        uniform_spans: false,
     };
     let s = fixed::exact(&fp)?;
     let stencil = s.stencil.unwrap_or_else(|| operator::Stencil::new(knots));

@@ -1,7 +1,8 @@
 //! Benchmarks for `refine` (Kersey §3–4).
 //!
-//! * interpolatory, closed, k = 7, d = 2: the library call from data to refined vertices, over a
-//!   size sweep (time per vertex shows the O(N) scaling), against scipy's periodic
+//! * interpolatory, closed, k = 7, d = 2: the library call from data to refined vertices
+//!   (`Problem::refine_points`, closed form) and the certified `Problem::solve`, over a size
+//!   sweep (time per vertex shows the O(N) scaling), against scipy's periodic
 //!   `CubicSpline` fit + evaluation at the same (k+1)n parameters (peer script
 //!   `xtask/peers/refine_peer.py`, run when python3 with scipy is importable);
 //! * balls, closed, k = 3: the exact optimum against Clarabel's solve of the same SOCP on the
@@ -93,9 +94,11 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     let k = 7;
     let reps = if opts.quick { 3 } else { 7 };
     println!("refine: interpolatory, closed, d = 2, k = {k}, knot_iterations = 0 (one solve)");
+    println!("  refine_points: closed form, data to refined vertices and knots, no certificate;");
+    println!("  solve: the same points plus energy, reactions and the independent KKT certificate");
     println!(
-        "  {:>8} {:>9} {:>10} {:>12}",
-        "n", "N", "time ms", "ns/vertex"
+        "  {:>8} {:>9} {:>14} {:>12} {:>10} {:>12}",
+        "n", "N", "points ms", "ns/vertex", "solve ms", "ns/vertex"
     );
     let sizes: &[usize] = if opts.quick {
         &[1_000, 10_000]
@@ -106,34 +109,47 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     for &n in sizes {
         let q = wavy_circle(n);
         let problem = Problem::new(q).with_k(k).with_knot_iterations(0);
+        let lean = time_median(reps, || {
+            problem.refine_points().expect("interpolation refines")
+        });
         let t = time_median(reps, || problem.solve().expect("interpolation solves"));
         let nv = (k + 1) * n;
+        let per = |t: Duration| t.as_secs_f64() * 1e9 / nv as f64;
         println!(
-            "  {:>8} {:>9} {:>10.2} {:>12.1}",
+            "  {:>8} {:>9} {:>14.2} {:>12.1} {:>10.2} {:>12.1}",
             n,
             nv,
+            ms(lean),
+            per(lean),
             ms(t),
-            t.as_secs_f64() * 1e9 / nv as f64
+            per(t)
         );
         if n == 100_000 {
-            at_1e5 = Some(t);
+            at_1e5 = Some((lean, t));
         }
     }
     let n_peer = if opts.quick { 10_000 } else { 100_000 };
-    let ours = match at_1e5 {
+    let (lean, ours) = match at_1e5 {
         Some(t) => t,
         None => {
             let problem = Problem::new(wavy_circle(n_peer))
                 .with_k(k)
                 .with_knot_iterations(0);
-            time_median(reps, || problem.solve().expect("interpolation solves"))
+            (
+                time_median(reps, || {
+                    problem.refine_points().expect("interpolation refines")
+                }),
+                time_median(reps, || problem.solve().expect("interpolation solves")),
+            )
         }
     };
     if let Some(scipy) = peer(n_peer, k, reps) {
         println!(
-            "  n = {n_peer}: curvefit {:.2} ms, scipy CubicSpline(periodic) fit+eval {:.2} ms: ratio {:.1}x (target >= 5x)",
-            ms(ours),
+            "  n = {n_peer}: scipy CubicSpline(periodic) fit+eval {:.2} ms; curvefit refine_points {:.2} ms: ratio {:.1}x (target >= 5x); certified solve {:.2} ms: ratio {:.1}x",
             scipy * 1e3,
+            ms(lean),
+            scipy / lean.as_secs_f64(),
+            ms(ours),
             scipy / ours.as_secs_f64()
         );
     }

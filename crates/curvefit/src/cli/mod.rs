@@ -450,6 +450,7 @@ fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C:
             let file = std::fs::File::open(p).map_err(|e| {
                 InputError::new("problem", format!("cannot open {}: {e}", p.display()))
             })?;
+            refuse_large_file(&file, &p.display().to_string())?;
             read_limited(&mut &file, &p.display().to_string())?
         }
         None if args.points_csv.is_some() => "{}".to_string(),
@@ -461,25 +462,53 @@ fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C:
             .into())
         }
     };
+    let path_error = |e: serde_path_to_error::Error<serde_json::Error>| -> Failure {
+        let path = e.path().to_string();
+        let field = if path == "." { String::new() } else { path };
+        let inner = e.into_inner();
+        if inner.is_syntax() || inner.is_eof() {
+            InputError::new("problem", format!("malformed JSON: {inner}")).into()
+        } else {
+            InputError::new(field, inner).into()
+        }
+    };
+    let Some(csv) = &args.points_csv else {
+        // Straight from the text into the typed problem: no `Value` tree, whose size is many
+        // times the text's (ROBUSTNESS.md finding 10).
+        let mut de = serde_json::Deserializer::from_str(&text);
+        let problem = serde_path_to_error::deserialize(&mut de).map_err(path_error)?;
+        de.end()
+            .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
+        return Ok(problem);
+    };
     let mut value: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
-    if let Some(csv) = &args.points_csv {
-        let rows = read_csv_points(csv)?;
-        let obj = value
-            .as_object_mut()
-            .ok_or_else(|| InputError::new("problem", "the problem must be a JSON object"))?;
-        if obj.contains_key("points") {
-            return Err(
-                InputError::new("points", "given both in the problem and by --points").into(),
-            );
-        }
-        obj.insert("points".into(), serde_json::Value::from(rows));
+    let rows = read_csv_points(csv)?;
+    let obj = value
+        .as_object_mut()
+        .ok_or_else(|| InputError::new("problem", "the problem must be a JSON object"))?;
+    if obj.contains_key("points") {
+        return Err(InputError::new("points", "given both in the problem and by --points").into());
     }
+    obj.insert("points".into(), serde_json::Value::from(rows));
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let field = if path == "." { String::new() } else { path };
         InputError::new(field, e.into_inner()).into()
     })
+}
+
+/// A regular file above [`MAX_INPUT_BYTES`] is refused from its metadata, before any byte is read
+/// (pipes and devices are limited while reading, by [`read_limited`]).
+fn refuse_large_file(file: &std::fs::File, what: &str) -> Result<(), Failure> {
+    match file.metadata() {
+        Ok(m) if m.is_file() && m.len() > MAX_INPUT_BYTES => Err(InputError::new(
+            "problem",
+            format!("{what} is larger than {MAX_INPUT_BYTES} bytes"),
+        )
+        .into()),
+        _ => Ok(()),
+    }
 }
 
 fn read_limited(r: &mut dyn Read, what: &str) -> Result<String, Failure> {
@@ -544,6 +573,7 @@ pub fn parse_csv_points(text: &str) -> Result<Vec<Vec<f64>>, InputError> {
 fn read_csv_points(path: &Path) -> Result<Vec<Vec<f64>>, Failure> {
     let file = std::fs::File::open(path)
         .map_err(|e| InputError::new("--points", format!("cannot open {}: {e}", path.display())))?;
+    refuse_large_file(&file, &path.display().to_string())?;
     let text = read_limited(&mut &file, &path.display().to_string())?;
     Ok(parse_csv_points(&text)?)
 }

@@ -23,46 +23,49 @@ pub fn split_count(n: usize, k: usize, closed: bool) -> Option<usize> {
     }
 }
 
-fn finite(field: String, x: f64) -> Result<f64, InputError> {
+// The field names are built only for an error (a format! per coordinate cost more than the
+// solve on large inputs).
+
+fn finite(field: impl Fn() -> String, x: f64) -> Result<f64, InputError> {
     if x.is_finite() {
         Ok(x)
     } else {
-        Err(InputError::new(field, "must be a finite number"))
+        Err(InputError::new(field(), "must be a finite number"))
     }
 }
 
-fn nonneg(field: String, x: f64) -> Result<f64, InputError> {
-    let x = finite(field.clone(), x)?;
+fn nonneg(field: impl Fn() -> String, x: f64) -> Result<f64, InputError> {
+    let x = finite(&field, x)?;
     if x < 0.0 {
-        return Err(InputError::new(field, format!("must be ≥ 0, got {x}")));
+        return Err(InputError::new(field(), format!("must be ≥ 0, got {x}")));
     }
     Ok(x)
 }
 
-fn vector(field: String, v: &[f64], d: usize) -> Result<(), InputError> {
+fn vector(field: impl Fn() -> String, v: &[f64], d: usize) -> Result<(), InputError> {
     if v.len() != d {
         return Err(InputError::new(
-            field,
+            field(),
             format!("has {} coordinates, expected {d}", v.len()),
         ));
     }
     for (j, &x) in v.iter().enumerate() {
-        finite(format!("{field}[{j}]"), x)?;
+        finite(|| format!("{}[{j}]", field()), x)?;
     }
     Ok(())
 }
 
-fn nonzero_vector(field: String, v: &[f64], d: usize) -> Result<(), InputError> {
-    vector(field.clone(), v, d)?;
+fn nonzero_vector(field: impl Fn() -> String, v: &[f64], d: usize) -> Result<(), InputError> {
+    vector(&field, v, d)?;
     if v.iter().all(|&x| x == 0.0) {
-        return Err(InputError::new(field, "must be a non-zero vector"));
+        return Err(InputError::new(field(), "must be a non-zero vector"));
     }
     Ok(())
 }
 
 fn halfspace(field: String, h: &HalfSpaceSpec, d: usize) -> Result<(), InputError> {
-    nonzero_vector(format!("{field}.normal"), &h.normal, d)?;
-    finite(format!("{field}.offset"), h.offset)?;
+    nonzero_vector(|| format!("{field}.normal"), &h.normal, d)?;
+    finite(|| format!("{field}.offset"), h.offset)?;
     Ok(())
 }
 
@@ -100,7 +103,7 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
         ));
     }
     for (i, q) in p.points.iter().enumerate() {
-        vector(format!("points[{i}]"), q, d)?;
+        vector(|| format!("points[{i}]"), q, d)?;
     }
     let spans = if p.closed { n } else { n - 1 };
     for i in 0..spans {
@@ -123,7 +126,7 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
             ));
         }
         for (i, &x) in t.iter().enumerate() {
-            finite(format!("knots[{i}]"), x)?;
+            finite(|| format!("knots[{i}]"), x)?;
             if i > 0 && x <= t[i - 1] {
                 return Err(InputError::new(
                     format!("knots[{i}]"),
@@ -133,7 +136,7 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
         }
     }
     if let ParamSpec::Exponent(e) = p.parametrization {
-        nonneg("parametrization.exponent".into(), e)?;
+        nonneg(|| "parametrization.exponent".into(), e)?;
     }
     if p.k == 0 {
         return Err(InputError::new("k", "must be at least 1"));
@@ -171,13 +174,13 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
         ConstraintSpec::Balls { radii } => {
             per_point_len("constraint.radii", radii.len(), n)?;
             for (i, &r) in radii.iter().enumerate() {
-                nonneg(format!("constraint.radii[{i}]"), r)?;
+                nonneg(|| format!("constraint.radii[{i}]"), r)?;
             }
         }
         ConstraintSpec::Smoothing { weights } => {
             per_point_len("constraint.weights", weights.len(), n)?;
             for (i, &w) in weights.iter().enumerate() {
-                nonneg(format!("constraint.weights[{i}]"), w)?;
+                nonneg(|| format!("constraint.weights[{i}]"), w)?;
             }
         }
         ConstraintSpec::Halfspaces { sets } => {
@@ -196,15 +199,15 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
             match t {
                 None => {}
                 Some(TangentSpec::Ball { center, radius }) => {
-                    vector(format!("{f}.center"), center, d)?;
-                    nonneg(format!("{f}.radius"), *radius)?;
+                    vector(|| format!("{f}.center"), center, d)?;
+                    nonneg(|| format!("{f}.radius"), *radius)?;
                 }
                 Some(TangentSpec::Wedge {
                     direction,
                     half_angle,
                 }) => {
-                    nonzero_vector(format!("{f}.direction"), direction, d)?;
-                    let a = nonneg(format!("{f}.half_angle"), *half_angle)?;
+                    nonzero_vector(|| format!("{f}.direction"), direction, d)?;
+                    let a = nonneg(|| format!("{f}.half_angle"), *half_angle)?;
                     if a >= std::f64::consts::FRAC_PI_2 {
                         return Err(InputError::new(
                             format!("{f}.half_angle"),
@@ -213,7 +216,7 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
                     }
                 }
                 Some(TangentSpec::Tension { radius }) => {
-                    nonneg(format!("{f}.radius"), *radius)?;
+                    nonneg(|| format!("{f}.radius"), *radius)?;
                 }
                 Some(TangentSpec::Halfspaces { halfspaces }) => {
                     for (j, h) in halfspaces.iter().enumerate() {
@@ -232,13 +235,13 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
             ))
         }
         BoundarySpec::Clamped { start, end } => {
-            vector("boundary.start".into(), start, d)?;
-            vector("boundary.end".into(), end, d)?;
+            vector(|| "boundary.start".into(), start, d)?;
+            vector(|| "boundary.end".into(), end, d)?;
         }
         BoundarySpec::NearClamped { start, end, radius } => {
-            vector("boundary.start".into(), start, d)?;
-            vector("boundary.end".into(), end, d)?;
-            nonneg("boundary.radius".into(), *radius)?;
+            vector(|| "boundary.start".into(), start, d)?;
+            vector(|| "boundary.end".into(), end, d)?;
+            nonneg(|| "boundary.radius".into(), *radius)?;
         }
     }
     Ok(d)

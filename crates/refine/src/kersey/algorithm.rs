@@ -100,6 +100,9 @@ pub(crate) struct FixedProblem<'a> {
     pub problem: &'a Problem,
     /// The data vertices are 0, stride, 2·stride, … (stride = k + 1).
     pub stride: usize,
+    /// The knots are exactly the k-level split (3.1) of the data knots (each data span divided
+    /// into `stride` equal sub-spans), so the closed forms of [`super::uniform`] apply.
+    pub uniform_spans: bool,
 }
 
 fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
@@ -113,7 +116,7 @@ fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
 pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     problem.validate()?;
     let q = &problem.points;
-    let u = problem.data_knots()?;
+    let u = problem.data_knots_unvalidated()?;
     let e = problem.parametrization;
     let mut iterations = Iterations::default();
     let mut stages = Vec::new();
@@ -214,17 +217,17 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
 }
 
 /// The knots of the k-level split (3.1), without the points (interpolation does not need them).
-fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
+pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
     let m = k + 1;
     let v = u.values();
     let spans = u.span_count();
+    // The same values as `split::split` computes ((1 − s)a + s b with s = j/m), with the
+    // fractions tabulated once.
+    let s: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
     let mut t = Vec::with_capacity(m * spans + 1);
     for i in 0..spans {
         let (a, b) = (v[i], v[i + 1]);
-        for j in 0..m {
-            let s = j as f64 / m as f64;
-            t.push((1.0 - s) * a + s * b);
-        }
+        t.extend(s.iter().map(|&s| (1.0 - s) * a + s * b));
     }
     t.push(v[spans]);
     Ok(Knots::new(u.topology(), t)?)
@@ -282,6 +285,8 @@ fn stage_loop(
             constraint,
             problem,
             stride,
+            // Until the first knot update the knots are those of `split_knots`.
+            uniform_spans: sol.is_none(),
         };
         let s = dispatch(&fp)?;
         iterations.solves += 1;

@@ -329,7 +329,7 @@ pub(crate) fn interpolate(
 /// Solves the symmetric tridiagonal (or, with `cyclic`, cyclic tridiagonal: `off[len−1]`
 /// couples the last unknown with the first) positive definite system in place, for `d`
 /// right-hand-side columns stored row-major in `rhs`. Returns the index of a non-positive pivot.
-fn solve_tridiagonal(
+pub(super) fn solve_tridiagonal(
     diag: &mut [f64],
     off: &mut [f64],
     rhs: &mut [f64],
@@ -362,8 +362,9 @@ fn solve_tridiagonal(
     Ok(())
 }
 
-/// LDLᵀ of a symmetric tridiagonal matrix (diagonal `diag`, off-diagonal `off`), solving for the
-/// `d` columns of `rhs` and, if given, one extra column `extra`. Pivots must be positive.
+/// LDLᵀ of a symmetric tridiagonal matrix (diagonal `diag`, overwritten with the reciprocal
+/// pivots; off-diagonal `off`), solving for the `d` columns of `rhs` and, if given, one extra
+/// column `extra`. Pivots must be positive.
 fn ldl_solve(
     diag: &mut [f64],
     off: &[f64],
@@ -372,10 +373,11 @@ fn ldl_solve(
     mut extra: Option<&mut Vec<f64>>,
 ) -> Result<(), usize> {
     let size = diag.len();
+    // diag[j] ends as the reciprocal pivot 1/D_j: one division per row, the rest multiplies.
     let mut lm = vec![0.0; size];
     for j in 0..size {
         if j > 0 {
-            lm[j] = off[j - 1] / diag[j - 1];
+            lm[j] = off[j - 1] * diag[j - 1];
             diag[j] -= lm[j] * off[j - 1];
             for c in 0..d {
                 rhs[j * d + c] -= lm[j] * rhs[(j - 1) * d + c];
@@ -387,17 +389,18 @@ fn ldl_solve(
         if diag[j].is_nan() || diag[j] <= 0.0 {
             return Err(j);
         }
+        diag[j] = 1.0 / diag[j];
     }
     for j in (0..size).rev() {
         for c in 0..d {
-            let mut y = rhs[j * d + c] / diag[j];
+            let mut y = rhs[j * d + c] * diag[j];
             if j + 1 < size {
                 y -= lm[j + 1] * rhs[(j + 1) * d + c];
             }
             rhs[j * d + c] = y;
         }
         if let Some(e) = extra.as_deref_mut() {
-            let mut y = e[j] / diag[j];
+            let mut y = e[j] * diag[j];
             if j + 1 < size {
                 y -= lm[j + 1] * e[j + 1];
             }

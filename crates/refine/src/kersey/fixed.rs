@@ -344,8 +344,19 @@ fn polish_balls(
     Ok(None)
 }
 
-/// Interpolation (3.3) at every data vertex: the fused banded solver of [`super::fast`].
+/// Interpolation (3.3) at every data vertex: the closed forms of [`super::uniform`] on the knots
+/// of the split, else the fused banded solver of [`super::fast`].
 fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    if fp.uniform_spans {
+        return Ok(FixedSolution {
+            points: super::uniform::interpolate(fp.knots, fp.q, fp.stride)?,
+            multipliers: None,
+            iterations: 1,
+            stencil: None,
+            extra: Vec::new(),
+            solver_kkt: None,
+        });
+    }
     let stencil = Stencil::new(fp.knots);
     let p = super::fast::interpolate(fp.knots, &stencil, fp.q, fp.stride)?;
     Ok(FixedSolution {

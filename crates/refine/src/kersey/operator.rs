@@ -113,59 +113,99 @@ pub(crate) struct Pass {
 }
 
 impl Stencil {
-    /// One pass computing Hp (kept only at the data vertices, which sit at multiples of
-    /// `stride`), E, ‖H‖_∞ and the extent of p about `center`, without O(N) temporaries.
-    /// (Ap)_r is evaluated three times per vertex rather than stored: flops are cheaper here
-    /// than a fresh N·d buffer.
+    /// One pass per coordinate computing Hp (kept only at the data vertices, which sit at
+    /// multiples of `stride`), E, ‖H‖_∞ and the extent of p about `center`, without O(N)
+    /// temporaries. Each row residual (Ap)_r is computed once and slides through a window of
+    /// three: (Hp)_j = α_{j−1,3}(Ap)_{j−1} + α_{j,2}(Ap)_j + α_{j+1,1}(Ap)_{j+1}.
     pub(crate) fn pass(&self, p: &Points, stride: usize, center: &[f64]) -> Pass {
         let n = p.len();
         let d = p.dim();
         let x = p.coords();
         let nd = n.div_ceil(stride);
         let mut data_gradient = vec![0.0; nd * d];
-        let rowsum = |r: usize| {
-            let a = self.rows[r];
-            a[0].abs() + a[1].abs() + a[2].abs()
-        };
-        let (mut energy, mut free_gradient, mut h_norm, mut extent) = (0.0, 0.0f64, 0.0f64, 0.0f64);
-        let mut step: f64 = 0.0;
-        let mut phase = 0;
-        let mut hp = vec![0.0; d];
-        for j in 0..n {
-            let jp = if j == 0 { n - 1 } else { j - 1 };
-            let jn = if j + 1 == n { 0 } else { j + 1 };
-            let jpp = if jp == 0 { n - 1 } else { jp - 1 };
-            let jnn = if jn + 1 == n { 0 } else { jn + 1 };
-            // Rows outside an open curve (and its first and last rows) are zero rows.
-            let (ap, ac, an) = (self.rows[jp], self.rows[j], self.rows[jn]);
-            let wp = if j > 0 || self.closed { ap[2] } else { 0.0 };
-            let wn = if j + 1 < n || self.closed { an[0] } else { 0.0 };
-            let wc = ac[1];
-            for c in 0..d {
-                let xm2 = x[jpp * d + c];
-                let xm1 = x[jp * d + c];
-                let x0 = x[j * d + c];
-                let xp1 = x[jn * d + c];
-                let xp2 = x[jnn * d + c];
-                // Difference form α₁(p_{i−1} − p_i) + α₃(p_{i+1} − p_i) (α₂ = −α₁ − α₃): the
-                // rounding error scales with the local spacing, not with |p|.
-                let rp = ap[0] * (xm2 - xm1) + ap[2] * (x0 - xm1);
-                let rc = ac[0] * (xm1 - x0) + ac[2] * (xp1 - x0);
-                let rn = an[0] * (x0 - xp1) + an[2] * (xp2 - xp1);
-                step = step.max((xp1 - x0).abs());
-                energy += rc * rc;
-                hp[c] = wp * rp + wc * rc + wn * rn;
-                extent = extent.max((x0 - center[c]).abs());
-            }
-            let hn = wc.abs() * rowsum(j) + wp.abs() * rowsum(jp) + wn.abs() * rowsum(jn);
-            h_norm = h_norm.max(hn);
-            if phase == 0 {
-                let i = j / stride;
-                data_gradient[i * d..(i + 1) * d].copy_from_slice(&hp);
+        let (mut energy, mut free_gradient, mut extent, mut step) = (0.0, 0.0f64, 0.0f64, 0.0f64);
+        let closed = self.closed;
+        let rows = &self.rows;
+        // Rows outside an open curve (and its first and last rows) are zero rows.
+        let row = |r: isize| -> [f64; 3] {
+            if r >= 0 && (r as usize) < n {
+                rows[r as usize]
+            } else if closed {
+                rows[r.rem_euclid(n as isize) as usize]
             } else {
-                free_gradient = hp.iter().fold(free_gradient, |a, v| a.max(v.abs()));
+                [0.0; 3]
             }
-            phase = if phase + 1 == stride { 0 } else { phase + 1 };
+        };
+        for c in 0..d {
+            let at = |j: isize| x[j.rem_euclid(n as isize) as usize * d + c];
+            // (Ap)_r in difference form α₁(p_{r−1} − p_r) + α₃(p_{r+1} − p_r) (α₂ = −α₁ − α₃):
+            // the rounding error scales with the local spacing, not with |p|.
+            let res_wrapped = |r: isize| {
+                let a = row(r);
+                let x0 = at(r);
+                a[0] * (at(r - 1) - x0) + a[2] * (at(r + 1) - x0)
+            };
+            // Vertex j given the residuals of rows j − 1, j, j + 1.
+            // Data vertices are j = stride·i: a phase counter instead of a division per vertex.
+            let (mut phase, mut data) = (0, 0);
+            let mut visit = |j: usize, rp: f64, rc: f64, rn: f64, wp: f64, wn: f64, next: f64| {
+                let x0 = x[j * d + c];
+                let hp = wp * rp + rows[j][1] * rc + wn * rn;
+                energy += rc * rc;
+                extent = extent.max((x0 - center[c]).abs());
+                step = step.max((next - x0).abs());
+                if phase == 0 {
+                    data_gradient[data * d + c] = hp;
+                    data += 1;
+                } else {
+                    free_gradient = free_gradient.max(hp.abs());
+                }
+                phase = if phase + 1 == stride { 0 } else { phase + 1 };
+            };
+            let ends = |j: usize| {
+                let ji = j as isize;
+                // The step from the last vertex wraps to the first for open curves too: the
+                // force scale has always included that end-to-end chord (ROBUSTNESS.md).
+                let next = at(ji + 1);
+                (
+                    res_wrapped(ji - 1),
+                    res_wrapped(ji),
+                    res_wrapped(ji + 1),
+                    row(ji - 1)[2],
+                    row(ji + 1)[0],
+                    next,
+                )
+            };
+            if n < 4 {
+                for j in 0..n {
+                    let (rp, rc, rn, wp, wn, next) = ends(j);
+                    visit(j, rp, rc, rn, wp, wn, next);
+                }
+                continue;
+            }
+            let (rp, rc, rn, wp, wn, next) = ends(0);
+            visit(0, rp, rc, rn, wp, wn, next);
+            // Interior: no index wraps; each row residual is computed once.
+            let (mut rp, mut rc) = (rc, rn);
+            for j in 1..n - 2 {
+                let a = rows[j + 1];
+                let (xl, x0, xr) = (x[j * d + c], x[(j + 1) * d + c], x[(j + 2) * d + c]);
+                let rn = a[0] * (xl - x0) + a[2] * (xr - x0);
+                visit(j, rp, rc, rn, rows[j - 1][2], a[0], x0);
+                (rp, rc) = (rc, rn);
+            }
+            for j in n - 2..n {
+                let (rp, rc, rn, wp, wn, next) = ends(j);
+                visit(j, rp, rc, rn, wp, wn, next);
+            }
+        }
+        // ‖H‖_∞ bound: Σ_r |A_rj| Σ_i |A_ri| over the three rows through vertex j.
+        let rowsum = |a: [f64; 3]| a[0].abs() + a[1].abs() + a[2].abs();
+        let mut h_norm: f64 = 0.0;
+        for j in 0..n as isize {
+            let (ap, ac, an) = (row(j - 1), row(j), row(j + 1));
+            let hn = ap[2].abs() * rowsum(ap) + ac[1].abs() * rowsum(ac) + an[0].abs() * rowsum(an);
+            h_norm = h_norm.max(hn);
         }
         Pass {
             energy: 0.5 * energy,

@@ -254,7 +254,7 @@ impl Problem {
             Topology::Closed => n,
         };
         for i in 0..spans {
-            let j = (i + 1) % n;
+            let j = if i + 1 == n { 0 } else { i + 1 };
             if self.points.point(i) == self.points.point(j) {
                 return Err(Error::CoincidentPoints { index: i, next: j });
             }
@@ -411,6 +411,11 @@ impl Problem {
     /// As [`Problem::validate`].
     pub fn data_knots(&self) -> Result<Knots, Error> {
         self.validate()?;
+        self.data_knots_unvalidated()
+    }
+
+    /// [`Problem::data_knots`] of a problem already validated.
+    pub(crate) fn data_knots_unvalidated(&self) -> Result<Knots, Error> {
         match &self.knots {
             Some(u) => Ok(Knots::new(self.topology, u.clone())?),
             None => divdiff::parametrize(&self.points, self.topology, self.parametrization)
