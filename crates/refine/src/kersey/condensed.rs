@@ -24,6 +24,9 @@
 //! (Hp)_{i_k} + w_i (p_{i_k} − q_i) = 0. The interior is then recovered by the second pass of
 //! [`super::fast`] with the data vertices at y.
 
+// The block kernels index several small arrays by the same row/column.
+#![allow(clippy::needless_range_loop)]
+
 use divdiff::{Knots, Points};
 
 use super::fast::Condensation;
@@ -942,7 +945,7 @@ impl NewtonCtx<'_> {
     ) {
         let d = self.d;
         let n = self.ball.len();
-        self.reduced(sm, &r, dy, nw);
+        self.reduced(sm, r, dy, nw);
         let rnorm = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for _ in 0..self.refine {
             // res = r − (Q + D) dy.
@@ -1154,6 +1157,8 @@ mod tests {
                 constraint: &c,
                 problem: &problem,
                 stride: m,
+                // Random knots, not a k-level split.
+                uniform_spans: false,
             };
             let (conic, _, _) = super::super::exact::solve(&fp, crate::CONIC_TOLERANCE).unwrap();
             let e_conic = energy::energy(&kn, &conic.points).unwrap();
