@@ -44,18 +44,22 @@ pub const CONDENSED_MAX_ITERATIONS: usize = 80;
 pub const CONDENSED_TOLERANCE: f64 = 1e-13;
 /// Fraction of the step to the boundary of the cones taken.
 pub const CONDENSED_STEP_FRACTION: f64 = 0.99;
-/// Iterative-refinement steps of each Newton solve (against Q + D applied exactly) before the
-/// iterate's residual is below [`CONDENSED_REFINE_FROM`]; after, up to
-/// [`CONDENSED_MAX_REFINEMENT_STEPS`].
-pub const CONDENSED_REFINEMENT_STEPS: usize = 1;
-/// Newton solves are refined once the relative residual is below this.
-pub const CONDENSED_REFINE_FROM: f64 = 1e-6;
+/// The corrector's Newton system is refined (against Q + D applied exactly) until its residual
+/// is below this times the iterate's relative residual times its right-hand side (but never
+/// asked for less than [`CONDENSED_REFINEMENT_RTOL`]): early directions need no accuracy. The
+/// predictor, which only sets the centring, is not refined.
+pub const CONDENSED_NEWTON_ACCURACY: f64 = 1e-3;
 /// Static regularization of the Newton systems: D + ρI is factored instead of D, with ρ this
 /// times the largest diagonal entry of Q, so D⁻¹ stays below 1/ρ. Without it the elimination
 /// through D⁻¹ cancels catastrophically on inactive cones (D → 0 makes T + K D⁻¹ Kᵀ as
 /// ill-conditioned as D⁻¹ is large: K has the constants in its kernel). Iterative refinement
 /// against Q + D removes the regularization from the directions.
-pub const CONDENSED_REGULARIZATION: f64 = 1e-10;
+pub const CONDENSED_REGULARIZATION: f64 = 1e-13;
+/// Factor by which ρ grows when T + K (D + ρI)⁻¹ Kᵀ does not factor (a pivot lost to the
+/// cancellation), up to [`CONDENSED_MAX_REGULARIZATION`] times the largest diagonal entry of Q.
+pub const CONDENSED_REGULARIZATION_GROWTH: f64 = 100.0;
+/// Largest regularization tried (relative to the largest diagonal entry of Q).
+pub const CONDENSED_MAX_REGULARIZATION: f64 = 1e-7;
 /// Iterative refinement stops when the residual of the Newton system is below this times its
 /// right-hand side (or after [`CONDENSED_MAX_REFINEMENT_STEPS`]).
 pub const CONDENSED_REFINEMENT_RTOL: f64 = 1e-12;
@@ -450,7 +454,7 @@ pub(crate) fn solve_balls(
         .iter()
         .fold(0.0f64, |a, &v| a.max(v))
         .max(f64::MIN_POSITIVE);
-    let rho = CONDENSED_REGULARIZATION * qmax;
+    let mut rho = CONDENSED_REGULARIZATION * qmax;
 
     let mut step: f64 = 0.0;
     for i in 0..n {
@@ -559,67 +563,75 @@ pub(crate) fn solve_balls(
         }
         iterations += 1;
 
-        // NT scalings, λ = V z, D⁻¹, and S = T + K D⁻¹ Kᵀ.
-        sm.clear();
-        for j in 0..size {
-            sm.add_identity(j, j, cond.diag[j]);
-            if closed || j + 1 < size {
-                sm.add_identity(j, (j + 1) % size, cond.off[j]);
-            }
-        }
-        for i in 0..n {
-            if !ball[i] {
-                continue;
-            }
-            let zi = &z[cone(&z, i)];
-            scaling(Kind::Soc, &s[cone(&s, i)], zi, &mut scv);
-            sc[i * (m + 1)..(i + 1) * (m + 1)].copy_from_slice(&scv);
-            let l = &mut lam[i * m..(i + 1) * m];
-            l.copy_from_slice(zi);
-            apply_v(Kind::Soc, &scv, l, false);
-            // D = a I + b w̄₁w̄₁ᵀ, a = η⁻², b = 2η⁻²; D + ρI has the eigenvalue a + ρ + b|w̄₁|²
-            // along u = w̄₁/|w̄₁| and a + ρ across it, inverted per eigenspace (no cancellation
-            // when b|w̄₁|² ≫ a, on active cones).
-            let eta2 = scv[0] * scv[0];
-            let w1 = &scv[2..];
-            let w2: f64 = w1.iter().map(|v| v * v).sum();
-            let (da, db) = (1.0 / eta2, 2.0 / eta2);
-            let ar = da + rho;
-            let (inv_across, inv_along) = (1.0 / ar, 1.0 / (ar + db * w2));
-            let wn = w2.sqrt();
-            let di = &mut dinv[i * d * d..(i + 1) * d * d];
-            let df = &mut dfac[i * d * d..(i + 1) * d * d];
-            for a in 0..d {
-                for b in 0..d {
-                    let id = if a == b { 1.0 } else { 0.0 };
-                    let uu = if wn > 0.0 {
-                        (w1[a] / wn) * (w1[b] / wn)
-                    } else {
-                        0.0
-                    };
-                    di[a * d + b] = inv_across * (id - uu) + inv_along * uu;
-                    df[a * d + b] = da * id + db * w1[a] * w1[b];
+        // NT scalings, λ = V z, D⁻¹, and S = T + K D⁻¹ Kᵀ; ρ grows (see
+        // CONDENSED_MAX_REGULARIZATION) while S does not factor.
+        let mut factored = false;
+        loop {
+            // NT scalings, λ = V z, D⁻¹, and S = T + K D⁻¹ Kᵀ.
+            sm.clear();
+            for j in 0..size {
+                sm.add_identity(j, j, cond.diag[j]);
+                if closed || j + 1 < size {
+                    sm.add_identity(j, (j + 1) % size, cond.off[j]);
                 }
             }
-            let nt = ntouch[i];
-            for x in 0..nt {
-                let (jx, kx) = touching[i][x];
-                sm.add(jx, jx, kx * kx, di);
-                for &(jy, ky) in &touching[i][x + 1..nt] {
-                    sm.add(jx, jy, kx * ky, di);
+            for i in 0..n {
+                if !ball[i] {
+                    continue;
+                }
+                let zi = &z[cone(&z, i)];
+                scaling(Kind::Soc, &s[cone(&s, i)], zi, &mut scv);
+                sc[i * (m + 1)..(i + 1) * (m + 1)].copy_from_slice(&scv);
+                let l = &mut lam[i * m..(i + 1) * m];
+                l.copy_from_slice(zi);
+                apply_v(Kind::Soc, &scv, l, false);
+                // D = a I + b w̄₁w̄₁ᵀ, a = η⁻², b = 2η⁻²; D + ρI has the eigenvalue a + ρ + b|w̄₁|²
+                // along u = w̄₁/|w̄₁| and a + ρ across it, inverted per eigenspace (no cancellation
+                // when b|w̄₁|² ≫ a, on active cones).
+                let eta2 = scv[0] * scv[0];
+                let w1 = &scv[2..];
+                let w2: f64 = w1.iter().map(|v| v * v).sum();
+                let (da, db) = (1.0 / eta2, 2.0 / eta2);
+                let ar = da + rho;
+                let (inv_across, inv_along) = (1.0 / ar, 1.0 / (ar + db * w2));
+                let wn = w2.sqrt();
+                let di = &mut dinv[i * d * d..(i + 1) * d * d];
+                let df = &mut dfac[i * d * d..(i + 1) * d * d];
+                for a in 0..d {
+                    for b in 0..d {
+                        let id = if a == b { 1.0 } else { 0.0 };
+                        let uu = if wn > 0.0 {
+                            (w1[a] / wn) * (w1[b] / wn)
+                        } else {
+                            0.0
+                        };
+                        di[a * d + b] = inv_across * (id - uu) + inv_along * uu;
+                        df[a * d + b] = da * id + db * w1[a] * w1[b];
+                    }
+                }
+                let nt = ntouch[i];
+                for x in 0..nt {
+                    let (jx, kx) = touching[i][x];
+                    sm.add(jx, jx, kx * kx, di);
+                    for &(jy, ky) in &touching[i][x + 1..nt] {
+                        sm.add(jx, jy, kx * ky, di);
+                    }
                 }
             }
+            if sm.factor().is_ok() {
+                factored = true;
+                break;
+            }
+            if rho >= CONDENSED_MAX_REGULARIZATION * qmax {
+                break;
+            }
+            rho *= CONDENSED_REGULARIZATION_GROWTH;
         }
-        if sm.factor().is_err() {
+        if !factored {
             stalled = true;
             break;
         }
-        let refine = if residual <= CONDENSED_REFINE_FROM {
-            CONDENSED_MAX_REFINEMENT_STEPS
-        } else {
-            CONDENSED_REFINEMENT_STEPS
-        };
-        let ctx = NewtonCtx {
+        let mut ctx = NewtonCtx {
             cond: &cond,
             ball: &ball,
             sc: &sc,
@@ -627,7 +639,8 @@ pub(crate) fn solve_balls(
             dfac: &dfac,
             rp: &rp,
             d,
-            refine,
+            refine: 0,
+            rtol: (CONDENSED_NEWTON_ACCURACY * residual).max(CONDENSED_REFINEMENT_RTOL),
         };
 
         // Predictor: ξ = −λ.
@@ -671,6 +684,7 @@ pub(crate) fn solve_balls(
             t2[0] += sigma * mu;
             jordan_div(Kind::Soc, l, &t2, &mut xi[r]);
         }
+        ctx.refine = CONDENSED_MAX_REFINEMENT_STEPS;
         ctx.solve(
             &mut sm, &mut qop, &rd, &xi, &mut dy, &mut ds, &mut dz, &mut ns,
         );
@@ -807,6 +821,7 @@ pub(crate) fn solve_balls(
                 rp: &rp,
                 d,
                 refine: CONDENSED_MAX_REFINEMENT_STEPS,
+                rtol: CONDENSED_REFINEMENT_RTOL,
             };
             ctx.refined(&mut sm, &mut qop, &rhs, &mut dy, &mut ns);
             for (a, b) in yp.iter_mut().zip(&dy) {
@@ -897,6 +912,8 @@ struct NewtonCtx<'a> {
     rp: &'a [f64],
     d: usize,
     refine: usize,
+    /// Refinement target relative to the right-hand side.
+    rtol: f64,
 }
 
 impl NewtonCtx<'_> {
@@ -964,9 +981,7 @@ impl NewtonCtx<'_> {
                 }
             }
             nw.qd = qd;
-            if nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs()))
-                <= CONDENSED_REFINEMENT_RTOL * rnorm
-            {
+            if nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs())) <= self.rtol * rnorm {
                 break;
             }
             let res = std::mem::take(&mut nw.res);
