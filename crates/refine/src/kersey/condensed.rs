@@ -1194,4 +1194,27 @@ mod tests {
             }
         }
     }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// All radii 0: the solver has no cone and returns the interpolating curve of
+        /// `fast::interpolate`; radii far larger than the data: a constant curve is feasible, so
+        /// E* = 0 and the optimum found has E at the rounding level of the interpolation energy.
+        #[test]
+        fn zero_radii_interpolate_and_huge_radii_give_zero_energy((kn, n, m, y, d) in case()) {
+            let q = Points::new(d, y).unwrap();
+            let stencil = Stencil::new(&kn);
+            let fixed = solve_balls(&kn, &stencil, &q, &vec![0.0; n], m).unwrap();
+            let interp = super::super::fast::interpolate(&kn, &stencil, &q, m).unwrap();
+            let scale = interp.coords().iter().fold(1.0f64, |a, v| a.max(v.abs()));
+            for (a, b) in fixed.points.coords().iter().zip(interp.coords()) {
+                prop_assert!((a - b).abs() <= 1e-13 * scale, "{a} vs {b}");
+            }
+            let e_interp = energy::energy(&kn, &interp).unwrap();
+            let sol = solve_balls(&kn, &stencil, &q, &vec![10.0; n], m).unwrap();
+            let e = energy::energy(&kn, &sol.points).unwrap();
+            prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp.max(f64::MIN_POSITIVE), "E = {e} (interpolation {e_interp})");
+        }
+    }
 }
