@@ -187,6 +187,7 @@ pub struct ConicProblem {
     constraints: Vec<ConicConstraint>,
 }
 
+#[inline]
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -195,6 +196,7 @@ fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
+#[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -799,6 +801,7 @@ fn merge_stencil(st: &[(usize, f64)]) -> Vec<(usize, f64)> {
 // Cone algebra (per block). Scaling convention: V z = V⁻¹ s = λ.
 
 /// NT scaling of one block: orthant: v_i = sqrt(s_i / z_i); SOC: [η, w̄...].
+#[inline]
 pub(crate) fn scaling(kind: Kind, s: &[f64], z: &[f64], out: &mut Vec<f64>) {
     out.clear();
     match kind {
@@ -821,12 +824,14 @@ pub(crate) fn scaling(kind: Kind, s: &[f64], z: &[f64], out: &mut Vec<f64>) {
     }
 }
 
+#[inline]
 pub(crate) fn soc_j(u: &[f64]) -> f64 {
     let r = norm(&u[1..]);
     (u[0] - r) * (u[0] + r)
 }
 
 /// u ← V u (inverse = false) or V⁻¹ u (inverse = true).
+#[inline]
 pub(crate) fn apply_v(kind: Kind, sc: &[f64], u: &mut [f64], inverse: bool) {
     match kind {
         Kind::Zero => {}
@@ -861,6 +866,7 @@ pub(crate) fn apply_v(kind: Kind, sc: &[f64], u: &mut [f64], inverse: bool) {
 }
 
 /// Jordan product u ∘ v.
+#[inline]
 pub(crate) fn jordan(kind: Kind, u: &[f64], v: &[f64], out: &mut [f64]) {
     match kind {
         Kind::Zero => out.fill(0.0),
@@ -879,6 +885,7 @@ pub(crate) fn jordan(kind: Kind, u: &[f64], v: &[f64], out: &mut [f64]) {
 }
 
 /// x with λ ∘ x = r.
+#[inline]
 pub(crate) fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
     match kind {
         Kind::Zero => out.fill(0.0),
@@ -899,6 +906,7 @@ pub(crate) fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
 }
 
 /// Largest α ≥ 0 (capped at `cap`) with u + α du in the cone.
+#[inline]
 pub(crate) fn max_step(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
     match kind {
         Kind::Zero => cap,

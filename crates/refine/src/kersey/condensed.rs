@@ -356,7 +356,7 @@ pub(crate) struct CondensedSolution {
 }
 
 /// Q = Kᵀ T⁻¹ K ⊗ I_d applied to y, with T's factor; returns E(y) = ½ yᵀ Q y.
-struct QOp<'a> {
+struct QOp<'a, const D: usize> {
     cond: &'a Condensation,
     t: Banded,
     u: Vec<f64>,
@@ -364,10 +364,10 @@ struct QOp<'a> {
     d: usize,
 }
 
-impl QOp<'_> {
+impl<const D: usize> QOp<'_, D> {
     /// out = Q y; afterwards `self.s` = T⁻¹ K y (the data-row values).
     fn apply(&mut self, y: &[f64], out: &mut [f64]) -> f64 {
-        let d = self.d;
+        let d = if D == 0 { self.d } else { D };
         self.cond.apply_k(y, d, &mut self.u);
         self.s.copy_from_slice(&self.u);
         self.t.solve(&mut self.s, d);
@@ -390,8 +390,25 @@ pub(crate) fn solve_balls(
     radii: &[f64],
     stride: usize,
 ) -> Result<CondensedSolution, Error> {
+    match q.dim() {
+        1 => solve_balls_d::<1>(knots, stencil, q, radii, stride),
+        2 => solve_balls_d::<2>(knots, stencil, q, radii, stride),
+        3 => solve_balls_d::<3>(knots, stencil, q, radii, stride),
+        _ => solve_balls_d::<0>(knots, stencil, q, radii, stride),
+    }
+}
+
+/// [`solve_balls`] with the dimension a compile-time constant for d = 1, 2, 3 (`D` = 0: any d,
+/// read from the data), so the per-coordinate loops unroll.
+fn solve_balls_d<const D: usize>(
+    knots: &Knots,
+    stencil: &Stencil,
+    q: &Points,
+    radii: &[f64],
+    stride: usize,
+) -> Result<CondensedSolution, Error> {
     let n = q.len();
-    let d = q.dim();
+    let d = if D == 0 { q.dim() } else { D };
     let m = d + 1;
     let cond = Condensation::new(knots, stencil, n, stride)?;
     let size = cond.len();
@@ -410,7 +427,7 @@ pub(crate) fn solve_balls(
         }
     }
     t.factor().map_err(|j| singular(cond.first + j))?;
-    let mut qop = QOp {
+    let mut qop = QOp::<D> {
         cond: &cond,
         t,
         u: vec![0.0; size * d],
@@ -631,7 +648,7 @@ pub(crate) fn solve_balls(
             stalled = true;
             break;
         }
-        let mut ctx = NewtonCtx {
+        let mut ctx = NewtonCtx::<D> {
             cond: &cond,
             ball: &ball,
             sc: &sc,
@@ -812,7 +829,7 @@ pub(crate) fn solve_balls(
             if sm.factor().is_err() {
                 break;
             }
-            let ctx = NewtonCtx {
+            let ctx = NewtonCtx::<D> {
                 cond: &cond,
                 ball: &ball,
                 sc: &sc,
@@ -903,7 +920,7 @@ struct NewtonWork {
 }
 
 /// One Newton system's data: scalings, D⁻¹ and D per cone, the primal residual.
-struct NewtonCtx<'a> {
+struct NewtonCtx<'a, const D: usize> {
     cond: &'a Condensation,
     ball: &'a [bool],
     sc: &'a [f64],
@@ -916,11 +933,11 @@ struct NewtonCtx<'a> {
     rtol: f64,
 }
 
-impl NewtonCtx<'_> {
+impl<const D: usize> NewtonCtx<'_, D> {
     /// Δy = (Q + D)⁻¹ r for r on the ball vertices (zero elsewhere), through S = T + K D⁻¹ Kᵀ
     /// (factored in `sm`).
     fn reduced(&self, sm: &mut Banded, r: &[f64], dy: &mut [f64], nw: &mut NewtonWork) {
-        let d = self.d;
+        let d = if D == 0 { self.d } else { D };
         let n = self.ball.len();
         // dy ← D⁻¹ r (temporarily), w = K D⁻¹ r.
         for i in 0..n {
@@ -955,12 +972,12 @@ impl NewtonCtx<'_> {
     fn refined(
         &self,
         sm: &mut Banded,
-        qop: &mut QOp<'_>,
+        qop: &mut QOp<'_, D>,
         r: &[f64],
         dy: &mut [f64],
         nw: &mut NewtonWork,
     ) {
-        let d = self.d;
+        let d = if D == 0 { self.d } else { D };
         let n = self.ball.len();
         self.reduced(sm, r, dy, nw);
         let rnorm = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -1000,7 +1017,7 @@ impl NewtonCtx<'_> {
     fn solve(
         &self,
         sm: &mut Banded,
-        qop: &mut QOp<'_>,
+        qop: &mut QOp<'_, D>,
         rd: &[f64],
         xi: &[f64],
         dy: &mut [f64],
@@ -1008,7 +1025,7 @@ impl NewtonCtx<'_> {
         dz: &mut [f64],
         nw: &mut NewtonWork,
     ) {
-        let d = self.d;
+        let d = if D == 0 { self.d } else { D };
         let m = d + 1;
         let n = self.ball.len();
         // r = −r_d − (V⁻¹(ξ + V⁻¹ r_p))₁.

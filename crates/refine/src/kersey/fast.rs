@@ -182,7 +182,7 @@ impl Condensation {
     }
 
     /// The data point of column `t` (0, 1, 2) of K's row j.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn col(&self, j: usize, t: usize) -> usize {
         let c = self.first + j + t;
         if self.closed {
@@ -196,6 +196,7 @@ impl Condensation {
     /// K_{j,0}(y_a − y_b) + K_{j,2}(y_c − y_b): K annihilates constants (constant data are
     /// interpolated with zero energy), so the rounding error scales with the steps between data
     /// points rather than with |y|.
+    #[inline]
     pub(crate) fn apply_k(&self, y: &[f64], d: usize, out: &mut [f64]) {
         for (j, kr) in self.krows.iter().enumerate() {
             let (a, b, c) = (self.col(j, 0), self.col(j, 1), self.col(j, 2));
@@ -207,6 +208,7 @@ impl Condensation {
     }
 
     /// out = Kᵀ s (n × d), s with one row per data row.
+    #[inline]
     pub(crate) fn apply_kt(&self, s: &[f64], d: usize, out: &mut [f64]) {
         out.fill(0.0);
         for (j, kr) in self.krows.iter().enumerate() {
