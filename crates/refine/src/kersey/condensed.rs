@@ -344,6 +344,54 @@ impl Banded {
     }
 }
 
+/// The matrix H ⊗ I_d + D (D at the data vertices of the balls, fixed data vertices
+/// eliminated) and its factor: its Schur complement on the data vertices is Q + D, so the data
+/// part of the solution of (H ⊗ I + D) Δp = (r at the data vertices, 0 elsewhere) is
+/// Δy = (Q + D)⁻¹ r, with no inverse of D (which vanishes at inactive vertices).
+struct NewtonSystem {
+    sys: energy::System,
+    factor: Option<energy::Factor>,
+    stride: usize,
+    rhs: Vec<f64>,
+}
+
+impl NewtonSystem {
+    /// Rebuilds H ⊗ I + D with D_i = `blocks[i]` (d × d) at the balls' data vertices and factors
+    /// it.
+    fn build(&mut self, ball: &[bool], blocks: &[f64], d: usize) -> Result<(), Error> {
+        self.factor = None;
+        self.sys.clear_blocks();
+        for (i, _) in ball.iter().enumerate().filter(|(_, &b)| b) {
+            self.sys
+                .add_block(i * self.stride, &blocks[i * d * d..(i + 1) * d * d])?;
+        }
+        self.factor = Some(self.sys.factor_with_tolerance(crate::conic::IPM_PIVOT_RTOL)?);
+        Ok(())
+    }
+
+    /// dy = (Q + D)⁻¹ r on the balls (0 at fixed data points).
+    fn solve(&mut self, ball: &[bool], r: &[f64], dy: &mut [f64], d: usize) {
+        self.rhs.fill(0.0);
+        for (i, _) in ball.iter().enumerate().filter(|(_, &b)| b) {
+            let v = i * self.stride;
+            self.rhs[v * d..(v + 1) * d].copy_from_slice(&r[i * d..(i + 1) * d]);
+        }
+        if let Some(f) = &self.factor {
+            // The length is N·d by construction.
+            let _ = f.solve_flat(&mut self.rhs);
+        }
+        for (i, &b) in ball.iter().enumerate() {
+            let o = i * d;
+            if b {
+                let v = i * self.stride;
+                dy[o..o + d].copy_from_slice(&self.rhs[v * d..(v + 1) * d]);
+            } else {
+                dy[o..o + d].fill(0.0);
+            }
+        }
+    }
+}
+
 /// The optimum of the condensed balls problem.
 pub(crate) struct CondensedSolution {
     /// The refined vertices (data vertices at y, free vertices by the second pass).
@@ -767,25 +815,32 @@ fn solve_balls_d<const D: usize>(
         let mut wp = w.clone();
         let mut rhs = vec![0.0; n * d];
         let mut u = vec![0.0; d];
+        // The polish's Newton systems: H ⊗ I_d + D at the data vertices, fixed ones eliminated
+        // (D vanishes at inactive vertices, so it is not eliminated through D⁻¹ as in the
+        // interior-point iterations).
+        let mut full = {
+            let mut sys = super::fixed::hessian_system(knots, d)?;
+            for i in (0..n).filter(|&i| !ball[i]) {
+                sys.fix(i * stride)?;
+            }
+            NewtonSystem {
+                sys,
+                factor: None,
+                stride,
+                rhs: vec![0.0; knots.vertex_count() * d],
+            }
+        };
         for _ in 0..CONDENSED_POLISH_STEPS {
             // Newton step on Qy + w(y − q) = 0, |y_i − q_i| = ε_i (active), with the normal
             // direction held by the penalty M: (Q + W + M uuᵀ)Δy = −(Qy + w(y − q)).
             qop.apply(&yp, &mut g);
             let stiff = CONDENSED_POLISH_STIFFNESS * qmax;
-            sm.clear();
-            for j in 0..size {
-                sm.add_identity(j, j, cond.diag[j]);
-                if closed || j + 1 < size {
-                    sm.add_identity(j, (j + 1) % size, cond.off[j]);
-                }
-            }
             for i in 0..n {
                 let o = i * d;
                 if !ball[i] {
                     rhs[o..o + d].fill(0.0);
                     continue;
                 }
-                let di = &mut dinv[i * d * d..(i + 1) * d * d];
                 let df = &mut dfac[i * d * d..(i + 1) * d * d];
                 if active[i] {
                     let gap = dist(&yp[o..o + d], &qc[o..o + d]);
@@ -795,11 +850,9 @@ fn solve_balls_d<const D: usize>(
                     // Least-squares multiplier at the current point.
                     let wi = (-(0..d).map(|c| g[o + c] * u[c]).sum::<f64>() / gap).max(0.0);
                     wp[i] = wi;
-                    let (across, along) = (wi + rho, wi + rho + stiff);
                     for a in 0..d {
                         for b in 0..d {
                             let id = if a == b { 1.0 } else { 0.0 };
-                            di[a * d + b] = (id - u[a] * u[b]) / across + u[a] * u[b] / along;
                             df[a * d + b] = wi * id + stiff * u[a] * u[b];
                         }
                         rhs[o + a] = -(g[o + a] + wi * (yp[o + a] - qc[o + a]))
@@ -807,40 +860,16 @@ fn solve_balls_d<const D: usize>(
                     }
                 } else {
                     wp[i] = 0.0;
+                    df.fill(0.0);
                     for a in 0..d {
-                        for b in 0..d {
-                            let id = if a == b { 1.0 } else { 0.0 };
-                            di[a * d + b] = id / rho;
-                            df[a * d + b] = 0.0;
-                        }
                         rhs[o + a] = -g[o + a];
                     }
                 }
-                let di = &dinv[i * d * d..(i + 1) * d * d];
-                let nt = ntouch[i];
-                for x in 0..nt {
-                    let (jx, kx) = touching[i][x];
-                    sm.add(jx, jx, kx * kx, di);
-                    for &(jy, ky) in &touching[i][x + 1..nt] {
-                        sm.add(jx, jy, kx * ky, di);
-                    }
-                }
             }
-            if sm.factor().is_err() {
+            if full.build(&ball, &dfac, d).is_err() {
                 break;
             }
-            let ctx = NewtonCtx::<D> {
-                cond: &cond,
-                ball: &ball,
-                sc: &sc,
-                dinv: &dinv,
-                dfac: &dfac,
-                rp: &rp,
-                d,
-                refine: CONDENSED_MAX_REFINEMENT_STEPS,
-                rtol: CONDENSED_REFINEMENT_RTOL,
-            };
-            ctx.refined(&mut sm, &mut qop, &rhs, &mut dy, &mut ns);
+            full.solve(&ball, &rhs, &mut dy, d);
             for (a, b) in yp.iter_mut().zip(&dy) {
                 *a += b;
             }
@@ -981,6 +1010,8 @@ impl<const D: usize> NewtonCtx<'_, D> {
         let n = self.ball.len();
         self.reduced(sm, r, dy, nw);
         let rnorm = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut last = f64::INFINITY;
+        nw.corr.fill(0.0);
         for _ in 0..self.refine {
             // res = r − (Q + D) dy.
             let mut qd = std::mem::take(&mut nw.qd);
@@ -998,7 +1029,17 @@ impl<const D: usize> NewtonCtx<'_, D> {
                 }
             }
             nw.qd = qd;
-            if nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs())) <= self.rtol * rnorm {
+            let rn = nw.res.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if rn > last {
+                // Diverging (the regularized factor is too far from Q + D): undo the last
+                // correction.
+                for (a, b) in dy.iter_mut().zip(&nw.corr) {
+                    *a -= b;
+                }
+                break;
+            }
+            last = rn;
+            if rn <= self.rtol * rnorm {
                 break;
             }
             let res = std::mem::take(&mut nw.res);
