@@ -62,6 +62,19 @@ pub const ACTIVE_RTOL: f64 = 1e-7;
 /// vertex by 1/this while pivots stay far above [`energy::PIVOT_RTOL`]; the penalty is removed
 /// again by iterative refinement against the unregularized system.
 pub const EQUALITY_REGULARIZATION: f64 = 1e-9;
+/// Factor by which δ of the equality rows grows when the penalized Newton matrix fails to factor.
+pub const EQUALITY_REGULARIZATION_RETRY: f64 = 1e3;
+/// Attempts at factoring one Newton matrix with growing δ (δ up to
+/// EQUALITY_REGULARIZATION × EQUALITY_REGULARIZATION_RETRY^(attempts − 1) = 1e-3).
+pub const EQUALITY_REGULARIZATION_ATTEMPTS: i32 = 3;
+/// Static regularization of a Newton matrix that fails to factor: every free vertex's diagonal
+/// grows by this times its local diagonal (the matrix is positive definite by construction; the
+/// failure is rounding on barrier terms that span many orders of magnitude).
+pub const STATIC_REGULARIZATION: f64 = 1e-12;
+/// Growth of the static regularization per further attempt.
+pub const STATIC_REGULARIZATION_RETRY: f64 = 1e3;
+/// Attempts with a static regularization (1e-12, 1e-9 relative).
+pub const STATIC_REGULARIZATION_ATTEMPTS: i32 = 2;
 /// Relative pivot tolerance of the interior-point and polish Newton systems (positive definite by
 /// construction, with barrier terms that grow without bound on active rows, so pivots far below
 /// [`energy::PIVOT_RTOL`] relative to their diagonal are legitimate there).
@@ -1103,9 +1116,16 @@ impl Prepared {
             let w: Vec<f64> = b.h.iter().map(|h| -omega * h).collect();
             self.add_adjoint(b, &w, &mut rhs);
         }
-        let f = sys.factor()?;
-        f.solve_flat(&mut rhs)?;
-        Ok(rhs)
+        // Positive definite by construction, so the interior-point pivot tolerance applies; the
+        // starting point is only a heuristic, so a system that still fails to factor (rounding
+        // on a nearly singular P, ROBUSTNESS.md finding 4) falls back to the plain start.
+        match sys.factor_with_tolerance(IPM_PIVOT_RTOL) {
+            Ok(f) => {
+                f.solve_flat(&mut rhs)?;
+                Ok(rhs)
+            }
+            Err(_) => Ok(x),
+        }
     }
 
     fn ipm(&self, problem: &ConicProblem, opts: &ConicOptions) -> Result<ConicSolution, Failure> {
@@ -1320,38 +1340,77 @@ impl Prepared {
                 }
                 sys.add_stencil(&b.stencil, &theta)?;
             }
+            // Equality rows enter as penalties GᵀG/δ. If the penalized matrix fails to factor
+            // (pivots lost to the penalty's size: clamped ends with tangent cones, ROBUSTNESS.md
+            // finding 4), δ is enlarged by EQUALITY_REGULARIZATION_RETRY up to
+            // EQUALITY_REGULARIZATION_ATTEMPTS times; iterative refinement against the
+            // unpenalized system removes the penalty either way.
             let mut delta = vec![0.0; self.blocks.len()];
-            for &bi in &eq_blocks {
-                let b = &self.blocks[bi];
-                // δ relative to the softest stencil vertex (see EQUALITY_REGULARIZATION).
-                let loc = b
-                    .stencil
-                    .iter()
-                    .map(|&(v, c)| local[v] / (c * c))
-                    .fold(f64::INFINITY, f64::min);
-                delta[bi] = EQUALITY_REGULARIZATION / loc.max(f64::MIN_POSITIVE);
-                for i in 0..d {
-                    for j in 0..d {
-                        theta[i * d + j] = (0..b.m)
-                            .map(|r| b.f[r * d + i] * b.f[r * d + j])
-                            .sum::<f64>()
-                            / delta[bi];
-                    }
+            let unpenalized = (!eq_blocks.is_empty()).then(|| sys.clone());
+            let mut attempt = 0;
+            let mut shifted = false;
+            let eq_attempts = if unpenalized.is_some() {
+                EQUALITY_REGULARIZATION_ATTEMPTS
+            } else {
+                1
+            };
+            let factor = loop {
+                let eq_attempt = attempt.min(eq_attempts - 1);
+                let reg = EQUALITY_REGULARIZATION * EQUALITY_REGULARIZATION_RETRY.powi(eq_attempt);
+                if let Some(base) = &unpenalized {
+                    sys = base.clone();
                 }
-                sys.add_stencil(&b.stencil, &theta)?;
-            }
-            let factor = match sys.factor_with_tolerance(IPM_PIVOT_RTOL) {
-                Ok(f) => f,
-                Err(e) => {
-                    if iterations == 1 {
-                        return Err(e.into());
+                for &bi in &eq_blocks {
+                    let b = &self.blocks[bi];
+                    // δ relative to the softest stencil vertex (see EQUALITY_REGULARIZATION).
+                    let loc = b
+                        .stencil
+                        .iter()
+                        .map(|&(v, c)| local[v] / (c * c))
+                        .fold(f64::INFINITY, f64::min);
+                    delta[bi] = reg / loc.max(f64::MIN_POSITIVE);
+                    for i in 0..d {
+                        for j in 0..d {
+                            theta[i * d + j] = (0..b.m)
+                                .map(|r| b.f[r * d + i] * b.f[r * d + j])
+                                .sum::<f64>()
+                                / delta[bi];
+                        }
                     }
-                    break;
+                    sys.add_stencil(&b.stencil, &theta)?;
+                }
+                // After the equality attempts: a static diagonal shift (ROBUSTNESS.md finding 4),
+                // removed by iterative refinement against the unshifted operator.
+                let shift_attempt = attempt - eq_attempt;
+                if shift_attempt > 0 {
+                    let rel =
+                        STATIC_REGULARIZATION * STATIC_REGULARIZATION_RETRY.powi(shift_attempt - 1);
+                    for (v, &k) in local.iter().enumerate() {
+                        if self.is_free(v) {
+                            sys.add_weight(v, rel * k)?;
+                        }
+                    }
+                    shifted = true;
+                }
+                match sys.factor_with_tolerance(IPM_PIVOT_RTOL) {
+                    Ok(f) => break Some(f),
+                    Err(e) => {
+                        attempt += 1;
+                        if attempt < eq_attempts + STATIC_REGULARIZATION_ATTEMPTS {
+                            continue;
+                        }
+                        if iterations == 1 {
+                            return Err(e.into());
+                        }
+                        break None;
+                    }
                 }
             };
+            let Some(factor) = factor else { break };
             let ctx = NewtonCtx {
                 prep: self,
                 factor: &factor,
+                shifted,
                 sc: &sc,
                 eq_blocks: &eq_blocks,
                 delta: &delta,
@@ -2035,6 +2094,8 @@ struct NewtonCtx<'a> {
     delta: &'a [f64],
     /// Refinement steps without equality rows (0 early on, when accuracy does not matter yet).
     refine_steps: usize,
+    /// The factored matrix carries a static diagonal shift: refine as for equality rows.
+    shifted: bool,
 }
 
 impl NewtonCtx<'_> {
@@ -2080,7 +2141,7 @@ impl NewtonCtx<'_> {
                 e2[b.off..b.off + b.m].copy_from_slice(&rs[b.off..b.off + b.m]);
             }
             let bnorm = inf_norm(&b1).max(inf_norm(&e2)).max(f64::MIN_POSITIVE);
-            let steps = if self.eq_blocks.is_empty() {
+            let steps = if self.eq_blocks.is_empty() && !self.shifted {
                 self.refine_steps
             } else {
                 EQUALITY_REFINEMENT_STEPS
