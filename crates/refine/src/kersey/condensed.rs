@@ -41,7 +41,7 @@ pub const CONDENSED_MAX_ITERATIONS: usize = 80;
 /// Target of the condensed interior-point method: the dual residual ‖Qy + z₁‖_∞ relative to the
 /// force scale (the largest of ‖Qy‖_∞, ‖z₁‖_∞), and the duality gap sᵀz relative to the energy
 /// (it bounds E(y) − E*), both at most this.
-pub const CONDENSED_TOLERANCE: f64 = 1e-13;
+pub const CONDENSED_TOLERANCE: f64 = 1e-10;
 /// Fraction of the step to the boundary of the cones taken.
 pub const CONDENSED_STEP_FRACTION: f64 = 0.99;
 /// The corrector's Newton system is refined (against Q + D applied exactly) until its residual
@@ -95,6 +95,8 @@ struct Banded {
     a: Vec<f64>,
     /// Solve workspace (positions × columns).
     work: Vec<f64>,
+    /// Reciprocals of the diagonal entries of the factor's diagonal blocks (by position).
+    rdiag: Vec<f64>,
 }
 
 impl Banded {
@@ -123,6 +125,7 @@ impl Banded {
             pos,
             a: vec![0.0; nb * (bw + 1) * bs * bs],
             work: vec![0.0; nb * bs * ncols],
+            rdiag: vec![0.0; nb * bs],
         }
     }
 
@@ -191,7 +194,14 @@ impl Banded {
         for (i, &p) in self.pos.iter().enumerate() {
             inv_pos[p] = i;
         }
-        let mut m = vec![0.0; bb];
+        let mut mbuf = [0.0; 16];
+        let mut mvec = Vec::new();
+        let m: &mut [f64] = if bb <= mbuf.len() {
+            &mut mbuf[..bb]
+        } else {
+            mvec.resize(bb, 0.0);
+            &mut mvec
+        };
         for p in 0..self.nb {
             let lo = p.saturating_sub(bw);
             for c in lo..=p {
@@ -220,10 +230,10 @@ impl Banded {
                             for t in 0..s {
                                 v -= m[r * bs + t] * self.a[dgo + s * bs + t];
                             }
-                            m[r * bs + s] = v / self.a[dgo + s * bs + s];
+                            m[r * bs + s] = v * self.rdiag[c * bs + s];
                         }
                     }
-                    self.a[o..o + bb].copy_from_slice(&m);
+                    self.a[o..o + bb].copy_from_slice(m);
                 } else {
                     // Dense Cholesky of the diagonal block (lower triangle stored).
                     for s in 0..bs {
@@ -235,19 +245,21 @@ impl Banded {
                             return Err(inv_pos[p]);
                         }
                         let piv = v.sqrt();
+                        let rpiv = 1.0 / piv;
+                        self.rdiag[p * bs + s] = rpiv;
                         m[s * bs + s] = piv;
                         for r in s + 1..bs {
                             let mut w = m[r * bs + s];
                             for t in 0..s {
                                 w -= m[r * bs + t] * m[s * bs + t];
                             }
-                            m[r * bs + s] = w / piv;
+                            m[r * bs + s] = w * rpiv;
                         }
                         for r in 0..s {
                             m[r * bs + s] = 0.0;
                         }
                     }
-                    self.a[o..o + bb].copy_from_slice(&m);
+                    self.a[o..o + bb].copy_from_slice(m);
                 }
             }
         }
@@ -286,6 +298,7 @@ impl Banded {
             w[p * row..(p + 1) * row].copy_from_slice(&b[i * row..(i + 1) * row]);
         }
         let a = &self.a;
+        let rd = &self.rdiag;
         let at = |p: usize, t: usize| (p * (bw + 1) + t) * bs * bs;
         // Forward: L x = b.
         for p in 0..nb {
@@ -308,7 +321,7 @@ impl Banded {
                     for t in 0..r {
                         v -= a[o + r * bs + t] * w[(p * bs + t) * ncols + e];
                     }
-                    w[(p * bs + r) * ncols + e] = v / a[o + r * bs + r];
+                    w[(p * bs + r) * ncols + e] = v * rd[p * bs + r];
                 }
             }
         }
@@ -333,7 +346,7 @@ impl Banded {
                     for t in r + 1..bs {
                         v -= a[o + t * bs + r] * w[(p * bs + t) * ncols + e];
                     }
-                    w[(p * bs + r) * ncols + e] = v / a[o + r * bs + r];
+                    w[(p * bs + r) * ncols + e] = v * rd[p * bs + r];
                 }
             }
         }
@@ -365,7 +378,10 @@ impl NewtonSystem {
             self.sys
                 .add_block(i * self.stride, &blocks[i * d * d..(i + 1) * d * d])?;
         }
-        self.factor = Some(self.sys.factor_with_tolerance(crate::conic::IPM_PIVOT_RTOL)?);
+        self.factor = Some(
+            self.sys
+                .factor_with_tolerance(crate::conic::IPM_PIVOT_RTOL)?,
+        );
         Ok(())
     }
 
