@@ -14,15 +14,22 @@
 //! [[D, Kᵀ], [K, −T]]: (T + K D⁻¹ Kᵀ) w = K D⁻¹ r, then Δy = D⁻¹(r − Kᵀ w) — a block
 //! pentadiagonal (cyclic) positive definite system of n blocks of size d, factored by a banded
 //! block Cholesky (a cyclic band becomes an ordinary band of twice the width in the zig-zag order
-//! 0, n−1, 1, n−2, …). Fixed vertices have D⁻¹ = 0 and Δy = 0. For the cone
-//! (η, w̄) of the NT scaling, D = η⁻²(I + 2 w̄₁w̄₁ᵀ) and D⁻¹ = η²(I − 2 w̄₁w̄₁ᵀ / (1 + 2|w̄₁|²)).
+//! 0, n−1, 1, n−2, …). Fixed vertices have D⁻¹ = 0 and Δy = 0. For the cone (η, w̄) of the NT
+//! scaling, D = η⁻²(I + 2 w̄₁w̄₁ᵀ). D vanishes on inactive cones, where D⁻¹ would make
+//! T + K D⁻¹ Kᵀ as ill-conditioned as D⁻¹ is large (K annihilates constants), so D + ρI is
+//! factored ([`CONDENSED_REGULARIZATION`]) and iterative refinement against Q + D (Q applied
+//! exactly) removes ρ from the corrector direction.
 //!
-//! The start y = q is strictly feasible (s = (ε, 0), the centre of the cone) and every step keeps
-//! s = h − Gy exactly (G y = (0, y)), so only the dual residual Qy + z₁ and the gap sᵀz have to
-//! be driven to zero. The multiplier of ball i in the convention of (3.5) is w_i = z_{i,0}/ε_i:
-//! complementarity s∘z = 0 gives z₁ = (z₀/ε)(y − q), so Qy + z₁ = 0 reads
-//! (Hp)_{i_k} + w_i (p_{i_k} − q_i) = 0. The interior is then recovered by the second pass of
-//! [`super::fast`] with the data vertices at y.
+//! The start y = q is strictly feasible (s = (ε, 0), the centre of the cone, z = (F, 0) with F the
+//! largest force |Qq|); s is its own iterate, with the primal residual s − (ε, q − y) kept in the
+//! Newton systems (the slack ε − |q − y| cannot be resolved through y near the spheres). The
+//! multiplier of ball i in the convention of (3.5) is w_i = z_{i,0}/ε_i: complementarity s∘z = 0
+//! gives z₁ = (z₀/ε)(y − q), so Qy + z₁ = 0 reads (Hp)_{i_k} + w_i (p_{i_k} − q_i) = 0. Off the
+//! central path the vector part of s∘z, and with it the tangential position on an active sphere,
+//! converges only like √μ, so an active-set polish follows ([`CONDENSED_POLISH_STEPS`]: Newton
+//! steps on the full-vertex system H ⊗ I + D, which needs no D⁻¹). The interior is recovered by
+//! the second pass of [`super::fast`] with the data vertices at y; the caller certifies the
+//! result independently (`certify`).
 
 // The block kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
