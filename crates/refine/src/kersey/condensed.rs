@@ -218,11 +218,12 @@ impl Banded {
                 for cp in lo.max(c.saturating_sub(bw))..c {
                     let x = self.at(p, p - cp);
                     let y = self.at(c, c - cp);
+                    let (xs, ys) = (&self.a[x..x + bb], &self.a[y..y + bb]);
                     for r in 0..bs {
                         for s in 0..bs {
                             let mut acc = 0.0;
                             for t in 0..bs {
-                                acc += self.a[x + r * bs + t] * self.a[y + s * bs + t];
+                                acc += xs[r * bs + t] * ys[s * bs + t];
                             }
                             m[r * bs + s] -= acc;
                         }
@@ -231,13 +232,15 @@ impl Banded {
                 if c < p {
                     // L[p][c] = M L[c][c]⁻ᵀ: each row solves L[c][c] xᵀ = mᵀ.
                     let dgo = self.at(c, 0);
+                    let dg = &self.a[dgo..dgo + bb];
+                    let rc = &self.rdiag[c * bs..(c + 1) * bs];
                     for r in 0..bs {
                         for s in 0..bs {
                             let mut v = m[r * bs + s];
                             for t in 0..s {
-                                v -= m[r * bs + t] * self.a[dgo + s * bs + t];
+                                v -= m[r * bs + t] * dg[s * bs + t];
                             }
-                            m[r * bs + s] = v * self.rdiag[c * bs + s];
+                            m[r * bs + s] = v * rc[s];
                         }
                     }
                     self.a[o..o + bb].copy_from_slice(m);
@@ -306,56 +309,75 @@ impl Banded {
         }
         let a = &self.a;
         let rd = &self.rdiag;
-        let at = |p: usize, t: usize| (p * (bw + 1) + t) * bs * bs;
+        let bb = bs * bs;
+        let at = |p: usize, t: usize| (p * (bw + 1) + t) * bb;
+        // The unknowns of one block row are accumulated in a local buffer (no stores to `w`
+        // between the contributions of its neighbours).
+        let mut buf = [0.0; 16];
+        let mut vbuf = Vec::new();
+        let x: &mut [f64] = if row <= buf.len() {
+            &mut buf[..row]
+        } else {
+            vbuf.resize(row, 0.0);
+            &mut vbuf
+        };
         // Forward: L x = b.
         for p in 0..nb {
+            x.copy_from_slice(&w[p * row..(p + 1) * row]);
             for c in p.saturating_sub(bw)..p {
-                let o = at(p, p - c);
+                let blk = &a[at(p, p - c)..at(p, p - c) + bb];
+                let xc = &w[c * row..(c + 1) * row];
                 for r in 0..bs {
                     for e in 0..ncols {
                         let mut acc = 0.0;
                         for t in 0..bs {
-                            acc += a[o + r * bs + t] * w[(c * bs + t) * ncols + e];
+                            acc += blk[r * bs + t] * xc[t * ncols + e];
                         }
-                        w[(p * bs + r) * ncols + e] -= acc;
+                        x[r * ncols + e] -= acc;
                     }
                 }
             }
-            let o = at(p, 0);
+            let dg = &a[at(p, 0)..at(p, 0) + bb];
+            let rp = &rd[p * bs..(p + 1) * bs];
             for r in 0..bs {
                 for e in 0..ncols {
-                    let mut v = w[(p * bs + r) * ncols + e];
+                    let mut v = x[r * ncols + e];
                     for t in 0..r {
-                        v -= a[o + r * bs + t] * w[(p * bs + t) * ncols + e];
+                        v -= dg[r * bs + t] * x[t * ncols + e];
                     }
-                    w[(p * bs + r) * ncols + e] = v * rd[p * bs + r];
+                    x[r * ncols + e] = v * rp[r];
                 }
             }
+            w[p * row..(p + 1) * row].copy_from_slice(x);
         }
         // Backward: Lᵀ x = y.
         for p in (0..nb).rev() {
+            x.copy_from_slice(&w[p * row..(p + 1) * row]);
             for rr in p + 1..(p + bw + 1).min(nb) {
-                let o = at(rr, rr - p);
+                let blk = &a[at(rr, rr - p)..at(rr, rr - p) + bb];
+                let xr = &w[rr * row..(rr + 1) * row];
                 for s in 0..bs {
                     for e in 0..ncols {
                         let mut acc = 0.0;
                         for t in 0..bs {
-                            acc += a[o + t * bs + s] * w[(rr * bs + t) * ncols + e];
+                            acc += blk[t * bs + s] * xr[t * ncols + e];
                         }
-                        w[(p * bs + s) * ncols + e] -= acc;
+                        x[s * ncols + e] -= acc;
                     }
                 }
             }
-            let o = at(p, 0);
+            let dg = &a[at(p, 0)..at(p, 0) + bb];
+            let rp = &rd[p * bs..(p + 1) * bs];
             for r in (0..bs).rev() {
                 for e in 0..ncols {
-                    let mut v = w[(p * bs + r) * ncols + e];
+                    let mut v = x[r * ncols + e];
                     for t in r + 1..bs {
-                        v -= a[o + t * bs + r] * w[(p * bs + t) * ncols + e];
+                        v -= dg[t * bs + r] * x[t * ncols + e];
                     }
-                    w[(p * bs + r) * ncols + e] = v * rd[p * bs + r];
+                    x[r * ncols + e] = v * rp[r];
                 }
             }
+            w[p * row..(p + 1) * row].copy_from_slice(x);
         }
         for i in 0..nb {
             let p = self.pos[i];
