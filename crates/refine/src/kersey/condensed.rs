@@ -49,6 +49,10 @@ pub const CONDENSED_MAX_ITERATIONS: usize = 80;
 /// force scale (the largest of ‖Qy‖_∞, ‖z₁‖_∞), and the duality gap sᵀz relative to the energy
 /// (it bounds E(y) − E*), both at most this.
 pub const CONDENSED_TOLERANCE: f64 = 1e-10;
+/// The stricter target of a second run when the first result is not certified at
+/// [`super::exact::EXACT_KKT_TARGET`] (its active set, read off at [`CONDENSED_TOLERANCE`], was
+/// not settled enough for the polish).
+pub const CONDENSED_STRICT_TOLERANCE: f64 = 1e-13;
 /// Fraction of the step to the boundary of the cones taken.
 pub const CONDENSED_STEP_FRACTION: f64 = 0.99;
 /// The corrector's Newton system is refined (against Q + D applied exactly) until its residual
@@ -475,19 +479,21 @@ impl<const D: usize> QOp<'_, D> {
 /// # Errors
 /// [`Error::Energy`] (`Singular`) if a pivot fails (impossible for valid knots and positive
 /// radii; reported rather than assumed); [`Error::NotConverged`] with the best residual when the
-/// method does not reach [`CONDENSED_TOLERANCE`] within [`CONDENSED_MAX_ITERATIONS`].
+/// method does not reach `tolerance` ([`CONDENSED_TOLERANCE`], [`CONDENSED_STRICT_TOLERANCE`])
+/// within [`CONDENSED_MAX_ITERATIONS`].
 pub(crate) fn solve_balls(
     knots: &Knots,
     stencil: &Stencil,
     q: &Points,
     radii: &[f64],
     stride: usize,
+    tolerance: f64,
 ) -> Result<CondensedSolution, Error> {
     match q.dim() {
-        1 => solve_balls_d::<1>(knots, stencil, q, radii, stride),
-        2 => solve_balls_d::<2>(knots, stencil, q, radii, stride),
-        3 => solve_balls_d::<3>(knots, stencil, q, radii, stride),
-        _ => solve_balls_d::<0>(knots, stencil, q, radii, stride),
+        1 => solve_balls_d::<1>(knots, stencil, q, radii, stride, tolerance),
+        2 => solve_balls_d::<2>(knots, stencil, q, radii, stride, tolerance),
+        3 => solve_balls_d::<3>(knots, stencil, q, radii, stride, tolerance),
+        _ => solve_balls_d::<0>(knots, stencil, q, radii, stride, tolerance),
     }
 }
 
@@ -499,6 +505,7 @@ fn solve_balls_d<const D: usize>(
     q: &Points,
     radii: &[f64],
     stride: usize,
+    tolerance: f64,
 ) -> Result<CondensedSolution, Error> {
     let n = q.len();
     let d = if D == 0 { q.dim() } else { D };
@@ -664,7 +671,7 @@ fn solve_balls_d<const D: usize>(
             best_y.copy_from_slice(&y);
             best_z.copy_from_slice(&z);
         }
-        if residual <= CONDENSED_TOLERANCE || nballs == 0 {
+        if residual <= tolerance || nballs == 0 {
             break;
         }
         if iterations >= CONDENSED_MAX_ITERATIONS {
@@ -1170,7 +1177,7 @@ mod tests {
     use super::super::fast::Condensation;
     use super::super::operator::Stencil;
     use super::super::problem::{Constraint, Problem};
-    use super::{solve_balls, Banded};
+    use super::{solve_balls, Banded, CONDENSED_TOLERANCE};
 
     /// Energies below this times the interpolation energy count as E* = 0.
     const ZERO_ENERGY_RTOL: f64 = 1e-12;
@@ -1261,7 +1268,7 @@ mod tests {
             // Valid problems have distinct consecutive data points (Problem::validate).
             prop_assume!((0..n - 1).all(|i| super::super::fixed::dist(q.point(i), q.point(i + 1)) > 0.05));
             let stencil = Stencil::new(&kn);
-            let sol = solve_balls(&kn, &stencil, &q, &radii, m).unwrap();
+            let sol = solve_balls(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE).unwrap();
             let data_vertex: Vec<usize> = (0..n).map(|i| i * m).collect();
             let c = Constraint::Balls(radii.clone());
             let (cert, _) = certify(&stencil, &sol.points, &q, &data_vertex, &c,
@@ -1308,14 +1315,14 @@ mod tests {
         fn zero_radii_interpolate_and_huge_radii_give_zero_energy((kn, n, m, y, d) in case()) {
             let q = Points::new(d, y).unwrap();
             let stencil = Stencil::new(&kn);
-            let fixed = solve_balls(&kn, &stencil, &q, &vec![0.0; n], m).unwrap();
+            let fixed = solve_balls(&kn, &stencil, &q, &vec![0.0; n], m, CONDENSED_TOLERANCE).unwrap();
             let interp = super::super::fast::interpolate(&kn, &stencil, &q, m).unwrap();
             let scale = interp.coords().iter().fold(1.0f64, |a, v| a.max(v.abs()));
             for (a, b) in fixed.points.coords().iter().zip(interp.coords()) {
                 prop_assert!((a - b).abs() <= 1e-13 * scale, "{a} vs {b}");
             }
             let e_interp = energy::energy(&kn, &interp).unwrap();
-            let sol = solve_balls(&kn, &stencil, &q, &vec![10.0; n], m).unwrap();
+            let sol = solve_balls(&kn, &stencil, &q, &vec![10.0; n], m, CONDENSED_TOLERANCE).unwrap();
             let e = energy::energy(&kn, &sol.points).unwrap();
             prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp.max(f64::MIN_POSITIVE), "E = {e} (interpolation {e_interp})");
         }
