@@ -200,6 +200,7 @@ pub struct ConicProblem {
     constraints: Vec<ConicConstraint>,
 }
 
+#[inline]
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -208,6 +209,7 @@ fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
+#[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -484,7 +486,7 @@ fn polytope_is_empty(hs: &[(Vec<f64>, f64)], d: usize) -> bool {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
+pub(crate) enum Kind {
     Zero,
     Nonneg,
     Soc,
@@ -812,7 +814,8 @@ fn merge_stencil(st: &[(usize, f64)]) -> Vec<(usize, f64)> {
 // Cone algebra (per block). Scaling convention: V z = V⁻¹ s = λ.
 
 /// NT scaling of one block: orthant: v_i = sqrt(s_i / z_i); SOC: [η, w̄...].
-fn scaling(kind: Kind, s: &[f64], z: &[f64], out: &mut Vec<f64>) {
+#[inline]
+pub(crate) fn scaling(kind: Kind, s: &[f64], z: &[f64], out: &mut Vec<f64>) {
     out.clear();
     match kind {
         Kind::Zero => {}
@@ -834,13 +837,15 @@ fn scaling(kind: Kind, s: &[f64], z: &[f64], out: &mut Vec<f64>) {
     }
 }
 
-fn soc_j(u: &[f64]) -> f64 {
+#[inline]
+pub(crate) fn soc_j(u: &[f64]) -> f64 {
     let r = norm(&u[1..]);
     (u[0] - r) * (u[0] + r)
 }
 
 /// u ← V u (inverse = false) or V⁻¹ u (inverse = true).
-fn apply_v(kind: Kind, sc: &[f64], u: &mut [f64], inverse: bool) {
+#[inline]
+pub(crate) fn apply_v(kind: Kind, sc: &[f64], u: &mut [f64], inverse: bool) {
     match kind {
         Kind::Zero => {}
         Kind::Nonneg => {
@@ -874,7 +879,8 @@ fn apply_v(kind: Kind, sc: &[f64], u: &mut [f64], inverse: bool) {
 }
 
 /// Jordan product u ∘ v.
-fn jordan(kind: Kind, u: &[f64], v: &[f64], out: &mut [f64]) {
+#[inline]
+pub(crate) fn jordan(kind: Kind, u: &[f64], v: &[f64], out: &mut [f64]) {
     match kind {
         Kind::Zero => out.fill(0.0),
         Kind::Nonneg => {
@@ -892,7 +898,8 @@ fn jordan(kind: Kind, u: &[f64], v: &[f64], out: &mut [f64]) {
 }
 
 /// x with λ ∘ x = r.
-fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
+#[inline]
+pub(crate) fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
     match kind {
         Kind::Zero => out.fill(0.0),
         Kind::Nonneg => {
@@ -912,7 +919,8 @@ fn jordan_div(kind: Kind, lam: &[f64], r: &[f64], out: &mut [f64]) {
 }
 
 /// Largest α ≥ 0 (capped at `cap`) with u + α du in the cone.
-fn max_step(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
+#[inline]
+pub(crate) fn max_step(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
     match kind {
         Kind::Zero => cap,
         Kind::Nonneg => u

@@ -30,9 +30,13 @@
 //!   further interpolatory `level_k`-level steps, each re-initialized from the previous result.
 //!
 //! Two fixed-knot solvers ([`Solver`]): **exact** (the default; linear solves for interpolation
-//! and smoothing, the interior-point solver [`ConicProblem`] for balls, half-space sets,
-//! derivative constraints and clamped ends, which become constraints L p ∈ K on stencils of at
-//! most three vertices) and the **paper's multiplier iteration** (w_i := w_i |p_{i_k} − q_i| / ε_i
+//! and smoothing; for balls alone an interior-point method on the n data vertices only, the free
+//! vertices eliminated exactly — E(y) = ½(Ky)ᵀT⁻¹(Ky) with T, K tridiagonal (cyclic) from the
+//! interpolation condensation — followed by an active-set polish, accepted when the certificate
+//! below is at most [`EXACT_KKT_TARGET`]; otherwise, and for half-space sets, derivative
+//! constraints and clamped ends, which become constraints L p ∈ K on stencils of at most three
+//! vertices, the full-vertex interior-point solver [`ConicProblem`]) and the **paper's
+//! multiplier iteration** (w_i := w_i |p_{i_k} − q_i| / ε_i
 //! from w_i = 1), kept to reproduce the seed's figures (balls only).
 //!
 //! **Optimal free knots** (beyond the paper, [`optimize_knots`]): minimize F(t) = E(p*(t), t)

@@ -165,7 +165,7 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
 
     println!("refine: balls, closed, d = 2, k = 3, knot_iterations = 0");
     let n_balls: &[usize] = if opts.quick {
-        &[1_000]
+        &[1_000, 10_000]
     } else {
         &[1_000, 10_000, 100_000]
     };

@@ -78,6 +78,225 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// The data-row condensation of the energy on fixed knots (module docs): with the data vertices
+/// v_i = m·i at y_i, the data-row values s solve T s = K y, T symmetric positive definite
+/// tridiagonal (cyclic for closed curves), K tridiagonal (cyclic) on the data points; the
+/// energy minimized over the free vertices is E(y) = ½ Σ_coords sᵀ K y = ½ (Ky)ᵀ T⁻¹ (Ky), and
+/// its gradient is Kᵀ s = (Hp)_{v_i}. (With s = L e + K y and e = −Lᵀ s, T = I + L Lᵀ and
+/// E = ½|e|² + ½|s|² = ½ sᵀ T s.)
+pub(crate) struct Condensation {
+    /// Number of data points n.
+    pub n: usize,
+    /// The data vertices' stride m = k + 1.
+    pub stride: usize,
+    /// Whether the curve is closed.
+    pub closed: bool,
+    /// The first data row with an unknown (0 closed, 1 open: the end rows are zero).
+    pub first: usize,
+    /// T: diagonal (one entry per data row first..first + len).
+    pub diag: Vec<f64>,
+    /// T: `off[j]` couples rows j and j + 1 (cyclic: the last couples back to 0; unused on open
+    /// curves).
+    pub off: Vec<f64>,
+    /// K: row j holds the coefficients on the data points first + j − 1, first + j,
+    /// first + j + 1 (indices modulo n on closed curves).
+    pub krows: Vec<[f64; 3]>,
+}
+
+impl Condensation {
+    /// Pass 1 over the spans of `knots` (α-rows in `stencil`), n data points every `stride`
+    /// vertices.
+    ///
+    /// # Errors
+    /// [`Error::Energy`] (`Singular`) naming a vertex whose pivot is not of the sign and size the
+    /// structure guarantees (impossible for valid knots; reported rather than assumed).
+    pub(crate) fn new(
+        knots: &Knots,
+        stencil: &Stencil,
+        n: usize,
+        stride: usize,
+    ) -> Result<Self, Error> {
+        let closed = knots.is_closed();
+        let m = stride;
+        let k = m - 1;
+        let spans = if closed { n } else { n - 1 };
+        let rows = &stencil.rows;
+        let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
+
+        // Per span: G = g·g, X = g·h, Y = h·h and the weights of the span's two data points in
+        // g·c and h·c: c = α_{a+1,1} q_i e_0 + α_{a+k,3} q_{i+1} e_{k−1}.
+        let mut gg = vec![0.0; spans];
+        let mut gh = vec![0.0; spans];
+        let mut hh = vec![0.0; spans];
+        let mut cw = vec![[0.0; 4]; spans]; // [c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}]
+        let (mut l, mut u, mut g, mut h) = (vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]);
+        for i in 0..spans {
+            let a = i * m;
+            let span_rows = &rows[a + 1..a + m];
+            span_lu(span_rows, &mut l, &mut u).map_err(|j| singular(a + 1 + j))?;
+            span_gh(span_rows, &l, &u, &mut g, &mut h);
+            gg[i] = dot(&g, &g);
+            gh[i] = dot(&g, &h);
+            hh[i] = dot(&h, &h);
+            let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
+            cw[i] = [c0 * g[0], c1 * g[k - 1], c0 * h[0], c1 * h[k - 1]];
+        }
+
+        let first = usize::from(!closed);
+        let last = if closed { n } else { n - 1 }; // exclusive
+        let size = last.saturating_sub(first);
+        let mut diag = vec![0.0; size];
+        let mut off = vec![0.0; size];
+        let mut krows = vec![[0.0; 3]; size];
+        for (j, i) in (first..last).enumerate() {
+            let ar = rows[i * m];
+            let prev = if i == 0 { spans - 1 } else { i - 1 };
+            let cur = i % spans;
+            diag[j] = 1.0 + ar[0] * ar[0] * hh[prev] + ar[2] * ar[2] * gg[cur];
+            let next = i + 1;
+            if next < last || closed {
+                let an = rows[(next % n) * m];
+                off[j] = ar[2] * an[0] * gh[cur];
+            }
+            // (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
+            krows[j] = [
+                -ar[0] * cw[prev][2],
+                ar[1] - ar[0] * cw[prev][3] - ar[2] * cw[cur][0],
+                -ar[2] * cw[cur][1],
+            ];
+        }
+        Ok(Condensation {
+            n,
+            stride,
+            closed,
+            first,
+            diag,
+            off,
+            krows,
+        })
+    }
+
+    /// Number of data rows with an unknown (n closed, n − 2 open).
+    pub(crate) fn len(&self) -> usize {
+        self.diag.len()
+    }
+
+    /// The data point of column `t` (0, 1, 2) of K's row j.
+    #[inline(always)]
+    pub(crate) fn col(&self, j: usize, t: usize) -> usize {
+        let c = self.first + j + t;
+        if self.closed {
+            (c + self.n - 1) % self.n
+        } else {
+            c - 1
+        }
+    }
+
+    /// out = K y (row j, d columns), y with n × d entries. Evaluated in difference form,
+    /// K_{j,0}(y_a − y_b) + K_{j,2}(y_c − y_b): K annihilates constants (constant data are
+    /// interpolated with zero energy), so the rounding error scales with the steps between data
+    /// points rather than with |y|.
+    #[inline]
+    pub(crate) fn apply_k(&self, y: &[f64], d: usize, out: &mut [f64]) {
+        for (j, kr) in self.krows.iter().enumerate() {
+            let (a, b, c) = (self.col(j, 0), self.col(j, 1), self.col(j, 2));
+            for e in 0..d {
+                let yb = y[b * d + e];
+                out[j * d + e] = kr[0] * (y[a * d + e] - yb) + kr[2] * (y[c * d + e] - yb);
+            }
+        }
+    }
+
+    /// out = Kᵀ s (n × d), s with one row per data row.
+    #[inline]
+    pub(crate) fn apply_kt(&self, s: &[f64], d: usize, out: &mut [f64]) {
+        out.fill(0.0);
+        for (j, kr) in self.krows.iter().enumerate() {
+            for (t, &kv) in kr.iter().enumerate() {
+                let c = self.col(j, t);
+                for e in 0..d {
+                    out[c * d + e] += kv * s[j * d + e];
+                }
+            }
+        }
+    }
+
+    /// Pass 2: the minimizing curve with the data vertices at y (n × d) and data-row values
+    /// `s` (one row of d per data row first..first + len, i.e. T s = K y).
+    ///
+    /// # Errors
+    /// As [`Condensation::new`].
+    pub(crate) fn reconstruct(
+        &self,
+        knots: &Knots,
+        stencil: &Stencil,
+        y: &[f64],
+        s: &[f64],
+        d: usize,
+    ) -> Result<Points, Error> {
+        let nv = knots.vertex_count();
+        let n = self.n;
+        let m = self.stride;
+        let k = m - 1;
+        let spans = if self.closed { n } else { n - 1 };
+        let rows = &stencil.rows;
+        let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
+        let yp = |i: usize| {
+            let i = if i == n { 0 } else { i };
+            &y[i * d..(i + 1) * d]
+        };
+        // The data-row value of row i (zero for the end rows of an open curve).
+        let srow = |i: usize, c: usize| {
+            if i >= self.first && i - self.first < self.len() {
+                s[(i - self.first) * d + c]
+            } else {
+                0.0
+            }
+        };
+        let (mut l, mut u, mut g, mut h) = (vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]);
+        let mut x = vec![0.0; nv * d];
+        for i in 0..n {
+            x[i * m * d..(i * m + 1) * d].copy_from_slice(yp(i));
+        }
+        let mut f = vec![0.0; k * d];
+        for i in 0..spans {
+            let a = i * m;
+            let span_rows = &rows[a + 1..a + m];
+            span_lu(span_rows, &mut l, &mut u).map_err(|j| singular(a + 1 + j))?;
+            span_gh(span_rows, &l, &u, &mut g, &mut h);
+            let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
+            let (qa, qb) = (yp(i), yp(i + 1));
+            let right = if i + 1 == n { 0 } else { i + 1 };
+            for c in 0..d {
+                // x = B⁻¹(e − c), e = −μ g − ν h with μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1}.
+                let mu = rows[a][2] * srow(i, c);
+                let nu = rows[right * m][0] * srow(right, c);
+                for j in 0..k {
+                    f[j * d + c] = -mu * g[j] - nu * h[j];
+                }
+                f[c] -= c0 * qa[c];
+                f[(k - 1) * d + c] -= c1 * qb[c];
+            }
+            // B x = f: forward with L, backward with U (super-diagonal = α_{·,3}).
+            for j in 1..k {
+                for c in 0..d {
+                    f[j * d + c] -= l[j] * f[(j - 1) * d + c];
+                }
+            }
+            for c in 0..d {
+                f[(k - 1) * d + c] *= u[k - 1];
+            }
+            for j in (0..k - 1).rev() {
+                for c in 0..d {
+                    f[j * d + c] = (f[j * d + c] - span_rows[j][2] * f[(j + 1) * d + c]) * u[j];
+                }
+            }
+            x[(a + 1) * d..(a + m) * d].copy_from_slice(&f);
+        }
+        Ok(Points::new(d, x)?)
+    }
+}
+
 /// Solves the interpolation problem (3.3) on `knots` with q_i fixed at vertex `stride · i`,
 /// using the α-rows in `stencil` (built from the same knots).
 ///
@@ -90,114 +309,23 @@ pub(crate) fn interpolate(
     q: &Points,
     stride: usize,
 ) -> Result<Points, Error> {
-    let nv = knots.vertex_count();
     let d = q.dim();
     let n = q.len();
-    let closed = knots.is_closed();
-    let m = stride;
-    let k = m - 1;
-    let spans = if closed { n } else { n - 1 };
-    let rows = &stencil.rows;
-    let qn = |i: usize| q.point(if i == n { 0 } else { i });
-    let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
-
-    // Pass 1: per span, G = g·g, X = g·h, Y = h·h and the d-vectors g·c, h·c.
-    let mut gg = vec![0.0; spans];
-    let mut gh = vec![0.0; spans];
-    let mut hh = vec![0.0; spans];
-    let mut gc = vec![0.0; spans * d];
-    let mut hc = vec![0.0; spans * d];
-    let (mut l, mut u, mut g, mut h) = (vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]);
-    for i in 0..spans {
-        let a = i * m;
-        let span_rows = &rows[a + 1..a + m];
-        span_lu(span_rows, &mut l, &mut u).map_err(|j| singular(a + 1 + j))?;
-        span_gh(span_rows, &l, &u, &mut g, &mut h);
-        gg[i] = dot(&g, &g);
-        gh[i] = dot(&g, &h);
-        hh[i] = dot(&h, &h);
-        // c = α_{a+1,1} q_i e_0 + α_{a+k,3} q_{i+1} e_{k−1}.
-        let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
-        let (qa, qb) = (qn(i), qn(i + 1));
-        for c in 0..d {
-            gc[i * d + c] = c0 * qa[c] * g[0] + c1 * qb[c] * g[k - 1];
-            hc[i * d + c] = c0 * qa[c] * h[0] + c1 * qb[c] * h[k - 1];
-        }
-    }
-
-    // The data-row system for s (rows 0..n closed, 1..n−1 open), tridiagonal with off-diagonal
-    // e_i between unknowns i and i + 1.
-    let first = usize::from(!closed);
-    let last = if closed { n } else { n - 1 }; // exclusive
-    let size = last.saturating_sub(first);
-    let mut s = vec![0.0; n * d];
+    let cond = Condensation::new(knots, stencil, n, stride)?;
+    let size = cond.len();
+    let mut s = vec![0.0; size * d];
     if size > 0 {
-        let mut diag = vec![0.0; size];
-        let mut off = vec![0.0; size]; // off[j] couples unknowns j and j+1 (cyclic: last ↔ 0)
-        let mut rhs = vec![0.0; size * d];
-        for (j, i) in (first..last).enumerate() {
-            let ar = rows[i * m];
-            let prev = if i == 0 { spans - 1 } else { i - 1 };
-            diag[j] = 1.0 + ar[0] * ar[0] * hh[prev] + ar[2] * ar[2] * gg[i % spans];
-            let next = i + 1;
-            if next < last || closed {
-                let an = rows[(next % n) * m];
-                off[j] = ar[2] * an[0] * gh[i % spans];
-            }
-            let qi = q.point(i);
-            for c in 0..d {
-                rhs[j * d + c] =
-                    ar[1] * qi[c] - ar[0] * hc[prev * d + c] - ar[2] * gc[(i % spans) * d + c];
-            }
-        }
-        solve_tridiagonal(&mut diag, &mut off, &mut rhs, d, closed && size >= 3)
-            .map_err(|j| singular((first + j) * m))?;
-        for (j, i) in (first..last).enumerate() {
-            s[i * d..(i + 1) * d].copy_from_slice(&rhs[j * d..(j + 1) * d]);
-        }
+        cond.apply_k(q.coords(), d, &mut s);
+        let (mut diag, mut off) = (cond.diag.clone(), cond.off.clone());
+        solve_tridiagonal(&mut diag, &mut off, &mut s, d, cond.closed && size >= 3).map_err(
+            |j| {
+                Error::from(energy::Error::Singular {
+                    vertex: (cond.first + j) * stride,
+                })
+            },
+        )?;
     }
-
-    // Pass 2: recover every span, x = B⁻¹(e − c), e = −μ g − ν h.
-    let mut x = vec![0.0; nv * d];
-    for i in 0..n {
-        x[i * m * d..(i * m + 1) * d].copy_from_slice(q.point(i));
-    }
-    let mut f = vec![0.0; k * d];
-    for i in 0..spans {
-        let a = i * m;
-        let span_rows = &rows[a + 1..a + m];
-        span_lu(span_rows, &mut l, &mut u).map_err(|j| singular(a + 1 + j))?;
-        span_gh(span_rows, &l, &u, &mut g, &mut h);
-        let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
-        let (qa, qb) = (qn(i), qn(i + 1));
-        let right = if i + 1 == n { 0 } else { i + 1 };
-        for c in 0..d {
-            // μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1} (zero for the end rows of open curves).
-            let mu = rows[a][2] * s[i * d + c];
-            let nu = rows[right * m][0] * s[right * d + c];
-            for j in 0..k {
-                f[j * d + c] = -mu * g[j] - nu * h[j];
-            }
-            f[c] -= c0 * qa[c];
-            f[(k - 1) * d + c] -= c1 * qb[c];
-        }
-        // B x = f: forward with L, backward with U (super-diagonal = α_{·,3}).
-        for j in 1..k {
-            for c in 0..d {
-                f[j * d + c] -= l[j] * f[(j - 1) * d + c];
-            }
-        }
-        for c in 0..d {
-            f[(k - 1) * d + c] *= u[k - 1];
-        }
-        for j in (0..k - 1).rev() {
-            for c in 0..d {
-                f[j * d + c] = (f[j * d + c] - span_rows[j][2] * f[(j + 1) * d + c]) * u[j];
-            }
-        }
-        x[(a + 1) * d..(a + m) * d].copy_from_slice(&f);
-    }
-    Ok(Points::new(d, x)?)
+    cond.reconstruct(knots, stencil, q.coords(), &s, d)
 }
 
 /// Solves the symmetric tridiagonal (or, with `cyclic`, cyclic tridiagonal: `off[len−1]`

@@ -90,7 +90,14 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             _ => {}
         }
     }
-    // Balls alone: the paper's multiplier iteration (scalar banded solves) finds the active set
+    // Balls alone: the interior-point method condensed onto the data vertices
+    // (super::condensed), accepted when the independent certificate reaches the target.
+    if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
+        if let Some(sol) = condensed_balls(fp, radii)? {
+            return Ok(sol);
+        }
+    }
+    // Fallbacks. Balls alone: the paper's multiplier iteration (scalar banded solves) finds the active set
     // approximately, the active-set polish makes it exact; the certificate decides. The
     // interior-point solver is the fallback.
     if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
@@ -152,6 +159,46 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     }
     let _ = k;
     Ok(best)
+}
+
+/// The condensed interior-point solution of balls alone ([`super::condensed`]) if its
+/// certificate is at most [`super::exact::EXACT_KKT_TARGET`]; `None` (use a fallback) otherwise.
+fn condensed_balls(fp: &FixedProblem<'_>, radii: &[f64]) -> Result<Option<FixedSolution>, Error> {
+    let stencil = Stencil::new(fp.knots);
+    let mut iterations = 0;
+    for tolerance in [
+        super::condensed::CONDENSED_TOLERANCE,
+        super::condensed::CONDENSED_STRICT_TOLERANCE,
+    ] {
+        // A failure of the method (not converged) only means the fallbacks run.
+        let Ok(sol) =
+            super::condensed::solve_balls(fp.knots, &stencil, fp.q, radii, fp.stride, tolerance)
+        else {
+            return Ok(None);
+        };
+        iterations += sol.iterations;
+        let (cert, _) = super::certify::certify(
+            &stencil,
+            &sol.points,
+            fp.q,
+            fp.data_vertex,
+            fp.constraint,
+            Some(sol.multipliers.clone()),
+            super::certify::ACTIVE_REL_TOL,
+            &[],
+        );
+        if cert.kkt_residual <= super::exact::EXACT_KKT_TARGET {
+            return Ok(Some(FixedSolution {
+                points: sol.points,
+                multipliers: Some(sol.multipliers),
+                iterations,
+                stencil: Some(stencil),
+                extra: Vec::new(),
+                solver_kkt: None,
+            }));
+        }
+    }
+    Ok(None)
 }
 
 /// A data vertex on its sphere to this relative accuracy is treated as active by the polish.
