@@ -147,6 +147,8 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
                 "{e} (cubic bounds with more than two contacts per interval are not supported)"
             ),
         ),
+        E::StripViolated { side, .. } => InputError::new(side_name(*side), e),
+        E::Discontinuous { .. } => InputError::new("t", e),
         _ => InputError::new("", e),
     }
 }
