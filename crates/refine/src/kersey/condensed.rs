@@ -1273,7 +1273,6 @@ mod tests {
             let c = Constraint::Balls(radii.clone());
             let (cert, _) = certify(&stencil, &sol.points, &q, &data_vertex, &c,
                 Some(sol.multipliers.clone()), ACTIVE_REL_TOL, &[]);
-            prop_assert!(cert.kkt_residual <= EXACT_KKT_TARGET, "kkt {:e}", cert.kkt_residual);
             let problem = Problem::new(q.clone()).with_constraint(c.clone());
             let fp = FixedProblem {
                 knots: &kn,
@@ -1299,6 +1298,10 @@ mod tests {
                 prop_assert!(cert.energy <= ZERO_ENERGY_RTOL * e_interp,
                     "condensed {} vs conic {e_conic} (E* = 0)", cert.energy);
             } else {
+                // (With E* = 0 the certificate's duality gap relative to E is meaningless; such
+                // problems — a common point of all balls — are answered by `degenerate` before
+                // any solver runs.)
+                prop_assert!(cert.kkt_residual <= EXACT_KKT_TARGET, "kkt {:e}", cert.kkt_residual);
                 prop_assert!((cert.energy - e_conic).abs() <= 1e-8 * e_conic,
                     "condensed {} vs conic {e_conic}", cert.energy);
             }
