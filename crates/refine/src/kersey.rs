@@ -88,9 +88,9 @@ impl Problem {
     /// The interpolatory k-level refinement (3.3) of the data on their knots (the given knots or
     /// the parametrization), from data to refined vertices in closed form and without the
     /// certificate: O(N) with one streaming write of the N vertices (see the `uniform` module:
-    /// every span of the split is a cubic). The points and knots are those of
-    /// [`Problem::solve`] with `knot_iterations = 0` and no further levels, to rounding
-    /// (tested); use `solve` for the energy, reactions and the KKT certificate.
+    /// every span of the split is a cubic). The points are those of [`Problem::solve`] with
+    /// `knot_iterations = 0` and no further levels, to rounding (tested); their knots are
+    /// [`Problem::refined_knots`]. Use `solve` for the energy, reactions and the KKT certificate.
     ///
     /// # Errors
     /// Any validation error of [`Problem::validate`]; [`crate::Error::Unsupported`] unless the
@@ -100,11 +100,12 @@ impl Problem {
     /// use divdiff::Points;
     /// use refine::Problem;
     /// let square = Points::from_rows(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]).unwrap();
-    /// let (p, t) = Problem::new(square).with_k(3).refine_points().unwrap();
-    /// assert_eq!((p.len(), t.values().len()), (16, 17));
+    /// let problem = Problem::new(square).with_k(3);
+    /// let p = problem.refine_points().unwrap();
+    /// assert_eq!((p.len(), problem.refined_knots().unwrap().values().len()), (16, 17));
     /// assert_eq!(p.point(4), &[1.0, 0.0]); // the data are interpolated
     /// ```
-    pub fn refine_points(&self) -> Result<(divdiff::Points, divdiff::Knots), crate::Error> {
+    pub fn refine_points(&self) -> Result<divdiff::Points, crate::Error> {
         self.validate()?;
         let derivatives = self
             .tangents
@@ -117,9 +118,21 @@ impl Problem {
                 reason: "refine_points is interpolation with natural ends; use solve",
             });
         }
-        let knots = algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)?;
-        let points = uniform::interpolate(&knots, &self.points, self.k + 1)?;
-        Ok((points, knots))
+        uniform::interpolate_from_data_knots(
+            &self.data_knots_unvalidated()?,
+            &self.points,
+            self.k + 1,
+        )
+    }
+
+    /// The knots of the k-level split (3.1) of the data knots: the knots of
+    /// [`Problem::refine_points`] (and of the first solve of [`Problem::solve`]).
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`].
+    pub fn refined_knots(&self) -> Result<divdiff::Knots, crate::Error> {
+        self.validate()?;
+        algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)
     }
 
     /// Refuses an exact result whose independent certificate is above [`EXACT_ACCEPT_KKT`]:

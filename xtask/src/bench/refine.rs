@@ -94,7 +94,7 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     let k = 7;
     let reps = if opts.quick { 3 } else { 7 };
     println!("refine: interpolatory, closed, d = 2, k = {k}, knot_iterations = 0 (one solve)");
-    println!("  refine_points: closed form, data to refined vertices and knots, no certificate;");
+    println!("  refine_points: closed form, data to refined vertices, no certificate;");
     println!("  solve: the same points plus energy, reactions and the independent KKT certificate");
     println!(
         "  {:>8} {:>9} {:>14} {:>12} {:>10} {:>12}",

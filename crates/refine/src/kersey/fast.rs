@@ -364,49 +364,112 @@ pub(super) fn solve_tridiagonal(
     Ok(())
 }
 
-/// LDLᵀ of a symmetric tridiagonal matrix (diagonal `diag`, overwritten with the reciprocal
-/// pivots; off-diagonal `off`), solving for the `d` columns of `rhs` and, if given, one extra
-/// column `extra`. Pivots must be positive.
+/// L D Lᵀ x = b for the D columns of `x` (row-major) and, if not empty, the column `e`, given
+/// the multipliers `lm` and the reciprocal pivots `inv`. The columns' recurrences run side by
+/// side with their running values in registers (reading back a value just stored would put
+/// store forwarding on each chain).
+#[inline]
+fn substitute<const D: usize>(lm: &[f64], inv: &[f64], x: &mut [f64], e: &mut [f64]) {
+    let size = inv.len();
+    if size == 0 {
+        return;
+    }
+    let has_e = !e.is_empty();
+    let mut prev: [f64; D] = std::array::from_fn(|c| x[c]);
+    let mut pe = if has_e { e[0] } else { 0.0 };
+    for j in 1..size {
+        let l = lm[j];
+        for c in 0..D {
+            prev[c] = x[j * D + c] - l * prev[c];
+            x[j * D + c] = prev[c];
+        }
+        if has_e {
+            pe = e[j] - l * pe;
+            e[j] = pe;
+        }
+    }
+    let last = size - 1;
+    for c in 0..D {
+        prev[c] = x[last * D + c] * inv[last];
+        x[last * D + c] = prev[c];
+    }
+    if has_e {
+        pe = e[last] * inv[last];
+        e[last] = pe;
+    }
+    for j in (0..last).rev() {
+        let (l, iv) = (lm[j + 1], inv[j]);
+        for c in 0..D {
+            prev[c] = x[j * D + c] * iv - l * prev[c];
+            x[j * D + c] = prev[c];
+        }
+        if has_e {
+            pe = e[j] * iv - l * pe;
+            e[j] = pe;
+        }
+    }
+}
+
+/// LDLᵀ of a symmetric positive definite tridiagonal matrix (diagonal `diag`, overwritten with
+/// the reciprocal pivots; off-diagonal `off`), solving for the `d` columns of `rhs` and, if
+/// given, one extra column `extra`. Returns the row of a pivot that is not positive.
+///
+/// The pivots come from the determinant recurrence P_j = a_j P_{j−1} − b_{j−1}² P_{j−2}
+/// (P_{−1} = 1) as D_j = P_j / P_{j−1}: the continued fraction D_j = a_j − b_{j−1}²/D_{j−1} puts
+/// a division on the dependency chain of every row, the recurrence only a multiply-add (the
+/// divisions overlap). P is rescaled by a power of two, which is exact, whenever it leaves
+/// [1e-150, 1e150].
 fn ldl_solve(
     diag: &mut [f64],
     off: &[f64],
     rhs: &mut [f64],
     d: usize,
-    mut extra: Option<&mut Vec<f64>>,
+    extra: Option<&mut Vec<f64>>,
 ) -> Result<(), usize> {
     let size = diag.len();
-    // diag[j] ends as the reciprocal pivot 1/D_j: one division per row, the rest multiplies.
     let mut lm = vec![0.0; size];
+    let (mut p2, mut p1) = (0.0f64, 1.0f64);
     for j in 0..size {
-        if j > 0 {
-            lm[j] = off[j - 1] * diag[j - 1];
-            diag[j] -= lm[j] * off[j - 1];
-            for c in 0..d {
-                rhs[j * d + c] -= lm[j] * rhs[(j - 1) * d + c];
-            }
-            if let Some(e) = extra.as_deref_mut() {
-                e[j] -= lm[j] * e[j - 1];
-            }
-        }
-        if diag[j].is_nan() || diag[j] <= 0.0 {
+        let b = if j > 0 { off[j - 1] } else { 0.0 };
+        let p = diag[j] * p1 - b * b * p2;
+        let inv = p1 / p;
+        if !(inv > 0.0 && inv.is_finite()) {
             return Err(j);
         }
-        diag[j] = 1.0 / diag[j];
-    }
-    for j in (0..size).rev() {
-        for c in 0..d {
-            let mut y = rhs[j * d + c] * diag[j];
-            if j + 1 < size {
-                y -= lm[j + 1] * rhs[(j + 1) * d + c];
-            }
-            rhs[j * d + c] = y;
+        diag[j] = inv;
+        if j > 0 {
+            lm[j] = b * diag[j - 1];
         }
-        if let Some(e) = extra.as_deref_mut() {
-            let mut y = e[j] * diag[j];
-            if j + 1 < size {
-                y -= lm[j + 1] * e[j + 1];
+        (p2, p1) = (p1, p);
+        if !(1e-150..=1e150).contains(&p1) {
+            // P_j > 0 here (D_j > 0 and P_{j−1} > 0): scale both by 2^(−exponent of P_j).
+            let e = ((p1.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+            let scale = 2f64.powi(-e);
+            (p2, p1) = (p2 * scale, p1 * scale);
+        }
+    }
+    // Forward and backward substitution, one column at a time with the running value kept in
+    // a register (reading back the value just stored would put store forwarding on the chain).
+    let mut none: Vec<f64> = Vec::new();
+    let e: &mut [f64] = match extra {
+        Some(e) => e,
+        None => &mut none,
+    };
+    match d {
+        1 => substitute::<1>(&lm, diag, rhs, e),
+        2 => substitute::<2>(&lm, diag, rhs, e),
+        3 => substitute::<3>(&lm, diag, rhs, e),
+        _ => {
+            for c in 0..d {
+                let mut col: Vec<f64> = (0..size).map(|j| rhs[j * d + c]).collect();
+                substitute::<1>(&lm, diag, &mut col, &mut []);
+                for (j, v) in col.into_iter().enumerate() {
+                    rhs[j * d + c] = v;
+                }
             }
-            e[j] = y;
+            if !e.is_empty() {
+                substitute::<1>(&lm, diag, e, &mut []);
+            }
         }
     }
     Ok(())

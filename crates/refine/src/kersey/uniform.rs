@@ -38,20 +38,35 @@ use crate::Error;
 /// positive (impossible for valid knots: the system's diagonal is ≥ 1 and it is diagonally
 /// dominant; reported rather than assumed).
 pub(crate) fn interpolate(knots: &Knots, q: &Points, m: usize) -> Result<Points, Error> {
+    let t = knots.values();
+    let spans = knots.span_count() / m;
+    let h: Vec<f64> = (0..spans)
+        .map(|i| (t[(i + 1) * m] - t[i * m]) / m as f64)
+        .collect();
+    from_spans(&h, knots.is_closed(), q, m)
+}
+
+/// [`interpolate`] on the split of the data knots `u` (the refined knots are not built).
+pub(crate) fn interpolate_from_data_knots(
+    u: &Knots,
+    q: &Points,
+    m: usize,
+) -> Result<Points, Error> {
+    let t = u.values();
+    let h: Vec<f64> = t.windows(2).map(|w| (w[1] - w[0]) / m as f64).collect();
+    from_spans(&h, u.is_closed(), q, m)
+}
+
+/// The closed forms, given the sub-span length h_i of every data span.
+fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, Error> {
     let n = q.len();
     let d = q.dim();
-    let closed = knots.is_closed();
     let spans = if closed { n } else { n - 1 };
-    let t = knots.values();
     let k = (m - 1) as f64;
     let mf = m as f64;
     let y = q.coords();
     let yn = |i: usize| if i == n { 0 } else { i };
 
-    // Per span: h, h³ and the Gram numbers g·g = h·h and g·h (in units of h³).
-    let h: Vec<f64> = (0..spans)
-        .map(|i| (t[(i + 1) * m] - t[i * m]) / mf)
-        .collect();
     let gg_unit = k * (2.0 * k + 1.0) / (6.0 * mf);
     let gh_unit = k * (k + 2.0) / (6.0 * mf);
     // The data rows (α_{v_i,1}, α_{v_i,2}, α_{v_i,3}); zero rows at the ends of an open curve.
@@ -114,14 +129,16 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, m: usize) -> Result<Points,
         })
         .collect();
     let total = m * spans + usize::from(!closed);
-    let mut x = Vec::with_capacity(total * d);
-    // One span at a time into a small buffer (it stays in L1), then appended: no zeroing pass
-    // over the output and no per-value capacity checks.
-    let mut buf = vec![0.0; m * d];
     let mut mu = vec![0.0; d];
     let mut nu = vec![0.0; d];
     let mut dy = vec![0.0; d];
-    for i in 0..spans {
+    // One span (its data vertex and free vertices) per chunk; an open curve's last data point
+    // is the last chunk.
+    Ok(Points::from_chunks(d, total, m, |i, buf| {
+        if i == spans {
+            buf.copy_from_slice(q.point(n - 1));
+            return;
+        }
         let r = yn(i + 1);
         let h3 = h[i].powi(3);
         let (ya, yb) = (&y[i * d..(i + 1) * d], &y[r * d..(r + 1) * d]);
@@ -131,8 +148,8 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, m: usize) -> Result<Points,
             dy[c] = yb[c] - ya[c];
         }
         match d {
-            2 => fill::<2>(&mut buf, ya, &dy, &mu, &nu, &w),
-            3 => fill::<3>(&mut buf, ya, &dy, &mu, &nu, &w),
+            2 => fill::<2>(buf, ya, &dy, &mu, &nu, &w),
+            3 => fill::<3>(buf, ya, &dy, &mu, &nu, &w),
             _ => {
                 buf[..d].copy_from_slice(ya);
                 for (o, wl) in buf[d..].chunks_exact_mut(d).zip(&w) {
@@ -142,13 +159,7 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, m: usize) -> Result<Points,
                 }
             }
         }
-        // (A copying iterator over a slice extends with one capacity check, inlined.)
-        x.extend(buf.iter().copied());
-    }
-    if !closed {
-        x.extend_from_slice(q.point(n - 1));
-    }
-    Ok(Points::new(d, x)?)
+    })?)
 }
 
 /// One span's vertices (the data vertex, then the free ones) for fixed dimension D (see the
@@ -262,7 +273,7 @@ mod tests {
                 .with_k(k)
                 .with_parametrization(Parametrization::Centripetal)
                 .with_knot_iterations(0);
-            let (p, t) = problem.refine_points().unwrap();
+            let (p, t) = (problem.refine_points().unwrap(), problem.refined_knots().unwrap());
             let solved = problem.solve().unwrap();
             prop_assert!(solved.kkt_residual <= 1e-9, "kkt {}", solved.kkt_residual);
             // (`solve` parametrizes the centred data: the chords agree to rounding.)
