@@ -270,3 +270,22 @@ fn oversized_files_are_refused_before_reading() {
     }
     std::fs::remove_file(&big).unwrap();
 }
+
+/// Problems that need the general interior-point method (tangents, end conditions, half-spaces)
+/// are refused above `refine::MAX_CONIC_COORDS` first-stage coordinates: one such solve with
+/// 4 points and k = 10⁶ took 8 minutes (found by the fuzzer); balls alone at the same size are
+/// solved (condensed onto the data vertices).
+#[test]
+fn general_interior_point_problems_have_a_size_limit() {
+    let wedge = r#"{"type": "wedge", "direction": [1, 0], "half_angle": 0.5}"#;
+    let tangents =
+        format!(r#"{{"points": {SQUARE}, "k": 1000000, "tangents": [{wedge}, null, null, null]}}"#);
+    refused("refine", &tangents, "k");
+    let clamped = r#"{"points": [[0, 0], [1, 1], [2, 0], [3, 1]], "closed": false, "k": 1000000,
+        "boundary": {"type": "clamped", "start": [0, 2], "end": [0, -2]}}"#;
+    refused("refine", clamped, "k");
+    let halfspaces = format!(
+        r#"{{"points": {SQUARE}, "k": 1000000, "constraint": {{"type": "halfspaces", "sets": [[], [], [], []]}}}}"#
+    );
+    refused("refine", &halfspaces, "k");
+}

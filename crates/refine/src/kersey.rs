@@ -31,7 +31,7 @@ pub use fixed::{
 };
 pub use problem::{
     Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
-    DEFAULT_PAPER_ITERATIONS,
+    DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
 };
 pub use slots::halfplane_polygon;
 pub use split::{data_vertex, split};

@@ -365,7 +365,13 @@ impl super::Command for RefineCmd {
     fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
         validate(problem)?;
         let prob = to_library(problem)?;
-        let r = prob.solve().map_err(|e| InputError::new("", e))?;
+        let r = prob.solve().map_err(|e| match e {
+            refine::Error::TooLarge { field, limit } => InputError::new(
+                field,
+                format!("the first stage would exceed {limit} coordinates, the limit of the general interior-point solver (tangents, end conditions, half-spaces); lower k"),
+            ),
+            e => InputError::new("", e),
+        })?;
         Ok(to_result(r))
     }
 

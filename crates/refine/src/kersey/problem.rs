@@ -89,6 +89,12 @@ pub enum Solver {
     Paper,
 }
 
+/// Largest first-stage problem (refined vertices × dimension) accepted for the general
+/// interior-point method, i.e. with derivative constraints (tangents, clamped ends) or
+/// half-spaces under the exact solver. Interpolation, smoothing and balls alone have O(N)
+/// closed-form or condensed solvers and only the CLI's output limit.
+pub const MAX_CONIC_COORDS: usize = 2_000_000;
+
 /// Default number of intermediate points per span in the near-interpolatory step.
 pub const DEFAULT_K: usize = 3;
 /// Default number of knot updates per stage (Algorithm 4.1 step (v)).
@@ -233,7 +239,9 @@ impl Problem {
     /// level_k = 0, negative or NaN exponent), [`Error::WrongLength`], [`Error::InvalidKnots`],
     /// [`Error::InvalidValue`] (negative/NaN radius or weight, bad angle), [`Error::WrongDimension`],
     /// [`Error::TooFewWeights`], [`Error::Unsupported`] (boundary on a closed curve, the paper
-    /// solver with tangents or end constraints).
+    /// solver with tangents or end constraints), [`Error::TooLarge`] (`k`) when the exact solver
+    /// would need the general interior-point method on more than [`MAX_CONIC_COORDS`]
+    /// coordinates.
     pub fn validate(&self) -> Result<(), Error> {
         let n = self.points.len();
         let d = self.points.dim();
@@ -391,6 +399,33 @@ impl Problem {
                 check_dim("boundary.start", 0, start, d)?;
                 check_dim("boundary.end", 0, end, d)?;
                 check_nonneg_one("boundary.radius", 0, *radius)?;
+            }
+        }
+        // The general interior-point method (derivative constraints, half-spaces) costs O(N) per
+        // iteration over tens of iterations on the first stage's N vertices; beyond this size
+        // one solve takes minutes (4 points, k = 10⁶, tangent wedges: 8 minutes), so it is
+        // refused up front.
+        let general = self
+            .tangents
+            .as_ref()
+            .is_some_and(|t| t.iter().any(Option::is_some))
+            || self.boundary != Boundary::Natural
+            || matches!(self.constraint, Constraint::HalfSpaces(_));
+        if general && self.solver == Solver::Exact {
+            let spans = if self.topology == Topology::Closed {
+                n
+            } else {
+                n - 1
+            };
+            let coords = spans
+                .checked_mul(self.k.saturating_add(1))
+                .and_then(|v| v.checked_add(1))
+                .and_then(|v| v.checked_mul(d));
+            if coords.is_none_or(|c| c > MAX_CONIC_COORDS) {
+                return Err(Error::TooLarge {
+                    field: "k",
+                    limit: MAX_CONIC_COORDS,
+                });
             }
         }
         Ok(())
