@@ -305,4 +305,46 @@ mod tests {
             "{e}"
         );
     }
+
+    /// The smallest problems: an open segment (no data-row unknowns) is the straight line, and
+    /// a closed triangle and d = 1 agree with the certified solve.
+    #[test]
+    fn smallest_problems_agree_with_solve() {
+        use crate::Problem;
+        let segment = Problem::new(Points::from_rows(&[[0.0, 0.0], [3.0, 1.5]]).unwrap())
+            .with_topology(divdiff::Topology::Open)
+            .with_k(5)
+            .with_knot_iterations(0);
+        let p = segment.refine_points().unwrap();
+        assert_eq!(p.len(), 7);
+        for (j, x) in p.iter().enumerate() {
+            let s = j as f64 / 6.0;
+            assert!(
+                (x[0] - 3.0 * s).abs() < 1e-15 && (x[1] - 1.5 * s).abs() < 1e-15,
+                "{x:?}"
+            );
+        }
+        for (q, topology) in [
+            (
+                vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]],
+                divdiff::Topology::Closed,
+            ),
+            (
+                vec![vec![0.0], vec![1.0], vec![-2.0], vec![0.5]],
+                divdiff::Topology::Open,
+            ),
+        ] {
+            let problem = Problem::new(Points::from_rows(&q).unwrap())
+                .with_topology(topology)
+                .with_k(1)
+                .with_knot_iterations(0);
+            let (a, b) = (
+                problem.refine_points().unwrap(),
+                problem.solve().unwrap().points,
+            );
+            for (x, y) in a.coords().iter().zip(b.coords()) {
+                assert!((x - y).abs() < 1e-13, "{x} vs {y}");
+            }
+        }
+    }
 }
