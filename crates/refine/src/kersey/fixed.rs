@@ -93,8 +93,21 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     // Balls alone: the interior-point method condensed onto the data vertices
     // (super::condensed), accepted when the independent certificate reaches the target.
     if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
-        if let Some(sol) = condensed_balls(fp, radii)? {
-            return Ok(sol);
+        match condensed_balls(fp, radii)? {
+            Ok(sol) => return Ok(sol),
+            // The full-vertex fallbacks cost minutes beyond the general solver's size limit
+            // (a 10-point star with k = 10⁶ ran 15 minutes): refuse with the best residual.
+            Err((iterations, residual))
+                if fp.knots.vertex_count().saturating_mul(fp.q.dim())
+                    > super::problem::MAX_CONIC_COORDS =>
+            {
+                return Err(Error::NotConverged {
+                    solver: "condensed balls",
+                    iterations,
+                    residual,
+                });
+            }
+            Err(_) => {}
         }
     }
     // Fallbacks. Balls alone: the paper's multiplier iteration (scalar banded solves) finds the active set
@@ -162,10 +175,15 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
 }
 
 /// The condensed interior-point solution of balls alone ([`super::condensed`]) if its
-/// certificate is at most [`super::exact::EXACT_KKT_TARGET`]; `None` (use a fallback) otherwise.
-fn condensed_balls(fp: &FixedProblem<'_>, radii: &[f64]) -> Result<Option<FixedSolution>, Error> {
+/// certificate is at most [`super::exact::EXACT_KKT_TARGET`]; otherwise (use a fallback) the
+/// iterations spent and the best certificate reached (∞ if the method failed).
+fn condensed_balls(
+    fp: &FixedProblem<'_>,
+    radii: &[f64],
+) -> Result<Result<FixedSolution, (usize, f64)>, Error> {
     let stencil = Stencil::new(fp.knots);
     let mut iterations = 0;
+    let mut best = f64::INFINITY;
     for tolerance in [
         super::condensed::CONDENSED_TOLERANCE,
         super::condensed::CONDENSED_STRICT_TOLERANCE,
@@ -174,7 +192,7 @@ fn condensed_balls(fp: &FixedProblem<'_>, radii: &[f64]) -> Result<Option<FixedS
         let Ok(sol) =
             super::condensed::solve_balls(fp.knots, &stencil, fp.q, radii, fp.stride, tolerance)
         else {
-            return Ok(None);
+            return Ok(Err((iterations, best)));
         };
         iterations += sol.iterations;
         let (cert, _) = super::certify::certify(
@@ -188,7 +206,7 @@ fn condensed_balls(fp: &FixedProblem<'_>, radii: &[f64]) -> Result<Option<FixedS
             &[],
         );
         if cert.kkt_residual <= super::exact::EXACT_KKT_TARGET {
-            return Ok(Some(FixedSolution {
+            return Ok(Ok(FixedSolution {
                 points: sol.points,
                 multipliers: Some(sol.multipliers),
                 iterations,
@@ -197,8 +215,9 @@ fn condensed_balls(fp: &FixedProblem<'_>, radii: &[f64]) -> Result<Option<FixedS
                 solver_kkt: None,
             }));
         }
+        best = best.min(cert.kkt_residual);
     }
-    Ok(None)
+    Ok(Err((iterations, best)))
 }
 
 /// A data vertex on its sphere to this relative accuracy is treated as active by the polish.
