@@ -77,7 +77,8 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
                     }
                 }
                 let v = violation(&x);
-                if v <= tol {
+                // (A NaN coordinate is no common point, whatever `violation` reads.)
+                if v <= tol && x.iter().all(|c| c.is_finite()) {
                     return Some(x);
                 }
                 if v > (1.0 - COMMON_POINT_STAGNATION) * last {
@@ -121,7 +122,8 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
             for _ in 0..COMMON_POINT_SWEEPS {
                 project(&mut x);
                 let v = violation(&x);
-                if v <= tol {
+                // (A NaN coordinate is no common point, whatever `violation` reads.)
+                if v <= tol && x.iter().all(|c| c.is_finite()) {
                     return Some(x);
                 }
                 if v > (1.0 - COMMON_POINT_STAGNATION) * last {

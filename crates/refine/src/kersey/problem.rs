@@ -537,6 +537,14 @@ fn check_halfspaces(
         if h.normal.iter().all(|&x| x == 0.0) {
             return Err(bad("the normal must be non-zero"));
         }
+        // The solvers divide by |n|² and |n| (projections, distances): both must be normal
+        // floating-point numbers, and so must the offset in units of |n|.
+        let nn: f64 = h.normal.iter().map(|x| x * x).sum();
+        if !(nn.is_normal() && (h.offset / nn.sqrt()).is_finite()) {
+            return Err(bad(
+                "the normal's length (squared) must be a normal floating-point number and offset/|normal| finite: rescale the half-space",
+            ));
+        }
     }
     Ok(())
 }
