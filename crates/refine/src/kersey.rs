@@ -107,12 +107,7 @@ impl Problem {
     /// ```
     pub fn refine_points(&self) -> Result<divdiff::Points, crate::Error> {
         self.validate()?;
-        let derivatives = self
-            .tangents
-            .as_ref()
-            .is_some_and(|t| t.iter().any(Option::is_some))
-            || self.boundary != Boundary::Natural;
-        if self.constraint != Constraint::Interpolate || derivatives {
+        if self.constraint != Constraint::Interpolate || self.has_derivative_constraints() {
             return Err(crate::Error::Unsupported {
                 field: "constraint",
                 reason: "refine_points is interpolation with natural ends; use solve",

@@ -491,11 +491,7 @@ fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C:
         return Err(InputError::new("points", "given both in the problem and by --points").into());
     }
     obj.insert("points".into(), serde_json::Value::from(rows));
-    serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
-        let field = if path == "." { String::new() } else { path };
-        InputError::new(field, e.into_inner()).into()
-    })
+    serde_path_to_error::deserialize(value).map_err(path_error)
 }
 
 /// A regular file above [`MAX_INPUT_BYTES`] is refused from its metadata, before any byte is read

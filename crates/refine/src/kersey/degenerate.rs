@@ -7,7 +7,7 @@
 //! there (all multipliers vanish and ker H is not pinned down), so the constant curve is
 //! returned directly.
 
-use super::problem::{Boundary, Constraint, Problem};
+use super::problem::{Constraint, Problem};
 
 /// Sweeps of alternating projections onto the constraint sets before giving up on finding a
 /// common point (a cheap necessary test runs first, so this only runs when it can succeed).
@@ -29,12 +29,7 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// A point common to all data constraint sets, if the problem has no derivative constraints
 /// and such a point is found; `None` otherwise.
 pub(crate) fn common_point(problem: &Problem) -> Option<Vec<f64>> {
-    if problem
-        .tangents
-        .as_ref()
-        .is_some_and(|t| t.iter().any(Option::is_some))
-        || problem.boundary != Boundary::Natural
-    {
+    if problem.has_derivative_constraints() {
         return None;
     }
     let q = &problem.points;

@@ -5,7 +5,7 @@ use energy::{Hessian, System};
 
 use super::algorithm::{FixedProblem, FixedSolution};
 use super::operator::{self, Stencil};
-use super::problem::{Boundary, Constraint};
+use super::problem::Constraint;
 use crate::Error;
 
 /// Relative floor of the paper iteration's weights: w_i ≥ PAPER_WEIGHT_FLOOR · mean(H_jj).
@@ -27,11 +27,7 @@ pub(crate) fn hessian_system(knots: &Knots, dim: usize) -> Result<System, Error>
 }
 
 fn has_extra_constraints(fp: &FixedProblem<'_>) -> bool {
-    fp.problem
-        .tangents
-        .as_ref()
-        .is_some_and(|t| t.iter().any(Option::is_some))
-        || fp.problem.boundary != Boundary::Natural
+    fp.problem.has_derivative_constraints()
 }
 
 /// Interpolation at the data vertices whose `fixed` flag is set, plus weights `w` (0 = none) at

@@ -405,11 +405,7 @@ impl Problem {
         // iteration over tens of iterations on the first stage's N vertices; beyond this size
         // one solve takes minutes (4 points, k = 10⁶, tangent wedges: 8 minutes), so it is
         // refused up front.
-        let general = self
-            .tangents
-            .as_ref()
-            .is_some_and(|t| t.iter().any(Option::is_some))
-            || self.boundary != Boundary::Natural
+        let general = self.has_derivative_constraints()
             || matches!(self.constraint, Constraint::HalfSpaces(_));
         if general && self.solver == Solver::Exact {
             let spans = if self.topology == Topology::Closed {
@@ -429,6 +425,15 @@ impl Problem {
             }
         }
         Ok(())
+    }
+
+    /// Whether any tangent constraint or an end condition other than natural is present (the
+    /// constraints on Df that only the general interior-point method handles).
+    pub(crate) fn has_derivative_constraints(&self) -> bool {
+        self.tangents
+            .as_ref()
+            .is_some_and(|t| t.iter().any(Option::is_some))
+            || self.boundary != Boundary::Natural
     }
 
     /// The number of refined vertices after one `k`-level split of `n` data points (3.1):
