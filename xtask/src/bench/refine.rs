@@ -6,7 +6,11 @@
 //!   `CubicSpline` fit + evaluation at the same (k+1)n parameters (peer script
 //!   `xtask/peers/refine_peer.py`, run when python3 with scipy is importable);
 //! * balls, closed, k = 3: the exact optimum against Clarabel's solve of the same SOCP on the
-//!   same knots (Clarabel through its Rust crate, in this process).
+//!   same knots, twice: through its Rust crate in this process (the tight-tolerance ladder of
+//!   the tests' reference), and through its Python package (peer script `refine_peer.py balls`,
+//!   run when python3 with numpy, scipy and clarabel is importable) at Clarabel's default
+//!   settings and at tolerances 1e-10, timing `solve()` alone. The SOCP is the one built by
+//!   `clarabel_problem`, written to a temporary file.
 //!
 //! Every ratio is measured in the same run; nothing is asserted.
 
@@ -15,8 +19,9 @@
 #[path = "../../../crates/refine/tests/kersey_support/mod.rs"]
 mod clarabel_ref;
 
-use std::process::Command;
-use std::time::Duration;
+use std::io::Write;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
 
 use divdiff::Points;
 use refine::{Constraint, Problem};
@@ -87,6 +92,169 @@ fn peer(n: usize, k: usize, reps: usize) -> Option<f64> {
             None
         }
     }
+}
+
+/// Writes the conic program in the format `refine_peer.py balls` reads (documented there): a JSON
+/// header line padded to a multiple of 8 bytes, then little-endian int64/float64 arrays.
+fn write_socp(path: &std::path::Path, s: &clarabel_ref::SocpData) -> anyhow::Result<()> {
+    let mut header = serde_json::json!({
+        "n_vars": s.n_vars,
+        "m": s.b.len(),
+        "p_nnz": s.p.vals.len(),
+        "a_nnz": s.a.vals.len(),
+        "n_cones": s.cones.len(),
+        "constant": s.constant,
+    })
+    .to_string();
+    while !(header.len() + 1).is_multiple_of(8) {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut buf: Vec<u8> = header.into_bytes();
+    let ints = |buf: &mut Vec<u8>, v: &mut dyn Iterator<Item = usize>| -> anyhow::Result<()> {
+        for x in v {
+            buf.extend_from_slice(&i64::try_from(x)?.to_le_bytes());
+        }
+        Ok(())
+    };
+    let floats = |buf: &mut Vec<u8>, v: &[f64]| {
+        for x in v {
+            buf.extend_from_slice(&x.to_le_bytes());
+        }
+    };
+    ints(&mut buf, &mut s.p.rows.iter().copied())?;
+    ints(&mut buf, &mut s.p.cols.iter().copied())?;
+    floats(&mut buf, &s.p.vals);
+    floats(&mut buf, &s.q_lin);
+    ints(&mut buf, &mut s.a.rows.iter().copied())?;
+    ints(&mut buf, &mut s.a.cols.iter().copied())?;
+    floats(&mut buf, &s.a.vals);
+    floats(&mut buf, &s.b);
+    ints(
+        &mut buf,
+        &mut s.cones.iter().map(|(kind, _)| match kind {
+            clarabel_ref::ConeKind::Zero => 0,
+            clarabel_ref::ConeKind::SecondOrder => 1,
+            clarabel_ref::ConeKind::Nonnegative => 2,
+        }),
+    )?;
+    ints(&mut buf, &mut s.cones.iter().map(|&(_, dim)| dim))?;
+    std::fs::File::create(path)?.write_all(&buf)?;
+    Ok(())
+}
+
+/// Clarabel's `time_limit` (seconds, per solve) for the Python peer at n = 10^5; a run that hits
+/// it reports status `MaxTime` instead of a ratio.
+const BALLS_PEER_LARGE_LIMIT_S: f64 = 30.0;
+
+/// Wall-clock backstop for one run of the balls peer (both settings, all repetitions) beyond
+/// Clarabel's own `time_limit`: the child is killed and the comparison skipped.
+const BALLS_PEER_WALL_LIMIT: Duration = Duration::from_secs(300);
+
+/// Runs `refine_peer.py balls` on `socp` (`reps` repetitions, Clarabel `time_limit` seconds if
+/// given) and returns its JSON; `None` (after a one-line message) when python3, numpy, scipy or
+/// clarabel is missing or the peer fails.
+fn balls_peer(
+    n: usize,
+    socp: &clarabel_ref::SocpData,
+    reps: usize,
+    time_limit: Option<f64>,
+) -> Option<serde_json::Value> {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/peers/refine_peer.py");
+    let path = std::env::temp_dir().join(format!(
+        "curvefit-bench-balls-{}-{n}.socp",
+        std::process::id()
+    ));
+    if let Err(e) = write_socp(&path, socp) {
+        println!(
+            "  n = {n}: (peer skipped: cannot write {}: {e})",
+            path.display()
+        );
+        return None;
+    }
+    let mut args = vec![
+        script.to_string(),
+        "balls".to_string(),
+        path.display().to_string(),
+        reps.to_string(),
+    ];
+    if let Some(t) = time_limit {
+        args.push(t.to_string());
+    }
+    let result = run_with_limit(&args, BALLS_PEER_WALL_LIMIT);
+    let _ = std::fs::remove_file(&path);
+    match result {
+        Ok((true, stdout, _)) => match serde_json::from_slice(&stdout) {
+            Ok(v) => Some(v),
+            Err(e) => {
+                println!("  n = {n}: (peer skipped: unreadable output: {e})");
+                None
+            }
+        },
+        Ok((false, stdout, stderr)) => {
+            let why = String::from_utf8_lossy(&stdout);
+            let err = String::from_utf8_lossy(&stderr);
+            let last = err.lines().last().unwrap_or("");
+            println!(
+                "  n = {n}: (peer skipped: python3 with numpy/scipy/clarabel not usable: {} {last})",
+                why.trim()
+            );
+            None
+        }
+        Err(e) => {
+            println!("  n = {n}: (peer skipped: {e})");
+            None
+        }
+    }
+}
+
+/// Runs python3 with `args`, killing it after `limit`; (success, stdout, stderr).
+fn run_with_limit(args: &[String], limit: Duration) -> Result<(bool, Vec<u8>, Vec<u8>), String> {
+    let mut child = Command::new("python3")
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("python3 not runnable: {e}"))?;
+    let start = Instant::now();
+    loop {
+        match child.try_wait() {
+            Ok(Some(_)) => break,
+            Ok(None) if start.elapsed() > limit => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "python3 peer still running after {:.0} s, killed",
+                    limit.as_secs_f64()
+                ));
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+            Err(e) => return Err(format!("waiting for python3: {e}")),
+        }
+    }
+    let out = child
+        .wait_with_output()
+        .map_err(|e| format!("reading python3 output: {e}"))?;
+    Ok((out.status.success(), out.stdout, out.stderr))
+}
+
+/// Prints one settings run of the balls peer against our energy and time.
+fn print_balls_peer(n: usize, label: &str, run: &serde_json::Value, e_ours: f64, ours: Duration) {
+    let f = |key: &str| run[key].as_f64().unwrap_or(f64::NAN);
+    let solve = f("solve_s");
+    println!(
+        "  n = {n}: python clarabel {label}: {} in {} iterations, solve {:.2} ms (+ setup {:.2} ms), E = {:.9e}, |E_ours - E|/E_ours {:.1e} (from x: {:.1e}), max cone violation {:.1e}: ratio solve/ours {:.1}x, (setup+solve)/ours {:.1}x (target >= 50x)",
+        run["status"].as_str().unwrap_or("?"),
+        run["iterations"],
+        solve * 1e3,
+        f("setup_s") * 1e3,
+        f("energy"),
+        (e_ours - f("energy")).abs() / e_ours,
+        (e_ours - f("energy_x")).abs() / e_ours,
+        f("max_cone_violation"),
+        solve / ours.as_secs_f64(),
+        (solve + f("setup_s")) / ours.as_secs_f64()
+    );
 }
 
 /// Runs this group and prints its table.
@@ -201,28 +369,53 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
             sol.energy
         );
         if n <= 10_000 {
-            let start = std::time::Instant::now();
-            let reference = match clarabel_ref::clarabel_solve(&sol.knots, &q, &sol.data_vertex, &c)
-            {
-                Ok(r) => r,
-                Err(e) => {
+            let start = Instant::now();
+            match clarabel_ref::clarabel_solve(&sol.knots, &q, &sol.data_vertex, &c) {
+                Ok(reference) => {
+                    let tc = start.elapsed();
+                    let e_ref = energy::energy(&sol.knots, &reference.points)?;
                     println!(
-                        "  n = {n}: Clarabel gave no reference ({e}) after {:.2} ms",
-                        ms(start.elapsed())
+                        "  n = {n}: clarabel (Rust crate, tolerance ladder {:?}) {:.2} ms ({} iterations), E = {:.9e}, rel diff {:.1e}: ratio {:.1}x (target >= 50x)",
+                        clarabel_ref::CLARABEL_LADDER,
+                        ms(tc),
+                        reference.iterations,
+                        e_ref,
+                        (sol.energy - e_ref).abs() / e_ref,
+                        tc.as_secs_f64() / t.as_secs_f64()
                     );
-                    continue;
                 }
-            };
-            let tc = start.elapsed();
-            let e_ref = energy::energy(&sol.knots, &reference.points)?;
+                Err(e) => println!(
+                    "  n = {n}: clarabel (Rust crate, tolerance ladder {:?}) gave no reference ({e}) after {:.2} ms",
+                    clarabel_ref::CLARABEL_LADDER,
+                    ms(start.elapsed())
+                ),
+            }
+        }
+        // The Python peer: every size up to 10^4 (median of `reps`), 10^5 once with Clarabel's
+        // time limit BALLS_PEER_LARGE_LIMIT_S per solve.
+        let (peer_reps, limit) = if n <= 10_000 {
+            (reps.min(3), None)
+        } else {
+            (1, Some(BALLS_PEER_LARGE_LIMIT_S))
+        };
+        let socp = clarabel_ref::clarabel_problem(&sol.knots, &q, &sol.data_vertex, &c);
+        if let Some(v) = balls_peer(n, &socp, peer_reps, limit) {
             println!(
-                "  n = {n}: clarabel {:.2} ms ({} iterations), E = {:.9e}, rel diff {:.1e}: ratio {:.1}x (target >= 50x)",
-                ms(tc),
-                reference.iterations,
-                e_ref,
-                (sol.energy - e_ref).abs() / e_ref,
-                tc.as_secs_f64() / t.as_secs_f64()
+                "  n = {n}: SOCP {} variables, {} rows; ours {:.2} ms; Python clarabel {}{}:",
+                v["n_vars"],
+                v["m"],
+                ms(t),
+                v["clarabel"].as_str().unwrap_or("?"),
+                limit.map_or(String::new(), |l| format!(", time_limit {l} s"))
             );
+            print_balls_peer(
+                n,
+                "default settings (tol 1e-8)",
+                &v["default"],
+                sol.energy,
+                t,
+            );
+            print_balls_peer(n, "tol 1e-10", &v["tol_1e-10"], sol.energy, t);
         }
     }
     Ok(())

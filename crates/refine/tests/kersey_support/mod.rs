@@ -50,13 +50,56 @@ pub fn clarabel_solve(
 /// The tolerances tried by [`clarabel_solve`], most accurate useful first.
 pub const CLARABEL_LADDER: [f64; 3] = [CLARABEL_TOL, 1e-11, 1e-9];
 
-fn clarabel_solve_tol(
+/// The kind of cone a block of rows of `A x + s = b` lies in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConeKind {
+    /// `s = 0` (equalities).
+    Zero,
+    /// `s = (t, u)` with `|u| ≤ t`.
+    SecondOrder,
+    /// `s ≥ 0` componentwise.
+    Nonnegative,
+}
+
+/// A sparse matrix as coordinate triplets; repeated (row, column) pairs add.
+#[derive(Clone, Debug, Default)]
+pub struct Triplets {
+    /// Row indices.
+    pub rows: Vec<usize>,
+    /// Column indices.
+    pub cols: Vec<usize>,
+    /// Values.
+    pub vals: Vec<f64>,
+}
+
+/// The conic program handed to Clarabel, solver-neutral (also written out for the Python peer of
+/// `cargo xtask bench`): minimize ½xᵀPx + q_linᵀx + constant s.t. A x + s = b, s in the product
+/// of `cones` (in row order).
+#[derive(Clone, Debug)]
+pub struct SocpData {
+    /// Number of variables (vertices × dimension, vertex-major).
+    pub n_vars: usize,
+    /// The upper triangle of P (n_vars × n_vars).
+    pub p: Triplets,
+    /// The linear term.
+    pub q_lin: Vec<f64>,
+    /// The constraint matrix (b.len() × n_vars).
+    pub a: Triplets,
+    /// The constraint right-hand side.
+    pub b: Vec<f64>,
+    /// The cones, each with its number of rows, in row order.
+    pub cones: Vec<(ConeKind, usize)>,
+    /// The constant dropped from the objective (so the energy is the objective plus this).
+    pub constant: f64,
+}
+
+/// The fixed-knot problem as the conic program [`clarabel_solve`] solves (the one builder).
+pub fn clarabel_problem(
     knots: &Knots,
     q: &Points,
     data_vertex: &[usize],
     constraint: &Constraint,
-    tol: f64,
-) -> Result<Reference, String> {
+) -> SocpData {
     let nv = knots.vertex_count();
     let d = q.dim();
     let nx = nv * d;
@@ -112,11 +155,11 @@ fn clarabel_solve_tol(
         match constraint {
             Constraint::Interpolate => {
                 equality(&mut ai, &mut aj, &mut av, &mut b);
-                cones.push(SupportedConeT::ZeroConeT(d));
+                cones.push((ConeKind::Zero, d));
             }
             Constraint::Balls(r) if r[i] == 0.0 => {
                 equality(&mut ai, &mut aj, &mut av, &mut b);
-                cones.push(SupportedConeT::ZeroConeT(d));
+                cones.push((ConeKind::Zero, d));
             }
             Constraint::Balls(r) => {
                 b.push(r[i]);
@@ -126,7 +169,7 @@ fn clarabel_solve_tol(
                     av.push(1.0);
                     b.push(qc);
                 }
-                cones.push(SupportedConeT::SecondOrderConeT(d + 1));
+                cones.push((ConeKind::SecondOrder, d + 1));
             }
             Constraint::Smoothing(w) => {
                 for (c, &qc) in qi.iter().enumerate() {
@@ -147,14 +190,58 @@ fn clarabel_solve_tol(
                     b.push(hs.offset);
                 }
                 if !sets[i].is_empty() {
-                    cones.push(SupportedConeT::NonnegativeConeT(sets[i].len()));
+                    cones.push((ConeKind::Nonnegative, sets[i].len()));
                 }
             }
         }
     }
+    SocpData {
+        n_vars: nx,
+        p: Triplets {
+            rows: pi,
+            cols: pj,
+            vals: pv,
+        },
+        q_lin: lin,
+        a: Triplets {
+            rows: ai,
+            cols: aj,
+            vals: av,
+        },
+        b,
+        cones,
+        constant,
+    }
+}
+
+fn clarabel_solve_tol(
+    knots: &Knots,
+    q: &Points,
+    data_vertex: &[usize],
+    constraint: &Constraint,
+    tol: f64,
+) -> Result<Reference, String> {
+    let SocpData {
+        n_vars: nx,
+        p,
+        q_lin: lin,
+        a,
+        b,
+        cones,
+        constant,
+    } = clarabel_problem(knots, q, data_vertex, constraint);
+    let d = q.dim();
+    let cones: Vec<SupportedConeT<f64>> = cones
+        .into_iter()
+        .map(|(kind, dim)| match kind {
+            ConeKind::Zero => SupportedConeT::ZeroConeT(dim),
+            ConeKind::SecondOrder => SupportedConeT::SecondOrderConeT(dim),
+            ConeKind::Nonnegative => SupportedConeT::NonnegativeConeT(dim),
+        })
+        .collect();
     let m = b.len();
-    let p_mat = CscMatrix::new_from_triplets(nx, nx, pi, pj, pv);
-    let a_mat = CscMatrix::new_from_triplets(m, nx, ai, aj, av);
+    let p_mat = CscMatrix::new_from_triplets(nx, nx, p.rows, p.cols, p.vals);
+    let a_mat = CscMatrix::new_from_triplets(m, nx, a.rows, a.cols, a.vals);
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .max_iter(200)
