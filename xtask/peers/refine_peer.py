@@ -21,7 +21,9 @@ Usage: refine_peer.py balls FILE REPS [TIME_LIMIT_S]
   DefaultSolver(...), which equilibrates and assembles/factors symbolically) and times
   solver.solve() alone; medians over REPS. TIME_LIMIT_S (optional) is Clarabel's time_limit.
   For each run: status, solve_s, setup_s, iterations, energy (obj_val + constant),
-  energy_x (1/2 x'Px + q'x + constant recomputed here from x), max_cone_violation of s = b - Ax.
+  energy_x (1/2 x'Px + q'x + constant recomputed here from x; loses digits to cancellation when
+  P is large and E small), max_cone_violation of s = b - Ax, and x_file: the last solve's x,
+  written as little-endian float64 to FILE.x.<settings> for the bench to evaluate and delete.
 
 Each mode prints one JSON line. Exit code 3 when numpy/scipy (or, for balls, clarabel) is not
 importable (the bench then skips the comparison with a message).
@@ -150,7 +152,7 @@ def balls(path, reps, time_limit):
             s.tol_feas = tol
         return s
 
-    def run(tol):
+    def run(tol, label):
         setups, solves = [], []
         for _ in range(reps):
             st = settings(tol)
@@ -166,6 +168,8 @@ def balls(path, reps, time_limit):
         energy_x = 0.5 * (x @ (P @ x) + x @ (P.T @ x) - x @ (P.diagonal() * x)) + q @ x + constant
         setups.sort()
         solves.sort()
+        x_file = f"{path}.x.{label}"
+        x.astype("<f8").tofile(x_file)
         return {
             "status": str(sol.status),
             "solve_s": solves[len(solves) // 2],
@@ -175,14 +179,15 @@ def balls(path, reps, time_limit):
             "energy": sol.obj_val + constant,
             "energy_x": float(energy_x),
             "max_cone_violation": cone_violation(cones, s),
+            "x_file": x_file,
         }
 
     return {
         "n_vars": P.shape[0],
         "m": A.shape[0],
         "clarabel": getattr(clarabel, "__version__", "?"),
-        "default": run(None),
-        "tol_1e-10": run(1e-10),
+        "default": run(None, "default"),
+        "tol_1e-10": run(1e-10, "tol_1e-10"),
     }
 
 

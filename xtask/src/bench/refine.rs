@@ -156,13 +156,14 @@ const BALLS_PEER_WALL_LIMIT: Duration = Duration::from_secs(300);
 /// clarabel is missing or the peer fails.
 fn balls_peer(
     n: usize,
+    tag: &str,
     socp: &clarabel_ref::SocpData,
     reps: usize,
     time_limit: Option<f64>,
 ) -> Option<serde_json::Value> {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/peers/refine_peer.py");
     let path = std::env::temp_dir().join(format!(
-        "curvefit-bench-balls-{}-{n}.socp",
+        "curvefit-bench-balls-{}-{n}-{tag}.socp",
         std::process::id()
     ));
     if let Err(e) = write_socp(&path, socp) {
@@ -182,7 +183,9 @@ fn balls_peer(
         args.push(t.to_string());
     }
     let result = run_with_limit(&args, BALLS_PEER_WALL_LIMIT);
-    let _ = std::fs::remove_file(&path);
+    if std::env::var_os("KEEP_SOCP").is_none() {
+        let _ = std::fs::remove_file(&path);
+    }
     match result {
         Ok((true, stdout, _)) => match serde_json::from_slice(&stdout) {
             Ok(v) => Some(v),
@@ -238,23 +241,129 @@ fn run_with_limit(args: &[String], limit: Duration) -> Result<(bool, Vec<u8>, Ve
     Ok((out.status.success(), out.stdout, out.stderr))
 }
 
+/// What the bench needs to judge a peer's answer independently of Clarabel's own objective.
+struct BallsCase<'a> {
+    n: usize,
+    knots: &'a divdiff::Knots,
+    q: &'a Points,
+    radii: &'a [f64],
+    data_vertex: &'a [usize],
+    /// Our optimum's energy.
+    e_ours: f64,
+    /// Our solve time.
+    ours: Duration,
+}
+
+/// Reads the peer's x (little-endian float64, vertex-major) and deletes the file; returns the
+/// energy of those vertices by `energy::energy` (the divided-difference form, free of the
+/// cancellation in ½xᵀPx) and the largest ball violation max_i(|p_{i_k} − q_i| − ε_i).
+fn peer_points(case: &BallsCase, file: &str) -> anyhow::Result<(f64, f64)> {
+    let bytes = std::fs::read(file)?;
+    let _ = std::fs::remove_file(file);
+    let mut x: Vec<f64> = bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .collect();
+    // The vertices come first (the factored form appends its auxiliary z).
+    let nx = case.knots.vertex_count() * case.q.dim();
+    anyhow::ensure!(x.len() >= nx, "{} values, expected at least {nx}", x.len());
+    x.truncate(nx);
+    let p = Points::new(case.q.dim(), x)?;
+    let e = energy::energy(case.knots, &p)?;
+    let mut worst = f64::NEG_INFINITY;
+    for (i, &v) in case.data_vertex.iter().enumerate() {
+        let dist = p
+            .point(v)
+            .iter()
+            .zip(case.q.point(i))
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        worst = worst.max(dist - case.radii[i]);
+    }
+    Ok((e, worst.max(0.0)))
+}
+
 /// Prints one settings run of the balls peer against our energy and time.
-fn print_balls_peer(n: usize, label: &str, run: &serde_json::Value, e_ours: f64, ours: Duration) {
+fn print_balls_peer(case: &BallsCase, label: &str, run: &serde_json::Value) {
+    let n = case.n;
     let f = |key: &str| run[key].as_f64().unwrap_or(f64::NAN);
     let solve = f("solve_s");
+    let rel = |e: f64| (case.e_ours - e).abs() / case.e_ours;
+    let from_x = match run["x_file"].as_str().map(|file| peer_points(case, file)) {
+        Some(Ok((e, viol))) => format!(
+            "E(x) = {e:.9e} (rel diff {:.1e}, max ball violation {viol:.1e})",
+            rel(e)
+        ),
+        Some(Err(e)) => format!("x not evaluated: {e}"),
+        None => "no x".to_string(),
+    };
     println!(
-        "  n = {n}: python clarabel {label}: {} in {} iterations, solve {:.2} ms (+ setup {:.2} ms), E = {:.9e}, |E_ours - E|/E_ours {:.1e} (from x: {:.1e}), max cone violation {:.1e}: ratio solve/ours {:.1}x, (setup+solve)/ours {:.1}x (target >= 50x)",
+        "  n = {n}: python clarabel {label}: {} in {} iterations, solve {:.2} ms (+ setup {:.2} ms): ratio solve/ours {:.1}x, (setup+solve)/ours {:.1}x (target >= 50x)",
         run["status"].as_str().unwrap_or("?"),
         run["iterations"],
         solve * 1e3,
         f("setup_s") * 1e3,
-        f("energy"),
-        (e_ours - f("energy")).abs() / e_ours,
-        (e_ours - f("energy_x")).abs() / e_ours,
-        f("max_cone_violation"),
-        solve / ours.as_secs_f64(),
-        (solve + f("setup_s")) / ours.as_secs_f64()
+        solve / case.ours.as_secs_f64(),
+        (solve + f("setup_s")) / case.ours.as_secs_f64()
     );
+    println!(
+        "      objective + const = {:.9e} (rel diff to ours {:.1e}); {from_x}",
+        f("energy"),
+        rel(f("energy")),
+    );
+}
+
+/// The same problem in factored form, for the balls SOCP (whose objective is ½xᵀ(H ⊗ I_d)x with
+/// no linear term): with H = AᵀA (`energy::alphas`, row i on vertices i − 1, i, i + 1) and new
+/// variables z = (A ⊗ I_d)x, minimize ½|z|² subject to the original rows plus the equalities
+/// (A ⊗ I_d)x − z = 0 (a zero cone appended). Equivalent optimum, but Clarabel's KKT system no
+/// longer carries H, whose condition number (~N⁴ on a closed curve) is what stops it at
+/// `InsufficientProgress` as posed at n = 10^4. Vertices come first in x, then z.
+fn factored_energy(
+    socp: &clarabel_ref::SocpData,
+    knots: &divdiff::Knots,
+    d: usize,
+) -> clarabel_ref::SocpData {
+    let nv = knots.vertex_count();
+    let nx = nv * d;
+    assert_eq!(socp.n_vars, nx, "one variable per vertex coordinate");
+    assert!(
+        socp.q_lin.iter().all(|&v| v == 0.0) && socp.constant == 0.0,
+        "the factored form is for objectives ½xᵀ(H ⊗ I_d)x (balls, interpolation, half-spaces)"
+    );
+    let alphas = energy::alphas(knots);
+    let mut out = socp.clone();
+    out.n_vars = nx + nx;
+    out.q_lin = vec![0.0; nx + nx];
+    out.p = clarabel_ref::Triplets {
+        rows: (nx..nx + nx).collect(),
+        cols: (nx..nx + nx).collect(),
+        vals: vec![1.0; nx],
+    };
+    let m = socp.b.len();
+    for (i, row) in alphas.iter().enumerate() {
+        for c in 0..d {
+            let r = m + i * d + c;
+            for (j, &a) in row.iter().enumerate() {
+                // Row i of A acts on vertices i − 1, i, i + 1 (periodic for closed curves; the
+                // end rows of an open curve are zero).
+                if a == 0.0 {
+                    continue;
+                }
+                let v = (i + nv + j - 1) % nv;
+                out.a.rows.push(r);
+                out.a.cols.push(v * d + c);
+                out.a.vals.push(a);
+            }
+            out.a.rows.push(r);
+            out.a.cols.push(nx + i * d + c);
+            out.a.vals.push(-1.0);
+            out.b.push(0.0);
+        }
+    }
+    out.cones.push((clarabel_ref::ConeKind::Zero, nx));
+    out
 }
 
 /// Runs this group and prints its table.
@@ -399,23 +508,41 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
             (1, Some(BALLS_PEER_LARGE_LIMIT_S))
         };
         let socp = clarabel_ref::clarabel_problem(&sol.knots, &q, &sol.data_vertex, &c);
-        if let Some(v) = balls_peer(n, &socp, peer_reps, limit) {
+        let factored = factored_energy(&socp, &sol.knots, q.dim());
+        let case = BallsCase {
+            n,
+            knots: &sol.knots,
+            q: &q,
+            radii: &r,
+            data_vertex: &sol.data_vertex,
+            e_ours: sol.energy,
+            ours: t,
+        };
+        for (tag, form, program) in [
+            (
+                "posed",
+                "as posed (P = H ⊗ I_d, the tests' reference)",
+                &socp,
+            ),
+            (
+                "factored",
+                "factored (P = I on z = (A ⊗ I_d) x, H = AᵀA)",
+                &factored,
+            ),
+        ] {
+            let Some(v) = balls_peer(n, tag, program, peer_reps, limit) else {
+                break;
+            };
             println!(
-                "  n = {n}: SOCP {} variables, {} rows; ours {:.2} ms; Python clarabel {}{}:",
+                "  n = {n}: SOCP {form}: {} variables, {} rows; ours {:.2} ms; Python clarabel {}{}:",
                 v["n_vars"],
                 v["m"],
                 ms(t),
                 v["clarabel"].as_str().unwrap_or("?"),
                 limit.map_or(String::new(), |l| format!(", time_limit {l} s"))
             );
-            print_balls_peer(
-                n,
-                "default settings (tol 1e-8)",
-                &v["default"],
-                sol.energy,
-                t,
-            );
-            print_balls_peer(n, "tol 1e-10", &v["tol_1e-10"], sol.energy, t);
+            print_balls_peer(&case, "default settings (tol 1e-8)", &v["default"]);
+            print_balls_peer(&case, "tol 1e-10", &v["tol_1e-10"]);
         }
     }
     Ok(())
