@@ -87,8 +87,8 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 pub(crate) struct Condensation {
     /// Number of data points n.
     pub n: usize,
-    /// The data vertices' stride m = k + 1.
-    pub stride: usize,
+    /// The vertex of each data point (increasing; `new` spaces them `stride` apart).
+    pub vertices: Vec<usize>,
     /// Whether the curve is closed.
     pub closed: bool,
     /// The first data row with an unknown (0 closed, 1 open: the end rows are zero).
@@ -116,28 +116,64 @@ impl Condensation {
         n: usize,
         stride: usize,
     ) -> Result<Self, Error> {
+        let vertices: Vec<usize> = (0..n).map(|i| i * stride).collect();
+        Self::at_vertices(knots, stencil, vertices)
+    }
+
+    /// Pass 1 with the data points at the given increasing `vertices` of `knots` (any spacing
+    /// of at least two; the first is vertex 0, and for an open curve the last is the last
+    /// vertex): every other vertex is free. The working-set method of the balls solver
+    /// condenses onto a subset of the data vertices this way.
+    ///
+    /// # Errors
+    /// As [`Condensation::new`]; also `Singular` at a vertex whose span has no free vertex or
+    /// where the vertex list is not of that shape (an internal error, reported).
+    pub(crate) fn at_vertices(
+        knots: &Knots,
+        stencil: &Stencil,
+        vertices: Vec<usize>,
+    ) -> Result<Self, Error> {
         let closed = knots.is_closed();
-        let m = stride;
-        let k = m - 1;
+        let n = vertices.len();
+        let nv = knots.vertex_count();
         let spans = if closed { n } else { n - 1 };
         let rows = &stencil.rows;
         let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
+        // End of span i (exclusive: its right data vertex; nv for the closing span).
+        let end = |i: usize| if i + 1 < n { vertices[i + 1] } else { nv };
+        if vertices.first() != Some(&0) || (!closed && vertices.last() != Some(&(nv - 1))) {
+            return Err(singular(0));
+        }
+        let mut kmax = 0;
+        for (i, &a) in vertices[..spans].iter().enumerate() {
+            if end(i) < a + 2 {
+                return Err(singular(a));
+            }
+            kmax = kmax.max(end(i) - a - 1);
+        }
 
         // Per span: G = g·g, X = g·h, Y = h·h and the weights of the span's two data points in
-        // g·c and h·c: c = α_{a+1,1} q_i e_0 + α_{a+k,3} q_{i+1} e_{k−1}.
+        // g·c and h·c: c = α_{a+1,1} q_i e_0 + α_{b−1,3} q_{i+1} e_{k−1}.
         let mut gg = vec![0.0; spans];
         let mut gh = vec![0.0; spans];
         let mut hh = vec![0.0; spans];
         let mut cw = vec![[0.0; 4]; spans]; // [c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}]
-        let (mut l, mut u, mut g, mut h) = (vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]);
+        let (mut l, mut u, mut g, mut h) = (
+            vec![0.0; kmax],
+            vec![0.0; kmax],
+            vec![0.0; kmax],
+            vec![0.0; kmax],
+        );
         for i in 0..spans {
-            let a = i * m;
-            let span_rows = &rows[a + 1..a + m];
-            span_lu(span_rows, &mut l, &mut u).map_err(|j| singular(a + 1 + j))?;
-            span_gh(span_rows, &l, &u, &mut g, &mut h);
-            gg[i] = dot(&g, &g);
-            gh[i] = dot(&g, &h);
-            hh[i] = dot(&h, &h);
+            let (a, b) = (vertices[i], end(i));
+            let k = b - a - 1;
+            let span_rows = &rows[a + 1..b];
+            let (l, u, g, h) = (&mut l[..k], &mut u[..k], &mut g[..k], &mut h[..k]);
+            span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
+            span_gh(span_rows, l, u, g, h);
+            gg[i] = dot(g, g);
+            gh[i] = dot(g, h);
+            hh[i] = dot(h, h);
             let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
             cw[i] = [c0 * g[0], c1 * g[k - 1], c0 * h[0], c1 * h[k - 1]];
         }
@@ -149,13 +185,13 @@ impl Condensation {
         let mut off = vec![0.0; size];
         let mut krows = vec![[0.0; 3]; size];
         for (j, i) in (first..last).enumerate() {
-            let ar = rows[i * m];
+            let ar = rows[vertices[i]];
             let prev = if i == 0 { spans - 1 } else { i - 1 };
             let cur = i % spans;
             diag[j] = 1.0 + ar[0] * ar[0] * hh[prev] + ar[2] * ar[2] * gg[cur];
             let next = i + 1;
             if next < last || closed {
-                let an = rows[(next % n) * m];
+                let an = rows[vertices[next % n]];
                 off[j] = ar[2] * an[0] * gh[cur];
             }
             // (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
@@ -167,7 +203,7 @@ impl Condensation {
         }
         Ok(Condensation {
             n,
-            stride,
+            vertices,
             closed,
             first,
             diag,
@@ -236,9 +272,13 @@ impl Condensation {
     ) -> Result<Points, Error> {
         let nv = knots.vertex_count();
         let n = self.n;
-        let m = self.stride;
-        let k = m - 1;
+        let vertices = &self.vertices;
+        let end = |i: usize| if i + 1 < n { vertices[i + 1] } else { nv };
         let spans = if self.closed { n } else { n - 1 };
+        let kmax = (0..spans)
+            .map(|i| end(i) - vertices[i] - 1)
+            .max()
+            .unwrap_or(0);
         let rows = &stencil.rows;
         let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
         let yp = |i: usize| {
@@ -253,24 +293,32 @@ impl Condensation {
                 0.0
             }
         };
-        let (mut l, mut u, mut g, mut h) = (vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]);
+        let (mut l, mut u, mut g, mut h) = (
+            vec![0.0; kmax],
+            vec![0.0; kmax],
+            vec![0.0; kmax],
+            vec![0.0; kmax],
+        );
         let mut x = vec![0.0; nv * d];
-        for i in 0..n {
-            x[i * m * d..(i * m + 1) * d].copy_from_slice(yp(i));
+        for (i, &v) in vertices.iter().enumerate() {
+            x[v * d..(v + 1) * d].copy_from_slice(yp(i));
         }
-        let mut f = vec![0.0; k * d];
+        let mut f = vec![0.0; kmax * d];
         for i in 0..spans {
-            let a = i * m;
-            let span_rows = &rows[a + 1..a + m];
-            span_lu(span_rows, &mut l, &mut u).map_err(|j| singular(a + 1 + j))?;
-            span_gh(span_rows, &l, &u, &mut g, &mut h);
+            let (a, b) = (vertices[i], end(i));
+            let k = b - a - 1;
+            let span_rows = &rows[a + 1..b];
+            let (l, u, g, h) = (&mut l[..k], &mut u[..k], &mut g[..k], &mut h[..k]);
+            let f = &mut f[..k * d];
+            span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
+            span_gh(span_rows, l, u, g, h);
             let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
             let (qa, qb) = (yp(i), yp(i + 1));
             let right = if i + 1 == n { 0 } else { i + 1 };
             for c in 0..d {
                 // x = B⁻¹(e − c), e = −μ g − ν h with μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1}.
                 let mu = rows[a][2] * srow(i, c);
-                let nu = rows[right * m][0] * srow(right, c);
+                let nu = rows[vertices[right]][0] * srow(right, c);
                 for j in 0..k {
                     f[j * d + c] = -mu * g[j] - nu * h[j];
                 }
@@ -291,7 +339,7 @@ impl Condensation {
                     f[j * d + c] = (f[j * d + c] - span_rows[j][2] * f[(j + 1) * d + c]) * u[j];
                 }
             }
-            x[(a + 1) * d..(a + m) * d].copy_from_slice(&f);
+            x[(a + 1) * d..b * d].copy_from_slice(f);
         }
         Ok(Points::new(d, x)?)
     }
