@@ -258,6 +258,8 @@ struct BallsCase<'a> {
     e_ours: f64,
     /// Our solve time.
     ours: Duration,
+    /// Clarabel's `time_limit` for the peer, seconds.
+    time_limit: Option<f64>,
 }
 
 /// Reads the peer's x (little-endian float64, vertex-major) and deletes the file; returns the
@@ -316,8 +318,14 @@ fn print_balls_peer(case: &BallsCase, label: &str, run: &serde_json::Value) {
             solve / case.ours.as_secs_f64()
         )
     } else if matches!(status, "Solved" | "AlmostSolved") {
+        let at_limit = match case.time_limit {
+            Some(l) if f("clarabel_solve_time_s") >= 0.99 * l => {
+                " (converged in the iteration that reached its time_limit)"
+            }
+            _ => "",
+        };
         format!(
-            "ratio solve/ours {:.1}x, (setup+solve)/ours {:.1}x (target >= 50x)",
+            "ratio solve/ours {:.1}x, (setup+solve)/ours {:.1}x (target >= 50x){at_limit}",
             solve / case.ours.as_secs_f64(),
             (solve + f("setup_s")) / case.ours.as_secs_f64()
         )
@@ -540,6 +548,7 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
             data_vertex: &sol.data_vertex,
             e_ours: sol.energy,
             ours: t,
+            time_limit: limit,
         };
         for (tag, form, program) in [
             (
