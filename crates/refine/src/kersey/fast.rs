@@ -101,6 +101,9 @@ pub(crate) struct Condensation {
     /// K: row j holds the coefficients on the data points first + j − 1, first + j,
     /// first + j + 1 (indices modulo n on closed curves).
     pub krows: Vec<[f64; 3]>,
+    /// Per free vertex (indexed by vertex): its span's LU multiplier l and reciprocal pivot u,
+    /// and the entries of g = B⁻ᵀe_first and h = B⁻ᵀe_last (pass 1's work, reused by pass 2).
+    factors: [Vec<f64>; 4],
 }
 
 impl Condensation {
@@ -158,17 +161,20 @@ impl Condensation {
         let mut gh = vec![0.0; spans];
         let mut hh = vec![0.0; spans];
         let mut cw = vec![[0.0; 4]; spans]; // [c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}]
-        let (mut l, mut u, mut g, mut h) = (
-            vec![0.0; kmax],
-            vec![0.0; kmax],
-            vec![0.0; kmax],
-            vec![0.0; kmax],
-        );
+                                            // The span factors, kept for the second pass (indexed by vertex; the data vertices'
+                                            // entries are unused).
+        let (mut fl, mut fu, mut fg, mut fh) =
+            (vec![0.0; nv], vec![0.0; nv], vec![0.0; nv], vec![0.0; nv]);
         for i in 0..spans {
             let (a, b) = (vertices[i], end(i));
             let k = b - a - 1;
             let span_rows = &rows[a + 1..b];
-            let (l, u, g, h) = (&mut l[..k], &mut u[..k], &mut g[..k], &mut h[..k]);
+            let (l, u, g, h) = (
+                &mut fl[a + 1..b],
+                &mut fu[a + 1..b],
+                &mut fg[a + 1..b],
+                &mut fh[a + 1..b],
+            );
             span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
             span_gh(span_rows, l, u, g, h);
             gg[i] = dot(g, g);
@@ -209,6 +215,7 @@ impl Condensation {
             diag,
             off,
             krows,
+            factors: [fl, fu, fg, fh],
         })
     }
 
@@ -234,6 +241,40 @@ impl Condensation {
     /// points rather than with |y|.
     #[inline]
     pub(crate) fn apply_k(&self, y: &[f64], d: usize, out: &mut [f64]) {
+        match d {
+            1 => self.apply_k_d::<1>(y, out),
+            2 => self.apply_k_d::<2>(y, out),
+            3 => self.apply_k_d::<3>(y, out),
+            _ => self.apply_k_any(y, d, out),
+        }
+    }
+
+    /// [`Condensation::apply_k`] for a compile-time d: the rows that wrap around a closed curve
+    /// are done apart, so the others index without a modulo.
+    fn apply_k_d<const D: usize>(&self, y: &[f64], out: &mut [f64]) {
+        let size = self.krows.len();
+        if size < 3 || !self.closed {
+            return self.apply_k_any(y, D, out);
+        }
+        // Closed: row j has columns j − 1, j, j + 1 (first = 0).
+        let yc = |i: usize| -> [f64; D] { std::array::from_fn(|e| y[i * D + e]) };
+        let row = |j: usize, a: [f64; D], b: [f64; D], c: [f64; D], out: &mut [f64]| {
+            let kr = self.krows[j];
+            for e in 0..D {
+                out[j * D + e] = kr[0] * (a[e] - b[e]) + kr[2] * (c[e] - b[e]);
+            }
+        };
+        row(0, yc(size - 1), yc(0), yc(1), out);
+        let (mut a, mut b) = (yc(0), yc(1));
+        for j in 1..size - 1 {
+            let c = yc(j + 1);
+            row(j, a, b, c, out);
+            (a, b) = (b, c);
+        }
+        row(size - 1, a, b, yc(0), out);
+    }
+
+    fn apply_k_any(&self, y: &[f64], d: usize, out: &mut [f64]) {
         for (j, kr) in self.krows.iter().enumerate() {
             let (a, b, c) = (self.col(j, 0), self.col(j, 1), self.col(j, 2));
             for e in 0..d {
@@ -246,6 +287,36 @@ impl Condensation {
     /// out = Kᵀ s (n × d), s with one row per data row.
     #[inline]
     pub(crate) fn apply_kt(&self, s: &[f64], d: usize, out: &mut [f64]) {
+        match d {
+            1 => self.apply_kt_d::<1>(s, out),
+            2 => self.apply_kt_d::<2>(s, out),
+            3 => self.apply_kt_d::<3>(s, out),
+            _ => self.apply_kt_any(s, d, out),
+        }
+    }
+
+    /// [`Condensation::apply_kt`] for a compile-time d, gathering per output point (column i of
+    /// a closed curve collects rows i − 1, i, i + 1) without a modulo away from the ends.
+    fn apply_kt_d<const D: usize>(&self, s: &[f64], out: &mut [f64]) {
+        let size = self.krows.len();
+        if size < 3 || !self.closed {
+            return self.apply_kt_any(s, D, out);
+        }
+        let k = &self.krows;
+        let col = |i: usize, jp: usize, jn: usize, out: &mut [f64]| {
+            for e in 0..D {
+                out[i * D + e] =
+                    k[jp][2] * s[jp * D + e] + k[i][1] * s[i * D + e] + k[jn][0] * s[jn * D + e];
+            }
+        };
+        col(0, size - 1, 1, out);
+        for i in 1..size - 1 {
+            col(i, i - 1, i + 1, out);
+        }
+        col(size - 1, size - 2, 0, out);
+    }
+
+    fn apply_kt_any(&self, s: &[f64], d: usize, out: &mut [f64]) {
         out.fill(0.0);
         for (j, kr) in self.krows.iter().enumerate() {
             for (t, &kv) in kr.iter().enumerate() {
@@ -280,7 +351,6 @@ impl Condensation {
             .max()
             .unwrap_or(0);
         let rows = &stencil.rows;
-        let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
         let yp = |i: usize| {
             let i = if i == n { 0 } else { i };
             &y[i * d..(i + 1) * d]
@@ -293,12 +363,7 @@ impl Condensation {
                 0.0
             }
         };
-        let (mut l, mut u, mut g, mut h) = (
-            vec![0.0; kmax],
-            vec![0.0; kmax],
-            vec![0.0; kmax],
-            vec![0.0; kmax],
-        );
+        let [fl, fu, fg, fh] = &self.factors;
         let mut x = vec![0.0; nv * d];
         for (i, &v) in vertices.iter().enumerate() {
             x[v * d..(v + 1) * d].copy_from_slice(yp(i));
@@ -308,10 +373,8 @@ impl Condensation {
             let (a, b) = (vertices[i], end(i));
             let k = b - a - 1;
             let span_rows = &rows[a + 1..b];
-            let (l, u, g, h) = (&mut l[..k], &mut u[..k], &mut g[..k], &mut h[..k]);
+            let (l, u, g, h) = (&fl[a + 1..b], &fu[a + 1..b], &fg[a + 1..b], &fh[a + 1..b]);
             let f = &mut f[..k * d];
-            span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
-            span_gh(span_rows, l, u, g, h);
             let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
             let (qa, qb) = (yp(i), yp(i + 1));
             let right = if i + 1 == n { 0 } else { i + 1 };
