@@ -107,6 +107,9 @@ pub const CONDENSED_POLISH_SKIP: f64 = 1e-12;
 /// Changes of the polish's active set (a vertex leaving its ball joins it, a negative
 /// multiplier leaves it), each followed by a retried Newton step.
 pub const CONDENSED_POLISH_ACTIVE_CHANGES: usize = 3;
+/// A working-set round is judged (its curve checked against the balls outside the set) when
+/// its residual first reaches this; only an accepted round continues to the full tolerance.
+pub const CONDENSED_ROUND_TOLERANCE: f64 = 1e-6;
 /// A ball counts as active in the polish when its slack is at most this times its radius.
 pub const CONDENSED_POLISH_ACTIVE_RTOL: f64 = 1e-6;
 /// Normal stiffness of the polish's penalty, relative to the largest diagonal entry of Q.
@@ -788,6 +791,7 @@ fn solve_balls_d<const D: usize>(
     let mut best = f64::INFINITY;
     let (mut best_y, mut best_z) = (y.clone(), z.clone());
     let mut stalled = false;
+    let mut judged = false;
     let mut iterations = 0;
     let mut residual;
     let cone = |v: &[f64], i: usize| -> std::ops::Range<usize> {
@@ -838,6 +842,21 @@ fn solve_balls_d<const D: usize>(
         }
         if residual <= tolerance || nballs == 0 {
             break;
+        }
+        // A working-set round is judged once the iterate is good enough to tell which balls
+        // outside the set the curve leaves: only a round that is accepted there goes on to the
+        // full tolerance (and is judged again at the end).
+        if !judged && residual <= CONDENSED_ROUND_TOLERANCE {
+            judged = true;
+            let points = cond.reconstruct(knots, stencil, &y, &qop.s, d)?;
+            if !accept(&points) {
+                return Ok(CondensedSolution {
+                    points,
+                    multipliers: Vec::new(),
+                    iterations,
+                    complete: false,
+                });
+            }
         }
         if iterations >= CONDENSED_MAX_ITERATIONS {
             stalled = true;
