@@ -548,6 +548,7 @@ fn solve_balls_from(
     // (point, |p − q|/ε) of the balls outside the set whose points are near their spheres.
     let mut near: Vec<(usize, f64)> = Vec::new();
     let mut ratio = vec![0.0; n];
+    let mut prev: Option<Condensation> = None;
     loop {
         let idx: Vec<usize> = (0..n).filter(|&i| work[i]).collect();
         let everything = idx.len() == n;
@@ -558,6 +559,8 @@ fn solve_balls_from(
         let qw = Points::new(d, coords)?;
         let rw: Vec<f64> = idx.iter().map(|&i| radii[i]).collect();
         let vertices: Vec<usize> = idx.iter().map(|&i| i * stride).collect();
+        // (The spans the new points do not split keep their factors.)
+        let cond = Condensation::at_vertices_reusing(knots, stencil, vertices, prev.take())?;
         // The curve of a round is accepted when it stays inside every ball outside the set.
         let mut accept = |p: &Points| {
             near.clear();
@@ -570,11 +573,12 @@ fn solve_balls_from(
             !near.iter().any(|v| v.1 >= 1.0 - WORKING_SET_MARGIN)
         };
         let sub = match d {
-            1 => solve_balls_d::<1>(knots, stencil, &qw, &rw, vertices, tolerance, &mut accept),
-            2 => solve_balls_d::<2>(knots, stencil, &qw, &rw, vertices, tolerance, &mut accept),
-            3 => solve_balls_d::<3>(knots, stencil, &qw, &rw, vertices, tolerance, &mut accept),
-            _ => solve_balls_d::<0>(knots, stencil, &qw, &rw, vertices, tolerance, &mut accept),
+            1 => solve_balls_d::<1>(knots, stencil, &qw, &rw, &cond, tolerance, &mut accept),
+            2 => solve_balls_d::<2>(knots, stencil, &qw, &rw, &cond, tolerance, &mut accept),
+            3 => solve_balls_d::<3>(knots, stencil, &qw, &rw, &cond, tolerance, &mut accept),
+            _ => solve_balls_d::<0>(knots, stencil, &qw, &rw, &cond, tolerance, &mut accept),
         };
+        prev = Some(cond);
         let sub = match sub {
             Ok(sub) => sub,
             // A round that fails on a subset is repeated on all balls.
@@ -667,14 +671,14 @@ fn solve_balls_d<const D: usize>(
     stencil: &Stencil,
     q: &Points,
     radii: &[f64],
-    vertices: Vec<usize>,
+    cond: &Condensation,
     tolerance: f64,
     accept: &mut dyn FnMut(&Points) -> bool,
 ) -> Result<CondensedSolution, Error> {
     let n = q.len();
     let d = if D == 0 { q.dim() } else { D };
     let m = d + 1;
-    let cond = Condensation::at_vertices(knots, stencil, vertices.clone())?;
+    let vertices = &cond.vertices;
     let size = cond.len();
     let closed = cond.closed;
     let singular = |j: usize| {
@@ -1081,7 +1085,7 @@ fn solve_balls_d<const D: usize>(
             Some(NewtonSystem {
                 sys,
                 factor: None,
-                vertices: &vertices,
+                vertices,
                 rhs: vec![0.0; knots.vertex_count() * d],
             })
         } else {

@@ -104,6 +104,9 @@ pub(crate) struct Condensation {
     /// Per free vertex (indexed by vertex): its span's LU multiplier l and reciprocal pivot u,
     /// and the entries of g = B⁻ᵀe_first and h = B⁻ᵀe_last (pass 1's work, reused by pass 2).
     factors: [Vec<f64>; 4],
+    /// Per span: [g·g, g·h, h·h, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (reused by
+    /// [`Condensation::at_vertices_reusing`]).
+    spans: Vec<[f64; 7]>,
 }
 
 impl Condensation {
@@ -136,6 +139,22 @@ impl Condensation {
         stencil: &Stencil,
         vertices: Vec<usize>,
     ) -> Result<Self, Error> {
+        Self::at_vertices_reusing(knots, stencil, vertices, None)
+    }
+
+    /// [`Condensation::at_vertices`] reusing the span work of `prev`, a condensation of the
+    /// same knots onto other vertices: a span of `prev` that is also a span here (same ends)
+    /// keeps its factors; only the others are factored. (The working-set method adds vertices
+    /// between rounds, which splits a few spans.)
+    ///
+    /// # Errors
+    /// As [`Condensation::at_vertices`].
+    pub(crate) fn at_vertices_reusing(
+        knots: &Knots,
+        stencil: &Stencil,
+        vertices: Vec<usize>,
+        prev: Option<Condensation>,
+    ) -> Result<Self, Error> {
         let closed = knots.is_closed();
         let n = vertices.len();
         let nv = knots.vertex_count();
@@ -147,26 +166,36 @@ impl Condensation {
         if vertices.first() != Some(&0) || (!closed && vertices.last() != Some(&(nv - 1))) {
             return Err(singular(0));
         }
-        let mut kmax = 0;
         for (i, &a) in vertices[..spans].iter().enumerate() {
             if end(i) < a + 2 {
                 return Err(singular(a));
             }
-            kmax = kmax.max(end(i) - a - 1);
         }
-
-        // Per span: G = g·g, X = g·h, Y = h·h and the weights of the span's two data points in
-        // g·c and h·c: c = α_{a+1,1} q_i e_0 + α_{b−1,3} q_{i+1} e_{k−1}.
-        let mut gg = vec![0.0; spans];
-        let mut gh = vec![0.0; spans];
-        let mut hh = vec![0.0; spans];
-        let mut cw = vec![[0.0; 4]; spans]; // [c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}]
-                                            // The span factors, kept for the second pass (indexed by vertex; the data vertices'
-                                            // entries are unused).
-        let (mut fl, mut fu, mut fg, mut fh) =
-            (vec![0.0; nv], vec![0.0; nv], vec![0.0; nv], vec![0.0; nv]);
+        let prev = prev.filter(|p| p.closed == closed && p.factors[0].len() == nv);
+        // The span factors, kept for the second pass (indexed by vertex; the data vertices'
+        // entries are unused), and per span G = g·g, X = g·h, Y = h·h and the weights of its two
+        // data points in g·c and h·c, c = α_{a+1,1} q_i e_0 + α_{b−1,3} q_{i+1} e_{k−1}:
+        // [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}].
+        let (mut factors, prev_spans) = match prev {
+            Some(p) => (p.factors, Some((p.vertices, p.spans))),
+            None => (
+                [vec![0.0; nv], vec![0.0; nv], vec![0.0; nv], vec![0.0; nv]],
+                None,
+            ),
+        };
+        let mut span = vec![[0.0; 7]; spans];
+        let [fl, fu, fg, fh] = &mut factors;
         for i in 0..spans {
             let (a, b) = (vertices[i], end(i));
+            if let Some((pv, ps)) = &prev_spans {
+                if let Ok(p) = pv.binary_search(&a) {
+                    let pend = if p + 1 < pv.len() { pv[p + 1] } else { nv };
+                    if pend == b && p < ps.len() {
+                        span[i] = ps[p];
+                        continue;
+                    }
+                }
+            }
             let k = b - a - 1;
             let span_rows = &rows[a + 1..b];
             let (l, u, g, h) = (
@@ -177,11 +206,16 @@ impl Condensation {
             );
             span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
             span_gh(span_rows, l, u, g, h);
-            gg[i] = dot(g, g);
-            gh[i] = dot(g, h);
-            hh[i] = dot(h, h);
             let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
-            cw[i] = [c0 * g[0], c1 * g[k - 1], c0 * h[0], c1 * h[k - 1]];
+            span[i] = [
+                dot(g, g),
+                dot(g, h),
+                dot(h, h),
+                c0 * g[0],
+                c1 * g[k - 1],
+                c0 * h[0],
+                c1 * h[k - 1],
+            ];
         }
 
         let first = usize::from(!closed);
@@ -194,17 +228,17 @@ impl Condensation {
             let ar = rows[vertices[i]];
             let prev = if i == 0 { spans - 1 } else { i - 1 };
             let cur = i % spans;
-            diag[j] = 1.0 + ar[0] * ar[0] * hh[prev] + ar[2] * ar[2] * gg[cur];
+            diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
             let next = i + 1;
             if next < last || closed {
                 let an = rows[vertices[next % n]];
-                off[j] = ar[2] * an[0] * gh[cur];
+                off[j] = ar[2] * an[0] * span[cur][1];
             }
             // (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
             krows[j] = [
-                -ar[0] * cw[prev][2],
-                ar[1] - ar[0] * cw[prev][3] - ar[2] * cw[cur][0],
-                -ar[2] * cw[cur][1],
+                -ar[0] * span[prev][5],
+                ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
+                -ar[2] * span[cur][4],
             ];
         }
         Ok(Condensation {
@@ -215,7 +249,8 @@ impl Condensation {
             diag,
             off,
             krows,
-            factors: [fl, fu, fg, fh],
+            factors,
+            spans: span,
         })
     }
 
