@@ -700,7 +700,7 @@ fn solve_balls_d<const D: usize>(
     }
     t.factor().map_err(|j| singular(cond.first + j))?;
     let mut qop = QOp::<D> {
-        cond: &cond,
+        cond,
         t,
         u: vec![0.0; size * d],
         s: vec![0.0; size * d],
@@ -937,7 +937,7 @@ fn solve_balls_d<const D: usize>(
             break;
         }
         let mut ctx = NewtonCtx::<D> {
-            cond: &cond,
+            cond,
             ball: &ball,
             sc: &sc,
             dinv: &dinv,
