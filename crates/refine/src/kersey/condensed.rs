@@ -40,10 +40,12 @@
 //! [`WORKING_SET_MARGIN`]) — then it is feasible for all balls and optimal among a superset of
 //! curves, so optimal. Otherwise balls join W and the round repeats: all the violated (and
 //! nearly violated, [`WORKING_SET_NEAR`]) ones when they are few, else the local maxima of
-//! |p − q|/ε ([`WORKING_SET_WINDOW`]). W only grows, so this ends (at worst with all balls); it
-//! starts from the fixed points, the ends of an open curve and every
-//! [`WORKING_SET_START_STEP`]-th ball. Only the accepted round is polished. The multipliers of
-//! the balls outside W are 0.
+//! |p − q|/ε ([`WORKING_SET_WINDOW`]). W only grows, so this ends (at worst with all balls,
+//! taken at once after [`WORKING_SET_MAX_ROUNDS`]); it starts from the fixed points, the ends
+//! of an open curve and every [`WORKING_SET_START_STEP`]-th ball. A round is judged when its
+//! residual reaches [`CONDENSED_ROUND_TOLERANCE`], and only an accepted one is solved to the
+//! full tolerance and polished. Each round's condensation reuses the spans of the previous one
+//! that no new point splits. The multipliers of the balls outside W are 0.
 
 // The block kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
@@ -549,6 +551,7 @@ fn solve_balls_from(
     let mut near: Vec<(usize, f64)> = Vec::new();
     let mut ratio = vec![0.0; n];
     let mut prev: Option<Condensation> = None;
+    let mut rounds = 0;
     loop {
         let idx: Vec<usize> = (0..n).filter(|&i| work[i]).collect();
         let everything = idx.len() == n;
@@ -602,7 +605,11 @@ fn solve_balls_from(
                 complete: true,
             });
         }
-        if near.len() * WORKING_SET_ADD_ALL <= idx.len() {
+        rounds += 1;
+        if rounds >= WORKING_SET_MAX_ROUNDS {
+            // (A bound on the work: the next round takes every ball.)
+            work.fill(true);
+        } else if near.len() * WORKING_SET_ADD_ALL <= idx.len() {
             // Few left: all of them (and the near ones) join.
             for &(i, _) in &near {
                 work[i] = true;
@@ -661,6 +668,9 @@ pub const WORKING_SET_NEAR: f64 = 0.02;
 /// When the near balls number at most 1/this of the working set, all of them join; otherwise
 /// only the local maxima of |p − q|/ε within [`WORKING_SET_WINDOW`] points.
 pub const WORKING_SET_ADD_ALL: usize = 2;
+/// After this many rounds the working set becomes all balls (one more round ends the method),
+/// which bounds its work at this many + 1 solves however the sets grow.
+pub const WORKING_SET_MAX_ROUNDS: usize = 16;
 /// Half-width (in data points) of the window of the local-maximum rule.
 pub const WORKING_SET_WINDOW: usize = 16;
 
@@ -1487,7 +1497,8 @@ mod tests {
         }
 
         /// The condensed interior-point optimum is certified at the exact target and agrees
-        /// with the full-vertex conic solver's optimum (energies to 1e-8 relative), with
+        /// with the full-vertex conic solver's optimum (energies to 1e-8 relative; where that
+        /// solver's own result is not certified, the condensed energy is not above it), with
         /// radius-0 (fixed) data points mixed among the balls.
         #[test]
         fn condensed_balls_match_the_conic_solver(
@@ -1519,6 +1530,11 @@ mod tests {
             };
             let (conic, _, _) = super::super::exact::solve(&fp, crate::CONIC_TOLERANCE).unwrap();
             let e_conic = energy::energy(&kn, &conic.points).unwrap();
+            // The reference's own certificate: only a certified reference is an optimum to agree
+            // with both ways; an uncertified one (the full-vertex method reaches 3e-8…6e-8 on some
+            // open curves with very unequal spans) only bounds the optimum from above.
+            let (reference, _) = certify(&stencil, &conic.points, &q, &data_vertex, &c,
+                conic.multipliers.clone(), ACTIVE_REL_TOL, &[]);
             // Optima with E* = 0 (data within reach of a straight open curve) are reached by
             // each solver only to its tolerance: both must then be below 1e-12 × the energy of
             // interpolating the centres.
@@ -1535,8 +1551,14 @@ mod tests {
                 // problems — a common point of all balls — are answered by `degenerate` before
                 // any solver runs.)
                 prop_assert!(cert.kkt_residual <= EXACT_KKT_TARGET, "kkt {:e}", cert.kkt_residual);
-                prop_assert!((cert.energy - e_conic).abs() <= 1e-8 * e_conic,
-                    "condensed {} vs conic {e_conic}", cert.energy);
+                if reference.kkt_residual <= EXACT_KKT_TARGET {
+                    prop_assert!((cert.energy - e_conic).abs() <= 1e-8 * e_conic,
+                        "condensed {} vs conic {e_conic}", cert.energy);
+                } else {
+                    prop_assert!(cert.energy <= e_conic * (1.0 + 1e-8),
+                        "condensed {} above the uncertified conic {e_conic} (kkt {:e})",
+                        cert.energy, reference.kkt_residual);
+                }
             }
         }
     }
