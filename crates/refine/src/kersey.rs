@@ -169,6 +169,7 @@ pub(crate) fn solve_stage0_on(
         problem,
         stride,
         uniform_spans: false,
+        working_set: None,
     };
     let s = fixed::exact(&fp)?;
     let stencil = s.stencil.unwrap_or_else(|| operator::Stencil::new(knots));

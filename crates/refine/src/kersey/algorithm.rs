@@ -103,6 +103,9 @@ pub(crate) struct FixedProblem<'a> {
     /// The knots are exactly the k-level split (3.1) of the data knots (each data span divided
     /// into `stride` equal sub-spans), so the closed forms of [`super::uniform`] apply.
     pub uniform_spans: bool,
+    /// Balls that start the working set of the condensed balls method (those active in the
+    /// previous knot iteration's solution); `None`: the default start.
+    pub working_set: Option<&'a [bool]>,
 }
 
 fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
@@ -267,6 +270,8 @@ fn stage_loop(
     iterations: &mut Iterations,
 ) -> Result<(Points, Vec<Vec<f64>>, Certificate), Error> {
     let mut sol: Option<FixedSolution> = None;
+    // The balls active in the last solution (multiplier > 0) start the next working set.
+    let mut working_set: Option<Vec<bool>> = None;
     for _ in 0..=problem.knot_iterations {
         if let Some(FixedSolution { points, .. }) = &sol {
             *knots =
@@ -287,8 +292,16 @@ fn stage_loop(
             stride,
             // Until the first knot update the knots are those of `split_knots`.
             uniform_spans: sol.is_none(),
+            working_set: working_set.as_deref(),
         };
         let s = dispatch(&fp)?;
+        if let (Constraint::Balls(_), Some(m)) = (constraint, &s.multipliers) {
+            working_set = Some(
+                m.iter()
+                    .map(|w| w.first().is_some_and(|&w| w > 0.0))
+                    .collect(),
+            );
+        }
         iterations.solves += 1;
         iterations.solver += s.iterations;
         sol = Some(s);

@@ -522,13 +522,15 @@ pub(crate) fn solve_balls(
     radii: &[f64],
     stride: usize,
     tolerance: f64,
+    start: Option<&[bool]>,
 ) -> Result<CondensedSolution, Error> {
     let step = (q.len() / WORKING_SET_START_POINTS).clamp(1, WORKING_SET_START_STEP);
-    solve_balls_from(knots, stencil, q, radii, stride, tolerance, step)
+    solve_balls_from(knots, stencil, q, radii, stride, tolerance, step, start)
 }
 
 /// [`solve_balls`] with the working set started from every `step`-th ball (1: all balls, a
-/// single round).
+/// single round) and the balls marked in `start`.
+#[allow(clippy::too_many_arguments)]
 fn solve_balls_from(
     knots: &Knots,
     stencil: &Stencil,
@@ -537,6 +539,7 @@ fn solve_balls_from(
     stride: usize,
     tolerance: f64,
     step: usize,
+    start: Option<&[bool]>,
 ) -> Result<CondensedSolution, Error> {
     let n = q.len();
     let d = q.dim();
@@ -544,7 +547,12 @@ fn solve_balls_from(
     // The fixed points and the ends of an open curve are always in the working set; of the
     // balls, every `step`-th to start with.
     let mut work: Vec<bool> = (0..n)
-        .map(|i| radii[i] == 0.0 || i % step == 0 || (!closed && i + 1 == n))
+        .map(|i| {
+            radii[i] == 0.0
+                || i % step == 0
+                || (!closed && i + 1 == n)
+                || start.is_some_and(|s| s.get(i) == Some(&true))
+        })
         .collect();
     let mut iterations = 0;
     // (point, |p − q|/ε) of the balls outside the set whose points are near their spheres.
@@ -1512,7 +1520,7 @@ mod tests {
             // Valid problems have distinct consecutive data points (Problem::validate).
             prop_assume!((0..n - 1).all(|i| super::super::fixed::dist(q.point(i), q.point(i + 1)) > 0.05));
             let stencil = Stencil::new(&kn);
-            let sol = solve_balls(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE).unwrap();
+            let sol = solve_balls(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE, None).unwrap();
             let data_vertex: Vec<usize> = (0..n).map(|i| i * m).collect();
             let c = Constraint::Balls(radii.clone());
             let (cert, _) = certify(&stencil, &sol.points, &q, &data_vertex, &c,
@@ -1527,6 +1535,7 @@ mod tests {
                 stride: m,
                 // Random knots, not a k-level split.
                 uniform_spans: false,
+                working_set: None,
             };
             let (conic, _, _) = super::super::exact::solve(&fp, crate::CONIC_TOLERANCE).unwrap();
             let e_conic = energy::energy(&kn, &conic.points).unwrap();
@@ -1566,9 +1575,9 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
 
-        /// The working-set method (started from every 2nd…9th ball) reaches the optimum of the
-        /// single round on all balls: energies to 1e-9 relative, both certified at the exact
-        /// target, every ball respected.
+        /// The working-set method (started from every 2nd…9th ball, and also with a random start
+        /// set) reaches the optimum of the single round on all balls: energies to 1e-9 relative,
+        /// all certified at the exact target, every ball respected.
         #[test]
         fn the_working_set_reaches_the_optimum_of_all_balls(
             n in 8usize..40,
@@ -1611,13 +1620,20 @@ mod tests {
                 certify(&stencil, &sol.points, &q, &data_vertex, &c,
                     Some(sol.multipliers.clone()), ACTIVE_REL_TOL, &[]).0
             };
-            let all = super::solve_balls_from(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE, 1).unwrap();
-            let ws = super::solve_balls_from(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE, step).unwrap();
+            let all = super::solve_balls_from(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE, 1, None).unwrap();
+            let ws = super::solve_balls_from(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE, step, None).unwrap();
             let (ca, cw) = (judge(&all), judge(&ws));
             prop_assert!(ca.kkt_residual <= EXACT_KKT_TARGET, "all: kkt {:e}", ca.kkt_residual);
             prop_assert!(cw.kkt_residual <= EXACT_KKT_TARGET, "working set: kkt {:e}", cw.kkt_residual);
             prop_assert!((ca.energy - cw.energy).abs() <= 1e-9 * ca.energy,
                 "all {} vs working set {}", ca.energy, cw.energy);
+            // A start set (as the previous knot iteration's active balls give it): any set works.
+            let start: Vec<bool> = (0..n).map(|_| uniform() < 0.2).collect();
+            let hinted = super::solve_balls_from(&kn, &stencil, &q, &radii, m, CONDENSED_TOLERANCE, step, Some(&start)).unwrap();
+            let ch = judge(&hinted);
+            prop_assert!(ch.kkt_residual <= EXACT_KKT_TARGET, "started: kkt {:e}", ch.kkt_residual);
+            prop_assert!((ca.energy - ch.energy).abs() <= 1e-9 * ca.energy,
+                "all {} vs started working set {}", ca.energy, ch.energy);
             for i in 0..n {
                 let g = super::super::fixed::dist(ws.points.point(i * m), q.point(i));
                 prop_assert!(g <= radii[i] * (1.0 + 1e-9) + 1e-12, "ball {i}: {g} > {}", radii[i]);
@@ -1635,14 +1651,14 @@ mod tests {
         fn zero_radii_interpolate_and_huge_radii_give_zero_energy((kn, n, m, y, d) in case()) {
             let q = Points::new(d, y).unwrap();
             let stencil = Stencil::new(&kn);
-            let fixed = solve_balls(&kn, &stencil, &q, &vec![0.0; n], m, CONDENSED_TOLERANCE).unwrap();
+            let fixed = solve_balls(&kn, &stencil, &q, &vec![0.0; n], m, CONDENSED_TOLERANCE, None).unwrap();
             let interp = super::super::fast::interpolate(&kn, &stencil, &q, m).unwrap();
             let scale = interp.coords().iter().fold(1.0f64, |a, v| a.max(v.abs()));
             for (a, b) in fixed.points.coords().iter().zip(interp.coords()) {
                 prop_assert!((a - b).abs() <= 1e-13 * scale, "{a} vs {b}");
             }
             let e_interp = energy::energy(&kn, &interp).unwrap();
-            let sol = solve_balls(&kn, &stencil, &q, &vec![10.0; n], m, CONDENSED_TOLERANCE).unwrap();
+            let sol = solve_balls(&kn, &stencil, &q, &vec![10.0; n], m, CONDENSED_TOLERANCE, None).unwrap();
             let e = energy::energy(&kn, &sol.points).unwrap();
             prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp.max(f64::MIN_POSITIVE), "E = {e} (interpolation {e_interp})");
         }

@@ -185,9 +185,15 @@ fn condensed_balls(
         super::condensed::CONDENSED_STRICT_TOLERANCE,
     ] {
         // A failure of the method (not converged) only means the fallbacks run.
-        let Ok(sol) =
-            super::condensed::solve_balls(fp.knots, &stencil, fp.q, radii, fp.stride, tolerance)
-        else {
+        let Ok(sol) = super::condensed::solve_balls(
+            fp.knots,
+            &stencil,
+            fp.q,
+            radii,
+            fp.stride,
+            tolerance,
+            fp.working_set,
+        ) else {
             return Ok(Err((iterations, best)));
         };
         iterations += sol.iterations;
