@@ -377,15 +377,32 @@ impl Condensation {
         d: usize,
     ) -> Result<Points, Error> {
         let nv = knots.vertex_count();
+        let mut x = vec![0.0; nv * d];
+        match d {
+            1 => self.reconstruct_into::<1>(&stencil.rows, y, s, 1, &mut x),
+            2 => self.reconstruct_into::<2>(&stencil.rows, y, s, 2, &mut x),
+            3 => self.reconstruct_into::<3>(&stencil.rows, y, s, 3, &mut x),
+            _ => self.reconstruct_into::<0>(&stencil.rows, y, s, d, &mut x),
+        }
+        Ok(Points::new(d, x)?)
+    }
+
+    /// [`Condensation::reconstruct`] into `x` (N × d), with d a compile-time constant for
+    /// d = 1, 2, 3 (`D` = 0: `d`). Each span is solved in place in its slice of `x`.
+    fn reconstruct_into<const D: usize>(
+        &self,
+        rows: &[[f64; 3]],
+        y: &[f64],
+        s: &[f64],
+        d: usize,
+        x: &mut [f64],
+    ) {
+        let d = if D == 0 { d } else { D };
+        let nv = x.len() / d;
         let n = self.n;
         let vertices = &self.vertices;
         let end = |i: usize| if i + 1 < n { vertices[i + 1] } else { nv };
         let spans = if self.closed { n } else { n - 1 };
-        let kmax = (0..spans)
-            .map(|i| end(i) - vertices[i] - 1)
-            .max()
-            .unwrap_or(0);
-        let rows = &stencil.rows;
         let yp = |i: usize| {
             let i = if i == n { 0 } else { i };
             &y[i * d..(i + 1) * d]
@@ -399,20 +416,18 @@ impl Condensation {
             }
         };
         let [fl, fu, fg, fh] = &self.factors;
-        let mut x = vec![0.0; nv * d];
         for (i, &v) in vertices.iter().enumerate() {
             x[v * d..(v + 1) * d].copy_from_slice(yp(i));
         }
-        let mut f = vec![0.0; kmax * d];
         for i in 0..spans {
             let (a, b) = (vertices[i], end(i));
             let k = b - a - 1;
             let span_rows = &rows[a + 1..b];
             let (l, u, g, h) = (&fl[a + 1..b], &fu[a + 1..b], &fg[a + 1..b], &fh[a + 1..b]);
-            let f = &mut f[..k * d];
             let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
-            let (qa, qb) = (yp(i), yp(i + 1));
             let right = if i + 1 == n { 0 } else { i + 1 };
+            let (qa, qb) = (yp(i), yp(i + 1));
+            let f = &mut x[(a + 1) * d..b * d];
             for c in 0..d {
                 // x = B⁻¹(e − c), e = −μ g − ν h with μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1}.
                 let mu = rows[a][2] * srow(i, c);
@@ -437,9 +452,7 @@ impl Condensation {
                     f[j * d + c] = (f[j * d + c] - span_rows[j][2] * f[(j + 1) * d + c]) * u[j];
                 }
             }
-            x[(a + 1) * d..b * d].copy_from_slice(f);
         }
-        Ok(Points::new(d, x)?)
     }
 }
 
