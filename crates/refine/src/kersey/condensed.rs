@@ -45,7 +45,9 @@
 //! of an open curve and every [`WORKING_SET_START_STEP`]-th ball. A round is judged when its
 //! residual reaches [`CONDENSED_ROUND_TOLERANCE`], and only an accepted one is solved to the
 //! full tolerance and polished. Each round's condensation reuses the spans of the previous one
-//! that no new point splits. The multipliers of the balls outside W are 0.
+//! that no new point splits. The multipliers of the balls outside W are 0. (Rounds cost O(N)
+//! passes each: with fewer than [`WORKING_SET_MIN_POINTS`] points or more than
+//! [`WORKING_SET_MAX_STRIDE`] vertices per span, one round on all balls is taken instead.)
 
 // The block kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
@@ -524,7 +526,13 @@ pub(crate) fn solve_balls(
     tolerance: f64,
     start: Option<&[bool]>,
 ) -> Result<CondensedSolution, Error> {
-    let step = (q.len() / WORKING_SET_START_POINTS).clamp(1, WORKING_SET_START_STEP);
+    // Each round costs O(N) passes besides the interior-point method on the set: with few balls
+    // or many vertices per span a single round on all balls is cheaper.
+    let step = if q.len() < WORKING_SET_MIN_POINTS || stride > WORKING_SET_MAX_STRIDE {
+        1
+    } else {
+        (q.len() / WORKING_SET_START_POINTS).clamp(1, WORKING_SET_START_STEP)
+    };
     solve_balls_from(knots, stencil, q, radii, stride, tolerance, step, start)
 }
 
@@ -661,6 +669,12 @@ fn solve_balls_from(
     }
 }
 
+/// The working-set method runs with at least this many data points (fewer: one round on all
+/// balls).
+pub const WORKING_SET_MIN_POINTS: usize = 64;
+/// The working-set method runs with at most this many vertices per span, k + 1 (more: the O(N)
+/// passes of each round outweigh the interior-point work saved; one round on all balls).
+pub const WORKING_SET_MAX_STRIDE: usize = 32;
 /// The working set starts with about this many balls (every
 /// n / `WORKING_SET_START_POINTS`-th, at most every [`WORKING_SET_START_STEP`]-th).
 pub const WORKING_SET_START_POINTS: usize = 4;
