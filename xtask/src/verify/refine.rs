@@ -229,6 +229,43 @@ pub fn cases() -> Vec<Case> {
                 "relative energy difference to Clarabel (SOCP)",
             ))
         }),
+        Case::holds("kersey/thm3.2/balls-working-set-vs-clarabel", || {
+            // n ≥ 64 points: the condensed solver's working-set rounds (balls outside the set
+            // checked, not solved); open and closed, d = 2 and 3, fixed knots and Algorithm 4.1.
+            let mut gap: f64 = 0.0;
+            let mut kkt: f64 = 0.0;
+            let mut detail = Vec::new();
+            for (n, d, topo, seed, ki) in [
+                (120, 2, Topology::Closed, 11, 0),
+                (96, 3, Topology::Closed, 12, 0),
+                (110, 2, Topology::Open, 13, 0),
+                (100, 2, Topology::Closed, 14, 3),
+            ] {
+                let q = data(n, d, seed);
+                let p = Problem::new(q)
+                    .with_topology(topo)
+                    .with_k(3)
+                    .with_knot_iterations(ki)
+                    .with_constraint(Constraint::Balls(radii(n, seed)));
+                let r = p.solve()?;
+                let g = clarabel_gap(&p, &r).map_err(|e| anyhow::anyhow!("n = {n}: {e}"))?;
+                gap = gap.max(g);
+                kkt = kkt.max(r.kkt_residual);
+                let active = r.active.iter().filter(|&&a| a).count();
+                detail.push(format!(
+                    "n={n}: {active} active, gap {g:.1e}, kkt {:.1e}",
+                    r.kkt_residual
+                ));
+            }
+            Ok(Outcome::check(
+                gap.max(kkt * ENERGY_RTOL / KKT_TOL),
+                ENERGY_RTOL,
+                format!(
+                    "relative energy difference to Clarabel, and KKT x 10 (KKT <= 1e-9): {}",
+                    detail.join("; ")
+                ),
+            ))
+        }),
         Case::holds("kersey/cor3.3/jmp-vanishes-at-inactive-vertices", || {
             let mut inactive = 0usize;
             let r = worst(
