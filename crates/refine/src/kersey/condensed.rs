@@ -106,7 +106,8 @@ pub const CONDENSED_MAX_REFINEMENT_STEPS: usize = 6;
 pub const CONDENSED_POLISH_STEPS: usize = 3;
 /// The polish is skipped when the interior-point result's stationarity residual
 /// ‖Qy + w(y − q)‖_∞ is already at most this times the force scale (the certificate, which the
-/// caller computes anyway, still judges the result).
+/// caller computes anyway, still judges the result; the second run, at
+/// [`CONDENSED_STRICT_TOLERANCE`], always polishes).
 pub const CONDENSED_POLISH_SKIP: f64 = 1e-12;
 /// Changes of the polish's active set (a vertex leaving its ball joins it, a negative
 /// multiplier leaves it), each followed by a retried Newton step.
@@ -1097,7 +1098,9 @@ fn solve_balls_d<const D: usize>(
         let mut current = stationarity(&g, &y, &w);
         // The force scale of the residuals (as in the iterations).
         let fscale = g.iter().fold(qmax * step, |a, v| a.max(v.abs()));
-        let polish_steps = if current <= CONDENSED_POLISH_SKIP * fscale {
+        let polish_steps = if current <= CONDENSED_POLISH_SKIP * fscale
+            && tolerance > CONDENSED_STRICT_TOLERANCE
+        {
             0
         } else {
             CONDENSED_POLISH_STEPS
