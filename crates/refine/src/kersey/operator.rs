@@ -54,7 +54,9 @@ impl Stencil {
         }
     }
 
-    /// A p (one row per vertex, d columns).
+    /// A p (one row per vertex, d columns), in difference form α₁(x_l − x_m) + α₃(x_r − x_m)
+    /// (α₂ = −α₁ − α₃ exactly, [`alpha_row`]): the rounding scales with the steps between
+    /// vertices rather than with |x|.
     pub(crate) fn apply_a(&self, p: &Points) -> Vec<f64> {
         let n = p.len();
         let d = p.dim();
@@ -64,7 +66,8 @@ impl Stencil {
             let a = self.rows[i];
             let [l, m, r] = self.cols(i, n);
             for c in 0..d {
-                out[i * d + c] = a[0] * x[l * d + c] + a[1] * x[m * d + c] + a[2] * x[r * d + c];
+                let xm = x[m * d + c];
+                out[i * d + c] = a[0] * (x[l * d + c] - xm) + a[2] * (x[r * d + c] - xm);
             }
         }
         out
