@@ -388,7 +388,7 @@ fn polish_balls(
 }
 
 /// Rounds of the half-space polish's active-set method.
-pub const HALFSPACE_POLISH_ROUNDS: usize = 20;
+pub const HALFSPACE_POLISH_ROUNDS: usize = 12;
 /// Augmented-Lagrangian steps per round of the half-space polish (one factorization each
 /// round; each step cuts the violation of the active faces by about the stiffness ratio).
 pub const HALFSPACE_POLISH_AL_STEPS: usize = 10;
