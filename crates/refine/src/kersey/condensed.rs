@@ -41,7 +41,8 @@
 //! curves, so optimal. Otherwise balls join W and the round repeats: all the violated (and
 //! nearly violated, [`WORKING_SET_NEAR`]) ones when they are few, else the local maxima of
 //! |p − q|/ε ([`WORKING_SET_WINDOW`]). W only grows, so this ends (at worst with all balls,
-//! taken at once after [`WORKING_SET_MAX_ROUNDS`]); it starts from the fixed points, the ends
+//! taken at once after [`WORKING_SET_MAX_ROUNDS`], or from the second round when most balls
+//! outside W are violated, [`WORKING_SET_DENSE`]); it starts from the fixed points, the ends
 //! of an open curve and every [`WORKING_SET_START_STEP`]-th ball. A round is judged when its
 //! residual reaches [`CONDENSED_ROUND_TOLERANCE`], and only an accepted one is solved to the
 //! full tolerance and polished. Each round's condensation reuses the spans of the previous one
@@ -529,7 +530,11 @@ pub(crate) fn solve_balls(
 ) -> Result<CondensedSolution, Error> {
     // Each round costs O(N) passes besides the interior-point method on the set: with few balls
     // or many vertices per span a single round on all balls is cheaper.
-    let step = if q.len() < WORKING_SET_MIN_POINTS || stride > WORKING_SET_MAX_STRIDE {
+    // (So is a start set holding most balls: most are active.)
+    let dense = start.is_some_and(|s| {
+        s.iter().filter(|&&a| a).count() as f64 > WORKING_SET_DENSE * q.len() as f64
+    });
+    let step = if q.len() < WORKING_SET_MIN_POINTS || stride > WORKING_SET_MAX_STRIDE || dense {
         1
     } else {
         (q.len() / WORKING_SET_START_POINTS).clamp(1, WORKING_SET_START_STEP)
@@ -623,8 +628,12 @@ fn solve_balls_from(
             });
         }
         rounds += 1;
-        if rounds >= WORKING_SET_MAX_ROUNDS {
-            // (A bound on the work: the next round takes every ball.)
+        let outside = n - idx.len();
+        if rounds >= WORKING_SET_MAX_ROUNDS
+            || (rounds >= 2 && near.len() as f64 > WORKING_SET_DENSE * outside as f64)
+        {
+            // (A bound on the work: the next round takes every ball. So does a second round
+            // that still leaves most balls outside the set violated: most balls are active.)
             work.fill(true);
         } else if near.len() * WORKING_SET_ADD_ALL <= idx.len() {
             // Few left: all of them (and the near ones) join.
@@ -694,6 +703,11 @@ pub const WORKING_SET_ADD_ALL: usize = 2;
 /// After this many rounds the working set becomes all balls (one more round ends the method),
 /// which bounds its work at this many + 1 solves however the sets grow.
 pub const WORKING_SET_MAX_ROUNDS: usize = 16;
+/// From the second round on, when more than this fraction of the balls outside the working set
+/// are (nearly) violated, the next round takes all balls: most balls are active and the rounds
+/// would add them a few at a time. A start set (the previous knot iteration's active balls)
+/// holding more than this fraction of the balls also means one round on all balls.
+pub const WORKING_SET_DENSE: f64 = 0.5;
 /// Half-width (in data points) of the window of the local-maximum rule.
 pub const WORKING_SET_WINDOW: usize = 16;
 
