@@ -488,9 +488,11 @@ fn polish_halfspaces(
         })
         .collect();
     let stencil = Stencil::new(fp.knots);
+    // H ⊗ I once; each round replaces the penalty blocks.
+    let mut sys = hessian_system(fp.knots, d)?;
+    let mut block = vec![0.0; d * d];
     for round in 1..=HALFSPACE_POLISH_ROUNDS {
-        let mut sys = hessian_system(fp.knots, d)?;
-        let mut block = vec![0.0; d * d];
+        sys.clear_blocks();
         for i in 0..n {
             block.fill(0.0);
             let mut any = false;
