@@ -34,16 +34,17 @@
 //! **Working set.** At the optimum most balls are usually inactive (the bench's closed curves:
 //! 3.6 % active at n = 10⁴, 0.9 % at n = 10⁵), and a ball that is inactive at the optimum can be
 //! dropped without changing it. So the method above runs on a working set W of balls: the
-//! condensation is taken onto the data vertices of W only ([`Condensation::at_vertices`]; the
+//! condensation is taken onto the data vertices of W only ([`Condensation::at_vertices_reusing`]; the
 //! other data vertices become free vertices of longer spans), and the optimum of the relaxed
 //! problem is accepted when its curve stays strictly inside every ball outside W (margin
 //! [`WORKING_SET_MARGIN`]) — then it is feasible for all balls and optimal among a superset of
 //! curves, so optimal. Otherwise balls join W and the round repeats: all the violated (and
 //! nearly violated, [`WORKING_SET_NEAR`]) ones when they are few, else the local maxima of
 //! |p − q|/ε ([`WORKING_SET_WINDOW`]). W only grows, so this ends (at worst with all balls,
-//! taken at once after [`WORKING_SET_MAX_ROUNDS`], or from the second round when most balls
-//! outside W are violated, [`WORKING_SET_DENSE`]); it starts from the fixed points, the ends
-//! of an open curve and every [`WORKING_SET_START_STEP`]-th ball. A round is judged when its
+//! taken at once after [`WORKING_SET_MAX_ROUNDS`], or from round [`WORKING_SET_DENSE_ROUND`]
+//! when most balls outside W are violated, [`WORKING_SET_DENSE`]); it starts from the fixed
+//! points, the ends of an open curve and every [`WORKING_SET_START_STEP`]-th ball (and, in
+//! Algorithm 4.1, the balls active in the previous knot iteration). A round is judged when its
 //! residual reaches [`CONDENSED_ROUND_TOLERANCE`], and only an accepted one is solved to the
 //! full tolerance and polished. Each round's condensation reuses the spans of the previous one
 //! that no new point splits. The multipliers of the balls outside W are 0. (Rounds cost O(N)
@@ -485,8 +486,8 @@ pub(crate) struct CondensedSolution {
     pub multipliers: Vec<Vec<f64>>,
     /// Interior-point iterations.
     pub iterations: usize,
-    /// False when the caller's acceptance test refused the unpolished curve (a working-set
-    /// round; `multipliers` is then empty).
+    /// False when the caller's acceptance test refused the curve, at the judging residual, at
+    /// the end or after the polish (a working-set round; `multipliers` is then empty).
     pub complete: bool,
 }
 
@@ -614,8 +615,7 @@ fn solve_balls_from(
             Err(e) => return Err(e),
         };
         iterations += sub.iterations;
-        // A polished curve is checked again (the polish moves it a little).
-        if sub.complete && accept(&sub.points) {
+        if sub.complete {
             let mut multipliers = vec![vec![0.0]; n];
             for (m, &i) in sub.multipliers.into_iter().zip(&idx) {
                 multipliers[i] = m;
@@ -630,10 +630,11 @@ fn solve_balls_from(
         rounds += 1;
         let outside = n - idx.len();
         if rounds >= WORKING_SET_MAX_ROUNDS
-            || (rounds >= 2 && near.len() as f64 > WORKING_SET_DENSE * outside as f64)
+            || (rounds >= WORKING_SET_DENSE_ROUND
+                && near.len() as f64 > WORKING_SET_DENSE * outside as f64)
         {
-            // (A bound on the work: the next round takes every ball. So does a second round
-            // that still leaves most balls outside the set violated: most balls are active.)
+            // (A bound on the work: the next round takes every ball. So does a later round that
+            // still leaves most balls outside the set violated: most balls are active.)
             work.fill(true);
         } else if near.len() * WORKING_SET_ADD_ALL <= idx.len() {
             // Few left: all of them (and the near ones) join.
@@ -703,11 +704,14 @@ pub const WORKING_SET_ADD_ALL: usize = 2;
 /// After this many rounds the working set becomes all balls (one more round ends the method),
 /// which bounds its work at this many + 1 solves however the sets grow.
 pub const WORKING_SET_MAX_ROUNDS: usize = 16;
-/// From the second round on, when more than this fraction of the balls outside the working set
-/// are (nearly) violated, the next round takes all balls: most balls are active and the rounds
-/// would add them a few at a time. A start set (the previous knot iteration's active balls)
+/// From round [`WORKING_SET_DENSE_ROUND`] on, when more than this fraction of the balls outside
+/// the working set are (nearly) violated, the next round takes all balls: most balls are active
+/// and the rounds would add them a few at a time. A start set (the previous knot iteration's active balls)
 /// holding more than this fraction of the balls also means one round on all balls.
 pub const WORKING_SET_DENSE: f64 = 0.5;
+/// The round from which [`WORKING_SET_DENSE`] applies (earlier rounds, from a small start set,
+/// leave most balls violated whether or not most are active: n = 10³ on the bench curve).
+pub const WORKING_SET_DENSE_ROUND: usize = 4;
 /// Half-width (in data points) of the window of the local-maximum rule.
 pub const WORKING_SET_WINDOW: usize = 16;
 
@@ -1249,7 +1253,17 @@ fn solve_balls_d<const D: usize>(
     // The curve: data-row values at the final y (left in qop.s by the last Q y) and the
     // second pass.
     let points = if polished {
-        cond.reconstruct(knots, stencil, &y, &qop.s, d)?
+        // The polish moves the curve a little: a working-set round judges it again.
+        let points = cond.reconstruct(knots, stencil, &y, &qop.s, d)?;
+        if !accept(&points) {
+            return Ok(CondensedSolution {
+                points,
+                multipliers: Vec::new(),
+                iterations,
+                complete: false,
+            });
+        }
+        points
     } else {
         unpolished
     };

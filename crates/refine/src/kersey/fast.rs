@@ -123,32 +123,20 @@ impl Condensation {
         stride: usize,
     ) -> Result<Self, Error> {
         let vertices: Vec<usize> = (0..n).map(|i| i * stride).collect();
-        Self::at_vertices(knots, stencil, vertices)
+        Self::at_vertices_reusing(knots, stencil, vertices, None)
     }
 
     /// Pass 1 with the data points at the given increasing `vertices` of `knots` (any spacing
     /// of at least two; the first is vertex 0, and for an open curve the last is the last
     /// vertex): every other vertex is free. The working-set method of the balls solver
-    /// condenses onto a subset of the data vertices this way.
+    /// condenses onto a subset of the data vertices this way, reusing the span work of `prev`,
+    /// a condensation of the same knots onto other vertices: a span of `prev` that is also a
+    /// span here (same ends) keeps its factors; only the others are factored (new points split
+    /// a few spans between rounds).
     ///
     /// # Errors
     /// As [`Condensation::new`]; also `Singular` at a vertex whose span has no free vertex or
     /// where the vertex list is not of that shape (an internal error, reported).
-    pub(crate) fn at_vertices(
-        knots: &Knots,
-        stencil: &Stencil,
-        vertices: Vec<usize>,
-    ) -> Result<Self, Error> {
-        Self::at_vertices_reusing(knots, stencil, vertices, None)
-    }
-
-    /// [`Condensation::at_vertices`] reusing the span work of `prev`, a condensation of the
-    /// same knots onto other vertices: a span of `prev` that is also a span here (same ends)
-    /// keeps its factors; only the others are factored. (The working-set method adds vertices
-    /// between rounds, which splits a few spans.)
-    ///
-    /// # Errors
-    /// As [`Condensation::at_vertices`].
     pub(crate) fn at_vertices_reusing(
         knots: &Knots,
         stencil: &Stencil,
