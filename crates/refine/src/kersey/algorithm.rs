@@ -89,6 +89,9 @@ pub(crate) struct FixedSolution {
     /// The conic solver's own relative KKT residual, when it ran (its primal and
     /// complementarity parts cover the derivative constraints).
     pub solver_kkt: Option<f64>,
+    /// The certificate of exactly these points and multipliers at `ACTIVE_REL_TOL` (and the
+    /// multipliers it reports), when the solver already computed it to accept them.
+    pub certificate: Option<(Certificate, Vec<Vec<f64>>)>,
 }
 
 /// One fixed-knot problem: data `q` attached at `data_vertex` of a curve with `knots`.
@@ -312,16 +315,20 @@ fn stage_loop(
         Solver::Exact => ACTIVE_REL_TOL,
         Solver::Paper => PAPER_ACTIVE_REL_TOL,
     };
-    let (mut cert, mult) = certify(
-        &stencil,
-        &s.points,
-        q,
-        data_vertex,
-        constraint,
-        s.multipliers,
-        tol,
-        &s.extra,
-    );
+    // (The exact solver's certificate, when it computed one to accept the points, is this one.)
+    let (mut cert, mult) = match s.certificate {
+        Some(c) if problem.solver == Solver::Exact => c,
+        _ => certify(
+            &stencil,
+            &s.points,
+            q,
+            data_vertex,
+            constraint,
+            s.multipliers,
+            tol,
+            &s.extra,
+        ),
+    };
     if let Some(k) = s.solver_kkt {
         cert.kkt_residual = cert.kkt_residual.max(k);
     }

@@ -213,6 +213,7 @@ pub(crate) fn solve(
             stencil: None,
             extra: Vec::new(),
             solver_kkt: None,
+            certificate: None,
         },
         forces,
         sol.kkt.total,

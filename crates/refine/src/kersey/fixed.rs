@@ -81,6 +81,7 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                     stencil: None,
                     extra: Vec::new(),
                     solver_kkt: None,
+                    certificate: None,
                 });
             }
             _ => {}
@@ -210,7 +211,7 @@ fn condensed_balls(
             return Ok(Err((iterations, best)));
         };
         iterations += sol.iterations;
-        let (cert, _) = super::certify::certify(
+        let (cert, mult) = super::certify::certify(
             &stencil,
             &sol.points,
             fp.q,
@@ -228,6 +229,7 @@ fn condensed_balls(
                 stencil: Some(stencil),
                 extra: Vec::new(),
                 solver_kkt: None,
+                certificate: Some((cert, mult)),
             }));
         }
         best = best.min(cert.kkt_residual);
@@ -380,6 +382,7 @@ fn polish_balls(
                 stencil: None,
                 extra: Vec::new(),
                 solver_kkt: None,
+                certificate: None,
             },
             k,
         )));
@@ -625,6 +628,7 @@ fn polish_halfspaces(
                 stencil: None,
                 extra: Vec::new(),
                 solver_kkt: None,
+                certificate: None,
             },
             cert.kkt_residual,
         )));
@@ -643,6 +647,7 @@ fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             stencil: None,
             extra: Vec::new(),
             solver_kkt: None,
+            certificate: None,
         });
     }
     let stencil = Stencil::new(fp.knots);
@@ -654,6 +659,7 @@ fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         stencil: Some(stencil),
         extra: Vec::new(),
         solver_kkt: None,
+        certificate: None,
     })
 }
 
@@ -711,6 +717,7 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                 stencil: None,
                 extra: Vec::new(),
                 solver_kkt: None,
+                certificate: None,
             })
         }
         Constraint::HalfSpaces(sets) => paper_slots(fp, sets),
@@ -839,6 +846,7 @@ fn paper_slots(
         stencil: None,
         extra: Vec::new(),
         solver_kkt: None,
+        certificate: None,
     })
 }
 
