@@ -116,12 +116,7 @@ pub fn solve_with<C: Command>(
     problem: &str,
     describe: impl Fn(&C::Solution) -> String,
 ) -> Result<Summary, InputError> {
-    let value: serde_json::Value = serde_json::from_str(problem)
-        .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
-    let p: C::Problem = serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
-        InputError::new(path, e.into_inner())
-    })?;
+    let p: C::Problem = crate::spec::from_json(problem)?;
     let s = C::solve(&p)?;
     let json = serde_json::to_string_pretty(&s).map_err(|e| InputError::new("", e))?;
     Ok(Summary {

@@ -1,4 +1,4 @@
-//! `curvefit natural PROBLEM`: Warren–Weimer natural cubic subdivision on [0, L] with the control
+//! `natural`: Warren–Weimer natural cubic subdivision on [0, L] with the control
 //! points at the integers 0..L (seed 003, §6.2–6.3).
 //!
 //! Problem: `{"points": [[x, …], …], "levels": K}` — at least 2 points of one dimension d ≥ 1
@@ -12,7 +12,6 @@ use serde::{Deserialize, Serialize};
 
 use super::scheme::validate_rows;
 use super::InputError;
-use crate::plot::{palette, Figure, Marker, Style};
 
 /// Largest result accepted: coordinates summed over all levels (the output lists every level).
 pub const MAX_NATURAL_OUTPUT_COORDS: usize = 10_000_000;
@@ -52,108 +51,64 @@ pub struct NaturalSolution {
     pub limit_energy: f64,
 }
 
-/// The `natural` subcommand.
-pub enum NaturalCmd {}
-
-impl super::Command for NaturalCmd {
-    type Problem = NaturalProblem;
-    type Solution = NaturalSolution;
-
-    fn solve(problem: &NaturalProblem) -> Result<NaturalSolution, InputError> {
-        let p0 = validate_rows("points", &problem.points, 2)?;
-        let l = p0.len() - 1;
-        // Σ_k (2^k L + 1) d ≤ (2^{K+1} L + K + 1) d, checked before any allocation.
-        let total = u32::try_from(problem.levels + 1)
-            .ok()
-            .and_then(|e| 1usize.checked_shl(e))
-            .and_then(|f| f.checked_mul(l))
-            .and_then(|n| n.checked_add(problem.levels + 1))
-            .and_then(|n| n.checked_mul(p0.dim()));
-        if total.is_none_or(|t| t > MAX_NATURAL_OUTPUT_COORDS) {
-            return Err(InputError::new(
-                "levels",
-                format!(
-                    "{} levels on {} points would exceed {MAX_NATURAL_OUTPUT_COORDS} output coordinates",
-                    problem.levels,
-                    p0.len()
-                ),
-            ));
-        }
-        let scheme = NaturalScheme::new().map_err(|e| InputError::new("", e))?;
-        let levels = scheme
-            .subdivide_levels(&p0, problem.levels)
-            .map_err(|e| InputError::new("levels", e))?;
-        let limit_energy = scheme
-            .limit_energy(&p0)
-            .map_err(|e| InputError::new("points", e))?;
-        let solution = NaturalSolution {
-            levels: levels
-                .iter()
-                .enumerate()
-                .map(|(k, p)| NaturalLevel {
-                    level: k,
-                    points: p.to_rows(),
-                    energy: NaturalScheme::energy(p, k),
-                })
-                .collect(),
-            limit_energy,
-        };
-        // The points are convex combinations of the input (always finite); the energies are
-        // sums of squares and can overflow for coordinates near the f64 limit.
-        let finite = solution.limit_energy.is_finite()
-            && solution.levels.iter().all(|l| l.energy.is_finite());
-        if !finite {
-            return Err(InputError::new(
-                "points",
-                "coordinates too large: the energy overflows the f64 range",
-            ));
-        }
-        Ok(solution)
-    }
-
-    /// The control polygon p_0 and the last level; for d = 1 the graph over [0, L], for d ≥ 2
-    /// the first two coordinates (parametric, as in Fig. 6.6).
-    fn svg(problem: &NaturalProblem, solution: &NaturalSolution) -> Option<String> {
-        let project = |rows: &[Vec<f64>], scale: f64| -> Vec<[f64; 2]> {
-            rows.iter()
-                .enumerate()
-                .map(|(i, r)| {
-                    if r.len() == 1 {
-                        [i as f64 * scale, r[0]]
-                    } else {
-                        [r[0], r[1]]
-                    }
-                })
-                .collect()
-        };
-        let last = solution.levels.last()?;
-        let k = last.level;
-        let mut fig = Figure::new("Natural cubic subdivision (Warren–Weimer §6.2)");
-        fig.equal_aspect(problem.points.first().is_some_and(|p| p.len() >= 2));
-        fig.polyline(
-            &project(&problem.points, 1.0),
-            Style::stroke(palette::REGION, 1.0).dashed("4 3"),
-        );
-        fig.points(
-            &project(&problem.points, 1.0),
-            Marker::Ring,
-            Style::stroke(palette::DATA, 1.2),
-        );
-        fig.polyline(
-            &project(&last.points, 1.0 / (1u64 << k.min(60)) as f64),
-            Style::stroke(palette::CURVE, 1.8),
-        );
-        fig.caption(&format!(
-            "level {k}: energy {:.6}; exact limit energy p0ᵀE0N0p0 = {:.6}",
-            last.energy, solution.limit_energy
+/// `curvefit natural`: K levels of Warren–Weimer's natural scheme and the exact limit energy.
+///
+/// # Errors
+/// An [`InputError`] naming the user's field and index.
+pub fn solve(problem: &NaturalProblem) -> Result<NaturalSolution, InputError> {
+    let p0 = validate_rows("points", &problem.points, 2)?;
+    let l = p0.len() - 1;
+    // Σ_k (2^k L + 1) d ≤ (2^{K+1} L + K + 1) d, checked before any allocation.
+    let total = u32::try_from(problem.levels + 1)
+        .ok()
+        .and_then(|e| 1usize.checked_shl(e))
+        .and_then(|f| f.checked_mul(l))
+        .and_then(|n| n.checked_add(problem.levels + 1))
+        .and_then(|n| n.checked_mul(p0.dim()));
+    if total.is_none_or(|t| t > MAX_NATURAL_OUTPUT_COORDS) {
+        return Err(InputError::new(
+            "levels",
+            format!(
+                "{} levels on {} points would exceed {MAX_NATURAL_OUTPUT_COORDS} output coordinates",
+                problem.levels,
+                p0.len()
+            ),
         ));
-        Some(fig.to_svg())
     }
+    let scheme = NaturalScheme::new().map_err(|e| InputError::new("", e))?;
+    let levels = scheme
+        .subdivide_levels(&p0, problem.levels)
+        .map_err(|e| InputError::new("levels", e))?;
+    let limit_energy = scheme
+        .limit_energy(&p0)
+        .map_err(|e| InputError::new("points", e))?;
+    let solution = NaturalSolution {
+        levels: levels
+            .iter()
+            .enumerate()
+            .map(|(k, p)| NaturalLevel {
+                level: k,
+                points: p.to_rows(),
+                energy: NaturalScheme::energy(p, k),
+            })
+            .collect(),
+        limit_energy,
+    };
+    // The points are convex combinations of the input (always finite); the energies are
+    // sums of squares and can overflow for coordinates near the f64 limit.
+    let finite =
+        solution.limit_energy.is_finite() && solution.levels.iter().all(|l| l.energy.is_finite());
+    if !finite {
+        return Err(InputError::new(
+            "points",
+            "coordinates too large: the energy overflows the f64 range",
+        ));
+    }
+    Ok(solution)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::Command;
     use super::*;
 
     fn problem(s: &str) -> NaturalProblem {
@@ -163,7 +118,7 @@ mod tests {
     #[test]
     fn result_follows_the_contract() {
         let p = problem(r#"{"points": [[0,0],[1,2],[3,1],[4,3]], "levels": 3}"#);
-        let s = NaturalCmd::solve(&p).unwrap();
+        let s = solve(&p).unwrap();
         assert_eq!(s.levels.len(), 4);
         for (k, lv) in s.levels.iter().enumerate() {
             assert_eq!(lv.level, k);
@@ -173,24 +128,22 @@ mod tests {
         assert!(s.levels[3].energy > s.limit_energy);
         let v = serde_json::to_value(&s).unwrap();
         assert!(v["levels"][0]["energy"].is_number() && v["limit_energy"].is_number());
-        assert!(NaturalCmd::svg(&p, &s).unwrap().starts_with("<svg"));
         let d = problem(r#"{"points": [[0],[1]]}"#);
-        assert_eq!(NaturalCmd::solve(&d).unwrap().levels.len(), 5);
+        assert_eq!(solve(&d).unwrap().levels.len(), 5);
     }
 
     #[test]
     fn bad_input_names_the_field() {
-        let e = NaturalCmd::solve(&problem(r#"{"points": [[0,0]]}"#)).unwrap_err();
+        let e = solve(&problem(r#"{"points": [[0,0]]}"#)).unwrap_err();
         assert_eq!(e.field, "points");
-        let e = NaturalCmd::solve(&problem(r#"{"points": [[0,0],[1]]}"#)).unwrap_err();
+        let e = solve(&problem(r#"{"points": [[0,0],[1]]}"#)).unwrap_err();
         assert_eq!(e.field, "points[1]");
-        let e =
-            NaturalCmd::solve(&problem(r#"{"points": [[0,0],[1,1]], "levels": 40}"#)).unwrap_err();
+        let e = solve(&problem(r#"{"points": [[0,0],[1,1]], "levels": 40}"#)).unwrap_err();
         assert_eq!(e.field, "levels");
-        let e = NaturalCmd::solve(&problem(r#"{"points": [[], []]}"#)).unwrap_err();
+        let e = solve(&problem(r#"{"points": [[], []]}"#)).unwrap_err();
         assert_eq!(e.field, "points[0]");
         // Found by `cargo xtask fuzz`: finite input whose energy overflows.
-        let e = NaturalCmd::solve(&problem(r#"{"points": [[0,0],[1,1e308],[3,1]]}"#)).unwrap_err();
+        let e = solve(&problem(r#"{"points": [[0,0],[1,1e308],[3,1]]}"#)).unwrap_err();
         assert_eq!(e.field, "points");
         assert!(serde_json::from_str::<NaturalProblem>(r#"{"points": [[0]], "x": 1}"#).is_err());
     }

@@ -1,4 +1,4 @@
-//! JSON problem and result of `curvefit refine` (issue 7's contract, field for field).
+//! JSON problem and result of `refine` (issue 7's contract, field for field).
 
 use serde::{Deserialize, Serialize};
 
@@ -218,12 +218,24 @@ pub struct RefineResult {
     pub data_vertex: Vec<usize>,
     /// E of (2.1) for `points` and `knots`.
     pub energy: f64,
-    /// Multipliers of the final solve (see the README for their meaning per constraint type).
-    pub multipliers: serde_json::Value,
+    /// Multipliers of the final solve, one list per data point (see the README for their
+    /// meaning per constraint type).
+    pub multipliers: Vec<Vec<f64>>,
     /// Which data-point constraints are active at the optimum.
     pub active: Vec<bool>,
     /// Relative KKT residual of the final solve.
     pub kkt_residual: f64,
     /// Iteration counts.
-    pub iterations: serde_json::Value,
+    pub iterations: RefineIterations,
+}
+
+/// Iteration counts of a refinement (fields in the order the result has always printed them).
+#[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
+pub struct RefineIterations {
+    /// Knot updates over all stages.
+    pub knot_updates: usize,
+    /// Inner iterations of the fixed-knot solver over all stages.
+    pub solver: usize,
+    /// Fixed-knot solves over all stages.
+    pub solves: usize,
 }

@@ -1,4 +1,4 @@
-//! `curvefit scheme --points P --arity N [--surface] [--apply POLYGON.json --levels L]`: the
+//! `scheme`: the
 //! (2m+2)-point n-ary interpolating rules of Khan et al. (P = 2m + 2) as exact rationals and
 //! correctly rounded doubles, optionally their tensor-product masks and their application to a
 //! polygon.
@@ -16,8 +16,7 @@
 
 use divdiff::{Points, Topology};
 use refine::{rational_to_f64, BigRational, NaryScheme};
-use serde::Deserialize;
-use serde_json::{json, Value};
+use serde::{Deserialize, Serialize};
 
 use super::InputError;
 
@@ -82,27 +81,27 @@ pub fn validate_rows(field: &str, rows: &[Vec<f64>], min: usize) -> Result<Point
     Points::from_rows(rows).map_err(|e| InputError::new(field, e))
 }
 
-/// Builds the scheme from command-line values, naming the flag on error.
+/// Builds the scheme P = `points`, N = `arity`, naming the field on error.
 pub fn scheme_from_flags(points: usize, arity: usize) -> Result<NaryScheme, InputError> {
     if points < 2 || points % 2 != 0 {
         return Err(InputError::new(
-            "--points",
+            "points",
             format!("must be even and at least 2 (P = 2m + 2), got {points}"),
         ));
     }
     if points > MAX_CLI_SCHEME_POINTS {
         return Err(InputError::new(
-            "--points",
+            "points",
             format!("at most {MAX_CLI_SCHEME_POINTS}, got {points}"),
         ));
     }
     if !(2..=MAX_CLI_ARITY).contains(&arity) {
         return Err(InputError::new(
-            "--arity",
+            "arity",
             format!("must be between 2 and {MAX_CLI_ARITY}, got {arity}"),
         ));
     }
-    NaryScheme::new(points, arity).map_err(|e| InputError::new("--points", e))
+    NaryScheme::new(points, arity).map_err(|e| InputError::new("points", e))
 }
 
 fn weights_json(w: &[BigRational]) -> (Vec<String>, Vec<f64>) {
@@ -112,106 +111,200 @@ fn weights_json(w: &[BigRational]) -> (Vec<String>, Vec<f64>) {
     )
 }
 
-/// The `scheme` subcommand: `points` = P, `arity` = N, `surface` adds the 2-D masks, `apply`
-/// = (polygon JSON text, levels) adds the refined polygon.
+fn one() -> usize {
+    1
+}
+
+/// The `scheme` problem: the rule P = `points`, N = `arity`; `surface` adds the tensor-product
+/// masks; `polygon` (with `levels`) adds the refined polygon.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SchemeProblem {
+    /// Stencil size P = 2m + 2 (even, 2 ≤ P ≤ 16).
+    pub points: usize,
+    /// Arity N (2 ≤ N ≤ 16).
+    pub arity: usize,
+    /// Also give the tensor-product surface rules (default false).
+    #[serde(default)]
+    pub surface: bool,
+    /// A polygon to refine (default none).
+    #[serde(default)]
+    pub polygon: Option<PolygonInput>,
+    /// Levels of refinement of `polygon` (default 1).
+    #[serde(default = "one")]
+    pub levels: usize,
+}
+
+/// One rule p^{k+1}_{N·i+a} = Σ_l weights\[l\] · p^k_{i+offsets\[l\]} (fields in the order the
+/// result has always printed them).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SchemeRule {
+    /// The weights as correctly rounded doubles.
+    pub floats: Vec<f64>,
+    /// Offsets −m, …, m + 1.
+    pub offsets: Vec<isize>,
+    /// The residue a.
+    pub residue: usize,
+    /// The exact weights, `"num/den"`.
+    pub weights: Vec<String>,
+}
+
+/// One tensor-product rule (row-major in (a, b) and in (r, s)).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SurfaceRule {
+    /// The weights as correctly rounded doubles.
+    pub floats: Vec<f64>,
+    /// Offsets (r, s).
+    pub offsets: Vec<[isize; 2]>,
+    /// The residue (a, b).
+    pub residue: [usize; 2],
+    /// The exact weights, `"num/den"`.
+    pub weights: Vec<String>,
+}
+
+/// The refined polygon of a `scheme` problem.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PolygonResult {
+    /// As in the problem.
+    pub closed: bool,
+    /// The input points.
+    pub input: Vec<Vec<f64>>,
+    /// Levels applied.
+    pub levels: usize,
+    /// The refined points.
+    pub output: Vec<Vec<f64>>,
+}
+
+/// The `scheme` result (fields in the order the result has always printed them).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SchemeResult {
+    /// N.
+    pub arity: usize,
+    /// P.
+    pub points: usize,
+    /// The refined polygon, when the problem has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polygon: Option<PolygonResult>,
+    /// The N rules, one per residue a = 0..N−1.
+    pub rules: Vec<SchemeRule>,
+    /// The N² tensor-product rules, when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_rules: Option<Vec<SurfaceRule>>,
+}
+
+/// `curvefit scheme`: the rules, optionally the tensor-product masks and the refined polygon.
 ///
 /// # Errors
-/// An [`InputError`] naming `--points`, `--arity`, `--levels`, or the polygon's field
-/// (`polygon.points[i][j]`, `polygon.closed`, …) for malformed polygon JSON.
-pub fn run_scheme(
-    points: usize,
-    arity: usize,
-    surface: bool,
-    apply: Option<(&str, usize)>,
-) -> Result<Value, InputError> {
+/// An [`InputError`] naming `points`, `arity`, `levels` or the polygon's field
+/// (`polygon.points[i]`, …).
+pub fn solve(problem: &SchemeProblem) -> Result<SchemeResult, InputError> {
+    let (points, arity, levels) = (problem.points, problem.arity, problem.levels);
     let scheme = scheme_from_flags(points, arity)?;
-    let rules: Vec<Value> = (0..arity)
+    let rules = (0..arity)
         .map(|a| {
             let (weights, floats) = weights_json(scheme.exact_rule(a));
-            json!({"residue": a, "offsets": scheme.offsets(), "weights": weights, "floats": floats})
+            SchemeRule {
+                floats,
+                offsets: scheme.offsets().to_vec(),
+                residue: a,
+                weights,
+            }
         })
         .collect();
-    let mut out = json!({"points": points, "arity": arity, "rules": rules});
-    if surface {
-        let surface_rules: Vec<Value> = scheme
+    let surface_rules = problem.surface.then(|| {
+        scheme
             .surface_rules()
             .iter()
             .map(|r| {
                 let (weights, floats) = weights_json(&r.weights);
-                let offsets: Vec<[isize; 2]> = r.offsets.iter().map(|&(a, b)| [a, b]).collect();
-                json!({"residue": [r.residue.0, r.residue.1], "offsets": offsets,
-                       "weights": weights, "floats": floats})
+                SurfaceRule {
+                    floats,
+                    offsets: r.offsets.iter().map(|&(a, b)| [a, b]).collect(),
+                    residue: [r.residue.0, r.residue.1],
+                    weights,
+                }
             })
-            .collect();
-        out["surface_rules"] = Value::from(surface_rules);
-    }
-    if let Some((text, levels)) = apply {
-        let value: Value = serde_json::from_str(text)
-            .map_err(|e| InputError::new("polygon", format!("malformed JSON: {e}")))?;
-        let poly: PolygonInput = serde_path_to_error::deserialize(value).map_err(|e| {
-            let path = e.path().to_string();
-            let field = if path == "." {
-                "polygon".to_string()
+            .collect()
+    });
+    let polygon = match &problem.polygon {
+        None => None,
+        Some(poly) => {
+            let pts = validate_rows("polygon.points", &poly.points, 2)?;
+            let topology = if poly.closed {
+                Topology::Closed
             } else {
-                format!("polygon.{path}")
+                Topology::Open
             };
-            InputError::new(field, e.into_inner())
-        })?;
-        let pts = validate_rows("polygon.points", &poly.points, 2)?;
-        let topology = if poly.closed {
-            Topology::Closed
-        } else {
-            Topology::Open
-        };
-        let too_many = || {
-            InputError::new(
-                "--levels",
-                format!(
-                    "{levels} levels on {} points would exceed {MAX_CLI_POLYGON_COORDS} output coordinates",
-                    pts.len()
-                ),
-            )
-        };
-        let count = scheme
-            .refined_count(pts.len(), topology, levels)
-            .ok_or_else(too_many)?;
-        if count
-            .checked_mul(pts.dim())
-            .is_none_or(|c| c > MAX_CLI_POLYGON_COORDS)
-        {
-            return Err(too_many());
+            let too_many = || {
+                InputError::new(
+                    "levels",
+                    format!(
+                        "{levels} levels on {} points would exceed {MAX_CLI_POLYGON_COORDS} output coordinates",
+                        pts.len()
+                    ),
+                )
+            };
+            let count = scheme
+                .refined_count(pts.len(), topology, levels)
+                .ok_or_else(too_many)?;
+            if count
+                .checked_mul(pts.dim())
+                .is_none_or(|c| c > MAX_CLI_POLYGON_COORDS)
+            {
+                return Err(too_many());
+            }
+            let refined = scheme
+                .subdivide(&pts, topology, levels)
+                .map_err(|e| InputError::new("polygon.points", e))?;
+            Some(PolygonResult {
+                closed: poly.closed,
+                input: poly.points.clone(),
+                levels,
+                output: refined.to_rows(),
+            })
         }
-        let refined = scheme
-            .subdivide(&pts, topology, levels)
-            .map_err(|e| InputError::new("polygon.points", e))?;
-        out["polygon"] = json!({
-            "closed": poly.closed,
-            "levels": levels,
-            "input": poly.points,
-            "output": refined.to_rows(),
-        });
-    }
-    Ok(out)
+    };
+    Ok(SchemeResult {
+        arity,
+        points,
+        polygon,
+        rules,
+        surface_rules,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn problem(points: usize, arity: usize, surface: bool, polygon: Option<&str>) -> SchemeProblem {
+        let polygon = polygon.map(|p| serde_json::from_str(p).unwrap());
+        SchemeProblem {
+            points,
+            arity,
+            surface,
+            polygon,
+            levels: 1,
+        }
+    }
+
     #[test]
     fn rules_follow_the_contract() {
-        let v = run_scheme(4, 3, false, None).unwrap();
+        let v = serde_json::to_value(solve(&problem(4, 3, false, None)).unwrap()).unwrap();
         assert_eq!(v["points"], 4);
         assert_eq!(v["arity"], 3);
         let rules = v["rules"].as_array().unwrap();
         assert_eq!(rules.len(), 3);
         assert_eq!(rules[1]["residue"], 1);
-        assert_eq!(rules[1]["offsets"], json!([-1, 0, 1, 2]));
+        assert_eq!(rules[1]["offsets"], serde_json::json!([-1, 0, 1, 2]));
         assert_eq!(
             rules[1]["weights"],
-            json!(["-5/81", "20/27", "10/27", "-4/81"])
+            serde_json::json!(["-5/81", "20/27", "10/27", "-4/81"])
         );
-        assert_eq!(rules[0]["weights"], json!(["0/1", "1/1", "0/1", "0/1"]));
+        assert_eq!(
+            rules[0]["weights"],
+            serde_json::json!(["0/1", "1/1", "0/1", "0/1"])
+        );
         let f = rules[1]["floats"][0].as_f64().unwrap();
         assert!((f + 5.0 / 81.0).abs() < 1e-17);
         assert!(v.get("surface_rules").is_none() && v.get("polygon").is_none());
@@ -220,48 +313,37 @@ mod tests {
     #[test]
     fn surface_and_apply() {
         let poly = r#"{"points": [[0,0],[1,0],[1,1],[0,1]], "closed": false}"#;
-        let v = run_scheme(4, 2, true, Some((poly, 2))).unwrap();
+        let mut p = problem(4, 2, true, Some(poly));
+        p.levels = 2;
+        let v = serde_json::to_value(solve(&p).unwrap()).unwrap();
         let s = v["surface_rules"].as_array().unwrap();
         assert_eq!(s.len(), 4);
-        assert_eq!(s[3]["residue"], json!([1, 1]));
-        assert_eq!(s[3]["offsets"][0], json!([-1, -1]));
-        assert_eq!(s[3]["weights"][5], json!("81/256"));
+        assert_eq!(s[3]["residue"], serde_json::json!([1, 1]));
+        assert_eq!(s[3]["offsets"][0], serde_json::json!([-1, -1]));
+        assert_eq!(s[3]["weights"][5], serde_json::json!("81/256"));
         let p = &v["polygon"];
         assert_eq!(p["closed"], false);
         assert_eq!(p["levels"], 2);
         assert_eq!(p["output"].as_array().unwrap().len(), 13);
         assert_eq!(
             p["input"],
-            json!([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+            serde_json::json!([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
         );
     }
 
     #[test]
     fn bad_input_names_the_field() {
-        assert_eq!(run_scheme(3, 2, false, None).unwrap_err().field, "--points");
-        assert_eq!(
-            run_scheme(18, 2, false, None).unwrap_err().field,
-            "--points"
-        );
-        assert_eq!(run_scheme(4, 1, false, None).unwrap_err().field, "--arity");
-        assert_eq!(run_scheme(4, 17, false, None).unwrap_err().field, "--arity");
-        let e = run_scheme(4, 2, false, Some(("{\"points\": [[0,0],[1]]}", 1))).unwrap_err();
-        assert_eq!(e.field, "polygon.points[1]");
-        let e = run_scheme(4, 2, false, Some(("{\"points\": [[0,0]]}", 1))).unwrap_err();
-        assert_eq!(e.field, "polygon.points");
-        let e = run_scheme(
-            4,
-            2,
-            false,
-            Some(("{\"points\": [[0,0],[1,1]], \"x\": 1}", 1)),
-        )
-        .unwrap_err();
-        assert_eq!(e.field, "polygon.x");
-        let e = run_scheme(4, 2, false, Some(("{\"points\": [[0,0],[1,\"a\"]]}", 1))).unwrap_err();
-        assert_eq!(e.field, "polygon.points[1][1]");
-        let e = run_scheme(4, 2, false, Some(("{\"points\": [[0,0],[1,1]]}", 40))).unwrap_err();
-        assert_eq!(e.field, "--levels");
-        let e = run_scheme(4, 2, false, Some(("not json", 1))).unwrap_err();
-        assert_eq!(e.field, "polygon");
+        let field = |p: SchemeProblem| solve(&p).unwrap_err().field;
+        assert_eq!(field(problem(3, 2, false, None)), "points");
+        assert_eq!(field(problem(18, 2, false, None)), "points");
+        assert_eq!(field(problem(4, 1, false, None)), "arity");
+        assert_eq!(field(problem(4, 17, false, None)), "arity");
+        let p = problem(4, 2, false, Some(r#"{"points": [[0,0],[1]]}"#));
+        assert_eq!(field(p), "polygon.points[1]");
+        let p = problem(4, 2, false, Some(r#"{"points": [[0,0]]}"#));
+        assert_eq!(field(p), "polygon.points");
+        let mut p = problem(4, 2, false, Some(r#"{"points": [[0,0],[1,1]]}"#));
+        p.levels = 40;
+        assert_eq!(field(p), "levels");
     }
 }

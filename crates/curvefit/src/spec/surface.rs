@@ -1,4 +1,4 @@
-//! `curvefit surface GRID.json [--obj FILE]`: the tensor-product (2m+2)-point n-ary scheme (Khan
+//! `surface`: the tensor-product (2m+2)-point n-ary scheme (Khan
 //! et al. §4, (4.2)) applied to a regular quad grid; the result as JSON and as an OBJ quad mesh.
 //!
 //! Grid problem:
@@ -19,7 +19,6 @@ use serde::{Deserialize, Serialize};
 
 use super::scheme::{scheme_from_flags, validate_rows};
 use super::InputError;
-use crate::plot::{palette, Figure, Style};
 
 /// Largest result accepted: refined grid points × dimension.
 pub const MAX_SURFACE_OUTPUT_COORDS: usize = 10_000_000;
@@ -108,188 +107,114 @@ fn grid_of(solution: &SurfaceSolution) -> Result<QuadGrid, InputError> {
 /// The OBJ quad mesh of a result (for `--obj FILE`).
 ///
 /// # Errors
-/// An [`InputError`] if the solution is inconsistent (not produced by [`SurfaceCmd`]).
+/// An [`InputError`] if the solution is inconsistent (not produced by [`solve`]).
 pub fn obj_text(solution: &SurfaceSolution) -> Result<String, InputError> {
     quad_mesh_obj(&grid_of(solution)?).map_err(|e| InputError::new("points", e))
 }
 
-/// An isometric projection of a point of R^2 or R^3 (x to the right-down, y to the left-down,
-/// z up), for wireframe pictures.
-pub fn isometric(p: &[f64]) -> [f64; 2] {
-    let (x, y) = (p[0], p[1]);
-    let z = p.get(2).copied().unwrap_or(0.0);
-    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
-    [(x - y) * c, (x + y) * s + z]
-}
-
-/// The `surface` subcommand.
-pub enum SurfaceCmd {}
-
-impl super::Command for SurfaceCmd {
-    type Problem = SurfaceProblem;
-    type Solution = SurfaceSolution;
-
-    fn solve(problem: &SurfaceProblem) -> Result<SurfaceSolution, InputError> {
-        for (field, v) in [("rows", problem.rows), ("cols", problem.cols)] {
-            if v < 2 {
-                return Err(InputError::new(
-                    field,
-                    format!("must be at least 2, got {v}"),
-                ));
-            }
-        }
-        let expected = problem
-            .rows
-            .checked_mul(problem.cols)
-            .ok_or_else(|| InputError::new("rows", "rows × cols overflows"))?;
-        if problem.points.len() != expected {
+/// `curvefit surface`: the tensor-product scheme applied `levels` times to the grid.
+///
+/// # Errors
+/// An [`InputError`] naming the user's field and index.
+pub fn solve(problem: &SurfaceProblem) -> Result<SurfaceSolution, InputError> {
+    for (field, v) in [("rows", problem.rows), ("cols", problem.cols)] {
+        if v < 2 {
             return Err(InputError::new(
-                "points",
-                format!(
-                    "has {} points, expected rows × cols = {expected}",
-                    problem.points.len()
-                ),
+                field,
+                format!("must be at least 2, got {v}"),
             ));
         }
-        let pts = validate_rows("points", &problem.points, 4)?;
-        if !(2..=3).contains(&pts.dim()) {
-            return Err(InputError::new(
-                "points[0]",
-                format!(
-                    "grid points must be in R^2 or R^3, got dimension {}",
-                    pts.dim()
-                ),
-            ));
-        }
-        let scheme =
-            scheme_from_flags(problem.scheme.points, problem.scheme.arity).map_err(|e| {
-                let field = if e.field == "--arity" {
-                    "scheme.arity"
-                } else {
-                    "scheme.points"
-                };
-                InputError::new(field, e.message)
-            })?;
-        let n = scheme.arity();
-        let grow = |c: usize, closed: bool| -> Option<usize> {
-            let mut c = c;
-            for _ in 0..problem.levels {
-                c = if closed {
-                    c.checked_mul(n)?
-                } else {
-                    (c - 1).checked_mul(n)?.checked_add(1)?
-                };
-                if c > MAX_SURFACE_OUTPUT_COORDS {
-                    return None;
-                }
-            }
-            Some(c)
-        };
-        let total = grow(problem.rows, problem.closed[0])
-            .zip(grow(problem.cols, problem.closed[1]))
-            .and_then(|(r, c)| r.checked_mul(c))
-            .and_then(|rc| rc.checked_mul(pts.dim()));
-        if total.is_none_or(|t| t > MAX_SURFACE_OUTPUT_COORDS) {
-            return Err(InputError::new(
-                "levels",
-                format!(
-                    "{} levels would exceed {MAX_SURFACE_OUTPUT_COORDS} output coordinates",
-                    problem.levels
-                ),
-            ));
-        }
-        let grid = QuadGrid::new(
-            problem.rows,
-            problem.cols,
-            pts,
-            problem.closed[0],
-            problem.closed[1],
-        )
-        .map_err(|e| InputError::new("points", e))?;
-        let fine = scheme
-            .subdivide_grid(&grid, problem.levels)
-            .map_err(|e| match e {
-                refine::Error::TooLarge { .. } => InputError::new("levels", e),
-                // Affine combinations with weights > 1 can overflow for coordinates near the
-                // f64 limit.
-                _ => InputError::new(
-                    "points",
-                    format!("coordinates too large: the refined surface overflows f64 ({e})"),
-                ),
-            })?;
-        Ok(SurfaceSolution {
-            rows: fine.rows(),
-            cols: fine.cols(),
-            closed: problem.closed,
-            levels: problem.levels,
-            points: fine.points().to_rows(),
-            quads: fine.quads(),
-        })
     }
-
-    /// The refined grid as an OBJ quad mesh (`--obj`).
-    fn obj(_: &SurfaceProblem, solution: &SurfaceSolution) -> Option<Result<String, InputError>> {
-        Some(obj_text(solution))
-    }
-
-    /// An isometric wireframe of the refined grid over the dashed control net.
-    fn svg(problem: &SurfaceProblem, solution: &SurfaceSolution) -> Option<String> {
-        let mut fig = Figure::new("Tensor-product subdivision surface (Khan et al. §4)");
-        fig.equal_aspect(true).axes(false);
-        let lines = |fig: &mut Figure,
-                     rows: usize,
-                     cols: usize,
-                     closed: [bool; 2],
-                     pts: &[Vec<f64>],
-                     style: Style| {
-            for i in 0..rows {
-                let mut line: Vec<[f64; 2]> =
-                    (0..cols).map(|j| isometric(&pts[i * cols + j])).collect();
-                if closed[1] {
-                    line.push(line[0]);
-                }
-                fig.polyline(&line, style.clone());
-            }
-            for j in 0..cols {
-                let mut line: Vec<[f64; 2]> =
-                    (0..rows).map(|i| isometric(&pts[i * cols + j])).collect();
-                if closed[0] {
-                    line.push(line[0]);
-                }
-                fig.polyline(&line, style.clone());
-            }
-        };
-        lines(
-            &mut fig,
-            solution.rows,
-            solution.cols,
-            solution.closed,
-            &solution.points,
-            Style::stroke(palette::CURVE, 0.6),
-        );
-        lines(
-            &mut fig,
-            problem.rows,
-            problem.cols,
-            problem.closed,
-            &problem.points,
-            Style::stroke(palette::SECOND, 1.2).dashed("4 3"),
-        );
-        fig.caption(&format!(
-            "{}-point {}-ary tensor-product scheme, {} level(s): {} × {} grid",
-            problem.scheme.points,
-            problem.scheme.arity,
-            solution.levels,
-            solution.rows,
-            solution.cols
+    let expected = problem
+        .rows
+        .checked_mul(problem.cols)
+        .ok_or_else(|| InputError::new("rows", "rows × cols overflows"))?;
+    if problem.points.len() != expected {
+        return Err(InputError::new(
+            "points",
+            format!(
+                "has {} points, expected rows × cols = {expected}",
+                problem.points.len()
+            ),
         ));
-        Some(fig.to_svg())
     }
+    let pts = validate_rows("points", &problem.points, 4)?;
+    if !(2..=3).contains(&pts.dim()) {
+        return Err(InputError::new(
+            "points[0]",
+            format!(
+                "grid points must be in R^2 or R^3, got dimension {}",
+                pts.dim()
+            ),
+        ));
+    }
+    let scheme = scheme_from_flags(problem.scheme.points, problem.scheme.arity).map_err(|e| {
+        let field = if e.field == "arity" {
+            "scheme.arity"
+        } else {
+            "scheme.points"
+        };
+        InputError::new(field, e.message)
+    })?;
+    let n = scheme.arity();
+    let grow = |c: usize, closed: bool| -> Option<usize> {
+        let mut c = c;
+        for _ in 0..problem.levels {
+            c = if closed {
+                c.checked_mul(n)?
+            } else {
+                (c - 1).checked_mul(n)?.checked_add(1)?
+            };
+            if c > MAX_SURFACE_OUTPUT_COORDS {
+                return None;
+            }
+        }
+        Some(c)
+    };
+    let total = grow(problem.rows, problem.closed[0])
+        .zip(grow(problem.cols, problem.closed[1]))
+        .and_then(|(r, c)| r.checked_mul(c))
+        .and_then(|rc| rc.checked_mul(pts.dim()));
+    if total.is_none_or(|t| t > MAX_SURFACE_OUTPUT_COORDS) {
+        return Err(InputError::new(
+            "levels",
+            format!(
+                "{} levels would exceed {MAX_SURFACE_OUTPUT_COORDS} output coordinates",
+                problem.levels
+            ),
+        ));
+    }
+    let grid = QuadGrid::new(
+        problem.rows,
+        problem.cols,
+        pts,
+        problem.closed[0],
+        problem.closed[1],
+    )
+    .map_err(|e| InputError::new("points", e))?;
+    let fine = scheme
+        .subdivide_grid(&grid, problem.levels)
+        .map_err(|e| match e {
+            refine::Error::TooLarge { .. } => InputError::new("levels", e),
+            // Affine combinations with weights > 1 can overflow for coordinates near the
+            // f64 limit.
+            _ => InputError::new(
+                "points",
+                format!("coordinates too large: the refined surface overflows f64 ({e})"),
+            ),
+        })?;
+    Ok(SurfaceSolution {
+        rows: fine.rows(),
+        cols: fine.cols(),
+        closed: problem.closed,
+        levels: problem.levels,
+        points: fine.points().to_rows(),
+        quads: fine.quads(),
+    })
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::Command;
     use super::*;
 
     fn grid_json(rows: usize, cols: usize, extra: &str) -> String {
@@ -309,27 +234,26 @@ mod tests {
             (p.scheme.points, p.scheme.arity, p.levels, p.closed),
             (4, 2, 1, [false, false])
         );
-        let s = SurfaceCmd::solve(&p).unwrap();
+        let s = solve(&p).unwrap();
         assert_eq!((s.rows, s.cols), (7, 9));
         assert_eq!(s.points.len(), 63);
         assert_eq!(s.quads.len(), 6 * 8);
         let obj = obj_text(&s).unwrap();
         assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 63);
         assert_eq!(obj.lines().filter(|l| l.starts_with("f ")).count(), 48);
-        assert!(SurfaceCmd::svg(&p, &s).unwrap().starts_with("<svg"));
         let p: SurfaceProblem = serde_json::from_str(&grid_json(
             4,
             4,
             r#", "closed": [true, false], "scheme": {"points": 4, "arity": 3}, "levels": 2"#,
         ))
         .unwrap();
-        let s = SurfaceCmd::solve(&p).unwrap();
+        let s = solve(&p).unwrap();
         assert_eq!((s.rows, s.cols), (36, 28));
     }
 
     #[test]
     fn bad_input_names_the_field() {
-        let solve = |s: &str| SurfaceCmd::solve(&serde_json::from_str(s).unwrap()).unwrap_err();
+        let solve = |s: &str| solve(&serde_json::from_str(s).unwrap()).unwrap_err();
         assert_eq!(solve(&grid_json(1, 4, "")).field, "rows");
         let e = solve(r#"{"rows": 2, "cols": 2, "points": [[0,0],[1,0],[0,1]]}"#);
         assert_eq!(e.field, "points");
