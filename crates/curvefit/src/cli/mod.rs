@@ -6,12 +6,14 @@
 
 mod commands;
 pub mod demo;
+pub mod output;
 
 pub use self::commands::{natural, refine, strip, surface};
 /// The JSON types of `refine` (kept at this path for existing callers; the home is
 /// [`crate::spec::refine`]).
 pub use crate::spec::refine as refine_types;
 pub use crate::spec::InputError;
+pub use output::{bytes_writer, Outputs, Writer};
 
 use std::ffi::OsString;
 use std::io::{Read, Write};
@@ -86,19 +88,18 @@ fn run_scheme_cmd(
     })?;
     let t2 = Instant::now();
     let json = serde_json::to_string(&value).map_err(|e| InputError::new("", e))? + "\n";
-    match &a.output {
-        Some(path) => write_files(vec![(path.clone(), json.into_bytes())])?,
-        None => stdout
-            .write_all(json.as_bytes())
-            .map_err(|e| InputError::new("-o", format!("cannot write to standard output: {e}")))?,
-    }
+    let mut outputs = Outputs::new();
+    outputs.add("-o", a.output.as_deref(), bytes_writer(json.into_bytes()))?;
+    outputs.commit(stdout)?;
     if a.timings {
         let line = serde_json::json!({
             "parse_s": (t1 - t0).as_secs_f64(),
             "solve_s": (t2 - t1).as_secs_f64(),
             "write_s": t2.elapsed().as_secs_f64(),
         });
-        let _ = writeln!(stderr, "{line}");
+        writeln!(stderr, "{line}").map_err(|e| {
+            InputError::new("--timings", format!("cannot write to standard error: {e}"))
+        })?;
     }
     Ok(())
 }
@@ -244,7 +245,15 @@ where
             let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
             let text = e.render().to_string();
             if code == 0 {
-                let _ = stdout.write_all(text.as_bytes());
+                // `--help`, `--version`: a failed write (e.g. `> /dev/full`) is an error too.
+                if stdout
+                    .write_all(text.as_bytes())
+                    .and_then(|_| stdout.flush())
+                    .is_err()
+                {
+                    let _ = writeln!(stderr, "error: cannot write to standard output");
+                    return EXIT_BAD_INPUT;
+                }
             } else {
                 // One line: clap's message up to its usage section, whitespace collapsed.
                 let msg: Vec<&str> = text
@@ -383,14 +392,22 @@ pub fn run_json_with<C: Command>(
         Some(_) => C::svg(&problem, &solution),
         None => None,
     };
-    let mut outputs: Vec<(PathBuf, Writer<'_>)> = Vec::new();
+    let mut outputs = Outputs::new();
+    // The JSON result is streamed into its file (or standard output): no copy of it in memory.
+    let json_to = |w: &mut dyn Write| -> std::io::Result<()> {
+        serde_json::to_writer(&mut *w, &solution).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    };
+    outputs.add("-o", args.output.as_deref(), Box::new(json_to))?;
     if let Some(path) = obj {
         let text = C::obj(&problem, &solution)
             .ok_or_else(|| InputError::new("--obj", format!("`{name}` has no mesh output")))??;
-        outputs.push((path.to_path_buf(), bytes_writer(text.into_bytes())));
+        outputs.add("--obj", Some(path), bytes_writer(text.into_bytes()))?;
     }
     match (&args.svg, svg) {
-        (Some(path), Some(svg)) => outputs.push((path.clone(), bytes_writer(svg.into_bytes()))),
+        (Some(path), Some(svg)) => {
+            outputs.add("--svg", Some(path), bytes_writer(svg.into_bytes()))?
+        }
         (Some(path), None) => {
             return Err(InputError::new(
                 "--svg",
@@ -403,24 +420,7 @@ pub fn run_json_with<C: Command>(
         }
         _ => {}
     }
-    // The JSON result is streamed into its file (or standard output): no copy of it in memory.
-    let json_to = |w: &mut dyn Write| -> std::io::Result<()> {
-        serde_json::to_writer(&mut *w, &solution).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
-    };
-    match &args.output {
-        Some(path) => {
-            outputs.push((path.clone(), Box::new(json_to)));
-            write_files_with(outputs)?;
-        }
-        None => {
-            write_files_with(outputs)?;
-            let mut buf = std::io::BufWriter::with_capacity(1 << 16, &mut *stdout);
-            json_to(&mut buf).and_then(|_| buf.flush()).map_err(|e| {
-                InputError::new("-o", format!("cannot write to standard output: {e}"))
-            })?;
-        }
-    }
+    outputs.commit(stdout)?;
     let t3 = Instant::now();
     if args.timings {
         let line = serde_json::json!({
@@ -428,7 +428,9 @@ pub fn run_json_with<C: Command>(
             "solve_s": (t2 - t1).as_secs_f64(),
             "write_s": (t3 - t2).as_secs_f64(),
         });
-        let _ = writeln!(stderr, "{line}");
+        writeln!(stderr, "{line}").map_err(|e| {
+            InputError::new("--timings", format!("cannot write to standard error: {e}"))
+        })?;
     }
     Ok(())
 }
@@ -549,83 +551,4 @@ fn read_csv_points(path: &Path) -> Result<Vec<Vec<f64>>, Failure> {
     refuse_large_file(&file, &path.display().to_string())?;
     let text = read_limited(&mut &file, &path.display().to_string())?;
     Ok(parse_csv_points(&text)?)
-}
-
-/// Something that writes one output file's content.
-pub type Writer<'a> = Box<dyn FnOnce(&mut dyn Write) -> std::io::Result<()> + 'a>;
-
-fn bytes_writer<'a>(bytes: Vec<u8>) -> Writer<'a> {
-    Box::new(move |w: &mut dyn Write| w.write_all(&bytes))
-}
-
-/// Writes every `(path, bytes)` to a temporary sibling first, then renames them all; on any
-/// failure the temporaries are removed and no target file is created or changed.
-pub fn write_files(files: Vec<(PathBuf, Vec<u8>)>) -> Result<(), InputError> {
-    write_files_with(
-        files
-            .into_iter()
-            .map(|(p, b)| (p, bytes_writer(b)))
-            .collect(),
-    )
-}
-
-/// [`write_files`] with streamed contents: each writer fills a buffered temporary file.
-pub fn write_files_with(files: Vec<(PathBuf, Writer<'_>)>) -> Result<(), InputError> {
-    let mut temps: Vec<(PathBuf, PathBuf)> = Vec::new();
-    let cleanup = |temps: &[(PathBuf, PathBuf)]| {
-        for (t, _) in temps {
-            let _ = std::fs::remove_file(t);
-        }
-    };
-    let mut direct: Vec<(PathBuf, Writer<'_>)> = Vec::new();
-    for (k, (path, write)) in files.into_iter().enumerate() {
-        // A device, FIFO or other special file (e.g. /dev/null, /dev/stdout) is written in
-        // place: renaming a temporary over it would replace the device with a regular file.
-        if std::fs::metadata(&path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
-            direct.push((path, write));
-            continue;
-        }
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "out".into());
-        let tmp = path.with_file_name(format!(".{name}.{}.{k}.tmp", std::process::id()));
-        let result = std::fs::File::create(&tmp).and_then(|f| {
-            let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
-            write(&mut w)?;
-            w.flush()
-        });
-        if let Err(e) = result {
-            cleanup(&temps);
-            let _ = std::fs::remove_file(&tmp);
-            return Err(InputError::new(
-                "output",
-                format!("cannot write {}: {e}", path.display()),
-            ));
-        }
-        temps.push((tmp, path));
-    }
-    for (tmp, path) in &temps {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            cleanup(&temps);
-            return Err(InputError::new(
-                "output",
-                format!("cannot write {}: {e}", path.display()),
-            ));
-        }
-    }
-    for (path, write) in direct {
-        let result = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&path)
-            .and_then(|f| {
-                let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
-                write(&mut w)?;
-                w.flush()
-            });
-        result.map_err(|e| {
-            InputError::new("output", format!("cannot write {}: {e}", path.display()))
-        })?;
-    }
-    Ok(())
 }
