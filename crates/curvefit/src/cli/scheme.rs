@@ -12,12 +12,12 @@
 //! The polygon file (`--apply`) is JSON: `{"points": [[x, y, …], …], "closed": true}` — at least
 //! two points, all of the same dimension d ≥ 1, finite coordinates; `closed` defaults to `true`
 //! (a periodic polygon; `false` keeps the end points and uses one-sided end stencils that keep
-//! the polynomial reproduction, see `refine::NaryScheme`). Unknown fields are an error.
+//! the polynomial reproduction, see `subdivision::NaryScheme`). Unknown fields are an error.
 
 use divdiff::{Points, Topology};
-use refine::{rational_to_f64, BigRational, NaryScheme};
 use serde::Deserialize;
 use serde_json::{json, Value};
+use subdivision::{rational_to_f64, BigRational, NaryScheme};
 
 use super::InputError;
 
