@@ -1,9 +1,10 @@
 //! `cargo xtask tidy`: mechanical checks of the invariants stated in ARCHITECTURE.md.
 //!
 //! 1. Layering: each workspace crate depends only on the crates it is allowed to (from
-//!    `cargo metadata`, normal dependencies).
-//! 2. No library crate does I/O: the sources of `divdiff`, `energy`, `refine` and `strip` never
-//!    name `std::fs`, `std::io`, `std::net`, `File`, or print.
+//!    `cargo metadata`, normal dependencies); crates listed in `EXTERNAL` also only on the
+//!    external crates listed there.
+//! 2. No library crate does I/O: the sources of `divdiff`, `energy`, `refine`, `subdivision` and
+//!    `strip` never name `std::fs`, `std::io`, `std::net`, `File`, or print.
 //! 3. The solve path never forms a dense N×N matrix: outside files named `dense.rs` and
 //!    `#[cfg(test)]` code, `energy` and `refine` sources never name `DMatrix`.
 
@@ -15,11 +16,22 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("divdiff", &[]),
     ("energy", &["divdiff"]),
     ("refine", &["divdiff", "energy"]),
+    ("subdivision", &["divdiff"]),
     ("strip", &[]),
-    ("curvefit", &["divdiff", "energy", "refine", "strip"]),
+    (
+        "curvefit",
+        &["divdiff", "energy", "refine", "subdivision", "strip"],
+    ),
 ];
 
-const LIBRARIES: &[&str] = &["divdiff", "energy", "refine", "strip"];
+/// Crates whose external (non-workspace) normal dependencies are restricted too: `subdivision`
+/// is exact rational arithmetic on `divdiff`'s points, nothing more (no linear-algebra crate).
+const EXTERNAL: &[(&str, &[&str])] = &[(
+    "subdivision",
+    &["num-rational", "num-bigint", "num-traits", "thiserror"],
+)];
+
+const LIBRARIES: &[&str] = &["divdiff", "energy", "refine", "subdivision", "strip"];
 const IO_PATTERNS: &[&str] = &[
     "std::fs",
     "std::io",
@@ -87,6 +99,15 @@ fn check_layers(problems: &mut Vec<String>) -> anyhow::Result<()> {
             let kind = dep["kind"].as_str();
             if kind.is_none() && internal.contains(&dname) && !ok.contains(&dname) {
                 problems.push(format!("layering: {name} must not depend on {dname}"));
+            }
+            let external = EXTERNAL.iter().find(|(n, _)| *n == name);
+            if let Some((_, allowed_external)) = external {
+                if kind.is_none()
+                    && !internal.contains(&dname)
+                    && !allowed_external.contains(&dname)
+                {
+                    problems.push(format!("layering: {name} must not depend on {dname}"));
+                }
             }
         }
     }

@@ -5,7 +5,7 @@
 //! identical) or the number of mismatches; floating-point checks report the largest deviation.
 
 use divdiff::{Points, Topology};
-use refine::{
+use subdivision::{
     lagrange_weights, natural_inner_product_matrix, natural_interpolation_matrix,
     natural_subdivision_matrix, rational_to_f64, upsampling_matrix, BigRational, NaryScheme,
     NaturalScheme, QuadGrid, RationalMatrix,

@@ -6,9 +6,9 @@
 //! |---|---|---|---|
 //! | [`refine()`] | [`RefineProblem`] | [`RefineResult`] | [`refine::Problem::solve`] |
 //! | [`strip()`] | [`StripProblem`] | [`StripResult`] | [`strip::solve`](::strip::solve) |
-//! | [`scheme()`] | [`SchemeProblem`] | [`SchemeResult`] | [`refine::NaryScheme`] |
-//! | [`surface()`] | [`SurfaceProblem`] | [`SurfaceResult`] | [`refine::NaryScheme::subdivide_grid`] |
-//! | [`natural()`] | [`NaturalProblem`] | [`NaturalResult`] | [`refine::NaturalScheme`] |
+//! | [`scheme()`] | [`SchemeProblem`] | [`SchemeResult`] | [`subdivision::NaryScheme`] |
+//! | [`surface()`] | [`SurfaceProblem`] | [`SurfaceResult`] | [`subdivision::NaryScheme::subdivide_grid`] |
+//! | [`natural()`] | [`NaturalProblem`] | [`NaturalResult`] | [`subdivision::NaturalScheme`] |
 //!
 //! The `curvefit` binary, the Python package and the WebAssembly page all call these functions,
 //! so a problem means the same everywhere: `curvefit refine f.json` prints

@@ -1,6 +1,6 @@
 //! Small dense matrices of exact rationals, used only to *derive* rules (subdivision and
 //! interpolation matrices of the natural cubic scheme) and to check identities exactly. Sizes
-//! are bounded by [`super::MAX_EXACT_INTERVALS`]; no solve path of the library runs on them.
+//! are bounded by [`crate::MAX_EXACT_INTERVALS`]; no solve path of the library runs on them.
 
 use num_rational::BigRational;
 use num_traits::{One, Zero};
@@ -97,7 +97,7 @@ impl RationalMatrix {
     /// The matrix with every entry correctly rounded to `f64`, as rows.
     pub fn to_f64_rows(&self) -> Vec<Vec<f64>> {
         (0..self.rows)
-            .map(|i| self.row(i).iter().map(super::rational_to_f64).collect())
+            .map(|i| self.row(i).iter().map(crate::rational_to_f64).collect())
             .collect()
     }
 
