@@ -6,6 +6,7 @@
 
 mod commands;
 pub mod demo;
+pub mod input;
 pub mod output;
 
 pub use self::commands::{natural, refine, strip, surface};
@@ -13,6 +14,7 @@ pub use self::commands::{natural, refine, strip, surface};
 /// [`crate::spec::refine`]).
 pub use crate::spec::refine as refine_types;
 pub use crate::spec::InputError;
+pub use input::MAX_INPUT_BYTES;
 pub use output::{bytes_writer, Outputs, Writer};
 
 use std::ffi::OsString;
@@ -32,6 +34,16 @@ pub trait Command {
     fn solve(problem: &Self::Problem) -> Result<Self::Solution, InputError>;
     /// The picture for `--svg`, or `None`.
     fn svg(problem: &Self::Problem, solution: &Self::Solution) -> Option<String>;
+    /// Puts the points of `--points FILE.csv` into the problem.
+    ///
+    /// # Errors
+    /// When the command takes no points from a CSV file, or the problem has points already.
+    fn set_points(_problem: &mut Self::Problem, _csv: input::Csv) -> Result<(), InputError> {
+        Err(InputError::new(
+            "--points",
+            "this subcommand reads no points from a CSV file",
+        ))
+    }
     /// A mesh for `--obj` (Wavefront OBJ text), or `None` when the command has none.
     fn obj(
         _problem: &Self::Problem,
@@ -49,26 +61,21 @@ fn run_scheme_cmd(
 ) -> Result<(), Failure> {
     let t0 = Instant::now();
     let polygon = match &a.apply {
-        Some(p) => {
-            let file = std::fs::File::open(p).map_err(|e| {
-                InputError::new("--apply", format!("cannot open {}: {e}", p.display()))
-            })?;
-            Some(read_limited(&mut &file, &p.display().to_string())?)
-        }
+        Some(p) => Some(
+            input::read_json(input::open(p, "--apply")?, &p.display().to_string()).map_err(
+                |e| {
+                    let field = if e.field.is_empty() || e.field == "problem" {
+                        "polygon".to_string()
+                    } else {
+                        format!("polygon.{}", e.field)
+                    };
+                    InputError::new(field, e.message)
+                },
+            )?,
+        ),
         None => None,
     };
     let t1 = Instant::now();
-    let polygon = match polygon {
-        Some(text) => Some(crate::spec::from_json(&text).map_err(|e| {
-            let field = if e.field.is_empty() || e.field == "problem" {
-                "polygon".to_string()
-            } else {
-                format!("polygon.{}", e.field)
-            };
-            InputError::new(field, e.message)
-        })?),
-        None => None,
-    };
     let problem = crate::spec::SchemeProblem {
         points: a.points,
         arity: a.arity,
@@ -122,9 +129,6 @@ fn one_line(s: &str) -> String {
 pub const EXIT_BAD_INPUT: i32 = 2;
 /// Exit code for an internal error (a bug): nothing was written.
 pub const EXIT_INTERNAL: i32 = 70;
-
-/// Largest problem file accepted (bytes); larger input is refused before parsing.
-pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 
 #[derive(Parser, Debug)]
 #[command(name = "curvefit", version, about = "Variational curve refinement and constrained spline interpolation", long_about = None)]
@@ -435,18 +439,13 @@ pub fn run_json_with<C: Command>(
     Ok(())
 }
 
-/// Reads and parses the problem; `--points FILE.csv` supplies (or must not duplicate) `points`.
+/// Reads and parses the problem (streamed: the text is never held); `--points FILE.csv`
+/// supplies `points` (or `t` and `y`), which the problem must not have already.
 fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C::Problem, Failure> {
-    let text = match &args.problem {
-        Some(p) if p.as_os_str() == "-" => read_limited(stdin, "standard input")?,
-        Some(p) => {
-            let file = std::fs::File::open(p).map_err(|e| {
-                InputError::new("problem", format!("cannot open {}: {e}", p.display()))
-            })?;
-            refuse_large_file(&file, &p.display().to_string())?;
-            read_limited(&mut &file, &p.display().to_string())?
-        }
-        None if args.points_csv.is_some() => "{}".to_string(),
+    let mut problem: C::Problem = match &args.problem {
+        Some(p) if p.as_os_str() == "-" => input::read_json(stdin, "standard input")?,
+        Some(p) => input::read_json(input::open(p, "problem")?, &p.display().to_string())?,
+        None if args.points_csv.is_some() => crate::spec::from_json("{}")?,
         None => {
             return Err(InputError::new(
                 "problem",
@@ -455,100 +454,10 @@ fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C:
             .into())
         }
     };
-    let Some(csv) = &args.points_csv else {
-        // Straight from the text into the typed problem: no `Value` tree, whose size is many
-        // times the text's (ROBUSTNESS.md finding 10).
-        return Ok(crate::spec::from_json(&text)?);
-    };
-    let mut value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
-    let rows = read_csv_points(csv)?;
-    let obj = value
-        .as_object_mut()
-        .ok_or_else(|| InputError::new("problem", "the problem must be a JSON object"))?;
-    if obj.contains_key("points") {
-        return Err(InputError::new("points", "given both in the problem and by --points").into());
+    if let Some(csv) = &args.points_csv {
+        let what = csv.display().to_string();
+        let points = input::read_csv(input::open(csv, "--points")?, &what)?;
+        C::set_points(&mut problem, points)?;
     }
-    obj.insert("points".into(), serde_json::Value::from(rows));
-    Ok(crate::spec::from_deserializer(value)?)
-}
-
-/// A regular file above [`MAX_INPUT_BYTES`] is refused from its metadata, before any byte is read
-/// (pipes and devices are limited while reading, by [`read_limited`]).
-fn refuse_large_file(file: &std::fs::File, what: &str) -> Result<(), Failure> {
-    match file.metadata() {
-        Ok(m) if m.is_file() && m.len() > MAX_INPUT_BYTES => Err(InputError::new(
-            "problem",
-            format!("{what} is larger than {MAX_INPUT_BYTES} bytes"),
-        )
-        .into()),
-        _ => Ok(()),
-    }
-}
-
-fn read_limited(r: &mut dyn Read, what: &str) -> Result<String, Failure> {
-    let mut buf = String::new();
-    let n = r
-        .take(MAX_INPUT_BYTES + 1)
-        .read_to_string(&mut buf)
-        .map_err(|e| InputError::new("problem", format!("cannot read {what}: {e}")))?;
-    if n as u64 > MAX_INPUT_BYTES {
-        return Err(InputError::new(
-            "problem",
-            format!("{what} is larger than {MAX_INPUT_BYTES} bytes"),
-        )
-        .into());
-    }
-    Ok(buf)
-}
-
-/// Parses a CSV of points: one point per line, coordinates separated by commas (or whitespace);
-/// blank lines and lines starting with `#` are skipped; all rows must have the same length.
-pub fn parse_csv_points(text: &str) -> Result<Vec<Vec<f64>>, InputError> {
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    for (lineno, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let idx = rows.len();
-        let row = line
-            .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
-            .filter(|s| !s.is_empty())
-            .map(|s| {
-                s.parse::<f64>()
-                    .ok()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| {
-                        InputError::new(
-                            format!("points[{idx}]"),
-                            format!("line {}: `{s}` is not a finite number", lineno + 1),
-                        )
-                    })
-            })
-            .collect::<Result<Vec<f64>, _>>()?;
-        if let Some(first) = rows.first() {
-            if first.len() != row.len() {
-                return Err(InputError::new(
-                    format!("points[{idx}]"),
-                    format!(
-                        "line {}: {} coordinates, expected {}",
-                        lineno + 1,
-                        row.len(),
-                        first.len()
-                    ),
-                ));
-            }
-        }
-        rows.push(row);
-    }
-    Ok(rows)
-}
-
-fn read_csv_points(path: &Path) -> Result<Vec<Vec<f64>>, Failure> {
-    let file = std::fs::File::open(path)
-        .map_err(|e| InputError::new("--points", format!("cannot open {}: {e}", path.display())))?;
-    refuse_large_file(&file, &path.display().to_string())?;
-    let text = read_limited(&mut &file, &path.display().to_string())?;
-    Ok(parse_csv_points(&text)?)
+    Ok(problem)
 }

@@ -27,6 +27,7 @@
 //! ```
 
 pub mod natural;
+pub(crate) mod points;
 pub mod refine;
 mod refine_types;
 pub mod scheme;
@@ -36,6 +37,7 @@ pub mod surface;
 use std::fmt::Display;
 
 pub use self::natural::{NaturalProblem, NaturalSolution as NaturalResult};
+pub use self::points::{Numbers, Rows, MAX_NUMBERS, MAX_POINT_COORDS};
 pub use self::refine::{RefineProblem, RefineResult};
 pub use self::scheme::{SchemeProblem, SchemeResult};
 pub use self::strip::{Problem as StripProblem, Solution as StripResult};
@@ -161,7 +163,13 @@ fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputError {
     if inner.is_syntax() || inner.is_eof() {
         InputError::new("problem", format!("malformed JSON: {inner}"))
     } else {
-        InputError::new(field, inner)
+        // The field path says where; the line and column serde_json appends add nothing.
+        let text = inner.to_string();
+        let text = match text.rfind(" at line ") {
+            Some(i) if inner.line() > 0 => text[..i].to_string(),
+            _ => text,
+        };
+        InputError::new(field, text)
     }
 }
 

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use subdivision::NaturalScheme;
 
 use super::scheme::validate_rows;
-use super::InputError;
+use super::{InputError, Rows};
 
 /// Largest result accepted: coordinates summed over all levels (the output lists every level).
 pub const MAX_NATURAL_OUTPUT_COORDS: usize = 10_000_000;
@@ -21,7 +21,8 @@ pub const MAX_NATURAL_OUTPUT_COORDS: usize = 10_000_000;
 #[serde(deny_unknown_fields)]
 pub struct NaturalProblem {
     /// Control points p_0 at the integers 0..L.
-    pub points: Vec<Vec<f64>>,
+    #[serde(default)]
+    pub points: Rows,
     /// Rounds of subdivision K (default 4).
     #[serde(default = "four")]
     pub levels: usize,
@@ -37,7 +38,7 @@ pub struct NaturalLevel {
     /// k.
     pub level: usize,
     /// p_k (2^k L + 1 points).
-    pub points: Vec<Vec<f64>>,
+    pub points: Rows,
     /// p_kᵀ E_k p_k summed over coordinates.
     pub energy: f64,
 }
@@ -88,7 +89,7 @@ pub fn solve(problem: &NaturalProblem) -> Result<NaturalSolution, InputError> {
             .enumerate()
             .map(|(k, p)| NaturalLevel {
                 level: k,
-                points: p.to_rows(),
+                points: Rows(p.clone()),
                 energy: NaturalScheme::energy(p, k),
             })
             .collect(),
@@ -112,7 +113,15 @@ mod tests {
     use super::*;
 
     fn problem(s: &str) -> NaturalProblem {
-        serde_json::from_str(s).unwrap()
+        super::super::from_json(s).unwrap()
+    }
+
+    /// The error of parsing or solving `s`.
+    fn error(s: &str) -> InputError {
+        match super::super::from_json::<NaturalProblem>(s) {
+            Ok(p) => solve(&p).unwrap_err(),
+            Err(e) => e,
+        }
     }
 
     #[test]
@@ -134,16 +143,16 @@ mod tests {
 
     #[test]
     fn bad_input_names_the_field() {
-        let e = solve(&problem(r#"{"points": [[0,0]]}"#)).unwrap_err();
+        let e = error(r#"{"points": [[0,0]]}"#);
         assert_eq!(e.field, "points");
-        let e = solve(&problem(r#"{"points": [[0,0],[1]]}"#)).unwrap_err();
+        let e = error(r#"{"points": [[0,0],[1]]}"#);
         assert_eq!(e.field, "points[1]");
-        let e = solve(&problem(r#"{"points": [[0,0],[1,1]], "levels": 40}"#)).unwrap_err();
+        let e = error(r#"{"points": [[0,0],[1,1]], "levels": 40}"#);
         assert_eq!(e.field, "levels");
-        let e = solve(&problem(r#"{"points": [[], []]}"#)).unwrap_err();
+        let e = error(r#"{"points": [[], []]}"#);
         assert_eq!(e.field, "points[0]");
         // Found by `cargo xtask fuzz`: finite input whose energy overflows.
-        let e = solve(&problem(r#"{"points": [[0,0],[1,1e308],[3,1]]}"#)).unwrap_err();
+        let e = error(r#"{"points": [[0,0],[1,1e308],[3,1]]}"#);
         assert_eq!(e.field, "points");
         assert!(serde_json::from_str::<NaturalProblem>(r#"{"points": [[0]], "x": 1}"#).is_err());
     }

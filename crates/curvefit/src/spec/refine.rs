@@ -96,20 +96,12 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
             ),
         ));
     }
-    let d = p.points[0].len();
-    if d == 0 {
-        return Err(InputError::new(
-            "points[0]",
-            "has no coordinates (dimension must be at least 1)",
-        ));
-    }
-    for (i, q) in p.points.iter().enumerate() {
-        vector(|| format!("points[{i}]"), q, d)?;
-    }
+    // Rows guarantee one dimension d ≥ 1 and finite coordinates.
+    let d = p.points.dim();
     let spans = if p.closed { n } else { n - 1 };
     for i in 0..spans {
         let j = (i + 1) % n;
-        if p.points[i] == p.points[j] {
+        if p.points.point(i) == p.points.point(j) {
             return Err(InputError::new(
                 format!("points[{j}]"),
                 format!(
@@ -253,8 +245,8 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
 /// # Errors
 /// An [`InputError`] for points the library rejects.
 pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
-    use divdiff::{DerivativeRule, Parametrization, Points, Topology};
-    let points = Points::from_rows(&p.points).map_err(|e| InputError::new("", e))?;
+    use divdiff::{DerivativeRule, Parametrization, Topology};
+    let points = p.points.0.clone();
     let hs = |h: &HalfSpaceSpec| refine::HalfSpace {
         normal: h.normal.clone(),
         offset: h.offset,
@@ -379,7 +371,7 @@ mod tests {
     use super::*;
 
     fn problem(json: &str) -> RefineProblem {
-        serde_json::from_str(json).unwrap()
+        super::super::from_json(json).unwrap()
     }
 
     #[test]
@@ -427,7 +419,10 @@ mod tests {
             ),
         ];
         for (json, field) in cases {
-            let e = validate(&problem(json)).unwrap_err();
+            let e = match super::super::from_json::<RefineProblem>(json) {
+                Ok(p) => validate(&p).unwrap_err(),
+                Err(e) => e,
+            };
             assert_eq!(e.field, field, "{json}: {e}");
         }
         assert_eq!(

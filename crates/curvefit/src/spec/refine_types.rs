@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use super::points::Rows;
+
 fn yes() -> bool {
     true
 }
@@ -18,8 +20,10 @@ fn one() -> usize {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RefineProblem {
-    /// The data q_1..q_n, all of the same dimension d ≥ 1.
-    pub points: Vec<Vec<f64>>,
+    /// The data q_1..q_n, all of the same dimension d ≥ 1 (required: absent reads as empty and
+    /// is refused by validation; the command line may fill it from `--points FILE.csv`).
+    #[serde(default)]
+    pub points: Rows,
     /// Closed curve (the last span closes it) or open.
     #[serde(default = "yes")]
     pub closed: bool,
@@ -182,29 +186,6 @@ pub enum SolverSpec {
     Exact,
     /// Kersey's multiplier iteration (approximate; reproduces the paper's figures).
     Paper,
-}
-
-/// Points serialized as `[[x, y, …], …]` straight from their flat storage (no per-point
-/// allocation: results can have millions of vertices).
-#[derive(Clone, Debug, Default)]
-pub struct Rows(pub divdiff::Points);
-
-impl std::ops::Deref for Rows {
-    type Target = divdiff::Points;
-    fn deref(&self) -> &divdiff::Points {
-        &self.0
-    }
-}
-
-impl Serialize for Rows {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeSeq;
-        let mut seq = s.serialize_seq(Some(self.0.len()))?;
-        for p in self.0.iter() {
-            seq.serialize_element(p)?;
-        }
-        seq.end()
-    }
 }
 
 /// The result of `curvefit refine`.

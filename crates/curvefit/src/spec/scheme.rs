@@ -18,7 +18,7 @@ use divdiff::{Points, Topology};
 use serde::{Deserialize, Serialize};
 use subdivision::{rational_to_f64, BigRational, NaryScheme};
 
-use super::InputError;
+use super::{InputError, Rows};
 
 /// Largest stencil size P accepted on the command line (the weights of wider rules are too large
 /// to be useful in floating point, and the output grows like P² N² with `--surface`).
@@ -33,7 +33,7 @@ pub const MAX_CLI_POLYGON_COORDS: usize = 10_000_000;
 #[serde(deny_unknown_fields)]
 pub struct PolygonInput {
     /// The vertices, each `[x, y, …]`.
-    pub points: Vec<Vec<f64>>,
+    pub points: Rows,
     /// Closed (periodic) polygon; default `true`.
     #[serde(default = "yes")]
     pub closed: bool,
@@ -53,37 +53,16 @@ pub fn format_rational(q: &BigRational) -> String {
     }
 }
 
-/// Validates rows of points: at least `min` rows, equal dimension ≥ 1, finite coordinates.
-/// Errors name `field[i]` or `field[i][j]`.
-pub fn validate_rows(field: &str, rows: &[Vec<f64>], min: usize) -> Result<Points, InputError> {
+/// Points with at least `min` rows (rows already have one dimension d ≥ 1 and finite
+/// coordinates). Errors name `field`.
+pub fn validate_rows(field: &str, rows: &Rows, min: usize) -> Result<Points, InputError> {
     if rows.len() < min {
         return Err(InputError::new(
             field,
             format!("needs at least {min} points, got {}", rows.len()),
         ));
     }
-    let dim = rows[0].len();
-    if dim == 0 {
-        return Err(InputError::new(
-            format!("{field}[0]"),
-            "a point needs at least one coordinate",
-        ));
-    }
-    for (i, r) in rows.iter().enumerate() {
-        if r.len() != dim {
-            return Err(InputError::new(
-                format!("{field}[{i}]"),
-                format!("has {} coordinates, expected {dim}", r.len()),
-            ));
-        }
-        if let Some(j) = r.iter().position(|x| !x.is_finite()) {
-            return Err(InputError::new(
-                format!("{field}[{i}][{j}]"),
-                "must be a finite number",
-            ));
-        }
-    }
-    Points::from_rows(rows).map_err(|e| InputError::new(field, e))
+    Ok(rows.0.clone())
 }
 
 /// Builds the scheme P = `points`, N = `arity`, naming the field on error.
@@ -173,11 +152,11 @@ pub struct PolygonResult {
     /// As in the problem.
     pub closed: bool,
     /// The input points.
-    pub input: Vec<Vec<f64>>,
+    pub input: Rows,
     /// Levels applied.
     pub levels: usize,
     /// The refined points.
-    pub output: Vec<Vec<f64>>,
+    pub output: Rows,
 }
 
 /// The `scheme` result (fields in the order the result has always printed them).
@@ -265,7 +244,7 @@ pub fn solve(problem: &SchemeProblem) -> Result<SchemeResult, InputError> {
                 closed: poly.closed,
                 input: poly.points.clone(),
                 levels,
-                output: refined.to_rows(),
+                output: Rows(refined),
             })
         }
     };
@@ -283,7 +262,7 @@ mod tests {
     use super::*;
 
     fn problem(points: usize, arity: usize, surface: bool, polygon: Option<&str>) -> SchemeProblem {
-        let polygon = polygon.map(|p| serde_json::from_str(p).unwrap());
+        let polygon = polygon.map(|p| super::super::from_json(p).unwrap());
         SchemeProblem {
             points,
             arity,
@@ -306,10 +285,7 @@ mod tests {
             rules[1]["weights"],
             serde_json::json!(["-5/81", "20/27", "10/27", "-4/81"])
         );
-        assert_eq!(
-            rules[0]["weights"],
-            serde_json::json!(["0", "1", "0", "0"])
-        );
+        assert_eq!(rules[0]["weights"], serde_json::json!(["0", "1", "0", "0"]));
         let f = rules[1]["floats"][0].as_f64().unwrap();
         assert!((f + 5.0 / 81.0).abs() < 1e-17);
         assert!(v.get("surface_rules").is_none() && v.get("polygon").is_none());
@@ -343,8 +319,11 @@ mod tests {
         assert_eq!(field(problem(18, 2, false, None)), "points");
         assert_eq!(field(problem(4, 1, false, None)), "arity");
         assert_eq!(field(problem(4, 17, false, None)), "arity");
-        let p = problem(4, 2, false, Some(r#"{"points": [[0,0],[1]]}"#));
-        assert_eq!(field(p), "polygon.points[1]");
+        let e = super::super::from_json::<SchemeProblem>(
+            r#"{"points": 4, "arity": 2, "polygon": {"points": [[0,0],[1]]}}"#,
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "polygon.points[1]");
         let p = problem(4, 2, false, Some(r#"{"points": [[0,0]]}"#));
         assert_eq!(field(p), "polygon.points");
         let mut p = problem(4, 2, false, Some(r#"{"points": [[0,0],[1,1]]}"#));

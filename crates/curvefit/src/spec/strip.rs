@@ -13,7 +13,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::InputError;
+use super::{InputError, Numbers};
 
 /// Largest number of data points accepted (the solver is O(n) per iteration; this guards
 /// against absurd inputs).
@@ -33,10 +33,13 @@ pub enum BoundSpec {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Problem {
-    /// Data sites, strictly increasing.
-    pub t: Vec<f64>,
-    /// Data values.
-    pub y: Vec<f64>,
+    /// Data sites, strictly increasing (required; the command line may read `t` and `y` from
+    /// the two columns of `--points FILE.csv`).
+    #[serde(default)]
+    pub t: Numbers,
+    /// Data values (required, like `t`).
+    #[serde(default)]
+    pub y: Numbers,
     /// Lower bound (default: none).
     #[serde(default)]
     pub lower: Option<BoundSpec>,
@@ -161,8 +164,8 @@ pub fn solve(p: &Problem) -> Result<Solution, InputError> {
         ));
     }
     let problem = strip::Problem {
-        t: p.t.clone(),
-        y: p.y.clone(),
+        t: p.t.0.clone(),
+        y: p.y.0.clone(),
         lower: bound(&p.lower),
         upper: bound(&p.upper),
         end_slopes: p.end_slopes.unwrap_or([None, None]),

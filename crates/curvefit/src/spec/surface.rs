@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use subdivision::{quad_mesh_obj, QuadGrid};
 
 use super::scheme::{scheme_from_flags, validate_rows};
-use super::InputError;
+use super::{InputError, Rows};
 
 /// Largest result accepted: refined grid points × dimension.
 pub const MAX_SURFACE_OUTPUT_COORDS: usize = 10_000_000;
@@ -63,7 +63,8 @@ pub struct SurfaceProblem {
     /// Number of columns (range of j), at least 2.
     pub cols: usize,
     /// rows × cols points, row-major.
-    pub points: Vec<Vec<f64>>,
+    #[serde(default)]
+    pub points: Rows,
     /// [closed in i, closed in j]; default both open.
     #[serde(default)]
     pub closed: [bool; 2],
@@ -87,7 +88,7 @@ pub struct SurfaceSolution {
     /// As in the problem.
     pub levels: usize,
     /// The refined points, row-major.
-    pub points: Vec<Vec<f64>>,
+    pub points: Rows,
     /// The quads as 0-based point indices (i, j), (i, j+1), (i+1, j+1), (i+1, j).
     pub quads: Vec<[usize; 4]>,
 }
@@ -208,7 +209,7 @@ pub fn solve(problem: &SurfaceProblem) -> Result<SurfaceSolution, InputError> {
         cols: fine.cols(),
         closed: problem.closed,
         levels: problem.levels,
-        points: fine.points().to_rows(),
+        points: Rows(fine.points().clone()),
         quads: fine.quads(),
     })
 }
@@ -253,7 +254,10 @@ mod tests {
 
     #[test]
     fn bad_input_names_the_field() {
-        let solve = |s: &str| solve(&serde_json::from_str(s).unwrap()).unwrap_err();
+        let solve = |s: &str| match super::super::from_json::<SurfaceProblem>(s) {
+            Ok(p) => solve(&p).unwrap_err(),
+            Err(e) => e,
+        };
         assert_eq!(solve(&grid_json(1, 4, "")).field, "rows");
         let e = solve(r#"{"rows": 2, "cols": 2, "points": [[0,0],[1,0],[0,1]]}"#);
         assert_eq!(e.field, "points");

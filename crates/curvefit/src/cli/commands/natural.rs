@@ -3,7 +3,7 @@
 
 use crate::plot::{palette, Figure, Marker, Style};
 use crate::spec::natural::*;
-use crate::spec::InputError;
+use crate::spec::{InputError, Rows};
 
 /// The `natural` subcommand.
 pub enum NaturalCmd {}
@@ -12,6 +12,11 @@ impl super::super::Command for NaturalCmd {
     type Problem = NaturalProblem;
     type Solution = NaturalSolution;
 
+    /// `--points FILE.csv`: the problem's `points`.
+    fn set_points(p: &mut NaturalProblem, csv: super::super::input::Csv) -> Result<(), InputError> {
+        super::set_points(&mut p.points, csv)
+    }
+
     fn solve(problem: &NaturalProblem) -> Result<NaturalSolution, InputError> {
         crate::spec::natural(problem)
     }
@@ -19,7 +24,7 @@ impl super::super::Command for NaturalCmd {
     /// The control polygon p_0 and the last level; for d = 1 the graph over [0, L], for d ≥ 2
     /// the first two coordinates (parametric, as in Fig. 6.6).
     fn svg(problem: &NaturalProblem, solution: &NaturalSolution) -> Option<String> {
-        let project = |rows: &[Vec<f64>], scale: f64| -> Vec<[f64; 2]> {
+        let project = |rows: &Rows, scale: f64| -> Vec<[f64; 2]> {
             rows.iter()
                 .enumerate()
                 .map(|(i, r)| {
@@ -34,7 +39,7 @@ impl super::super::Command for NaturalCmd {
         let last = solution.levels.last()?;
         let k = last.level;
         let mut fig = Figure::new("Natural cubic subdivision (Warren–Weimer §6.2)");
-        fig.equal_aspect(problem.points.first().is_some_and(|p| p.len() >= 2));
+        fig.equal_aspect(problem.points.dim() >= 2);
         fig.polyline(
             &project(&problem.points, 1.0),
             Style::stroke(palette::REGION, 1.0).dashed("4 3"),

@@ -11,6 +11,11 @@ impl super::super::Command for RefineCmd {
     type Problem = RefineProblem;
     type Solution = RefineResult;
 
+    /// `--points FILE.csv`: the problem's `points`.
+    fn set_points(p: &mut RefineProblem, csv: super::super::input::Csv) -> Result<(), InputError> {
+        super::set_points(&mut p.points, csv)
+    }
+
     fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
         crate::spec::refine(problem)
     }
@@ -112,7 +117,7 @@ pub fn halfplane_polygon(
 /// curves in R^1 are drawn as graphs over their knots.
 pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
     use crate::plot::{palette, Figure, Marker, Style};
-    let d = p.points.first().map_or(0, Vec::len);
+    let d = p.points.dim();
     let xy = |v: &[f64], t: f64| -> [f64; 2] {
         if d >= 2 {
             [v[0], v[1]]

@@ -2,7 +2,7 @@
 
 use crate::plot::{palette, Figure, Marker, Style};
 use crate::spec::strip::*;
-use crate::spec::InputError;
+use crate::spec::{InputError, Numbers};
 
 /// The `strip` subcommand.
 pub enum Strip {}
@@ -13,6 +13,29 @@ impl super::super::Command for Strip {
 
     fn solve(p: &Problem) -> Result<Solution, InputError> {
         crate::spec::strip(p)
+    }
+
+    /// `--points FILE.csv` with two columns: the sites `t` and the values `y`.
+    fn set_points(p: &mut Problem, csv: super::super::input::Csv) -> Result<(), InputError> {
+        if !p.t.is_empty() || !p.y.is_empty() {
+            return Err(InputError::new(
+                "t",
+                "given both in the problem and by --points (give t and y in one place)",
+            ));
+        }
+        let points = csv.points;
+        if !points.is_empty() && points.dim() != 2 {
+            return Err(InputError::new(
+                "--points",
+                format!(
+                    "a strip's CSV has two columns, t and y; this one has {}",
+                    points.dim()
+                ),
+            ));
+        }
+        p.t = Numbers(points.iter().map(|r| r[0]).collect());
+        p.y = Numbers(points.iter().map(|r| r[1]).collect());
+        Ok(())
     }
 
     fn svg(p: &Problem, s: &Solution) -> Option<String> {
@@ -77,7 +100,7 @@ pub fn figure(p: &Problem, s: &Solution, title: &str) -> Figure {
         fig.polyline(&line, bstyle.clone());
     }
     fig.polyline(&curve_points(s), Style::stroke(palette::CURVE, 2.0));
-    let data: Vec<[f64; 2]> = p.t.iter().zip(&p.y).map(|(a, b)| [*a, *b]).collect();
+    let data: Vec<[f64; 2]> = p.t.iter().zip(p.y.iter()).map(|(a, b)| [*a, *b]).collect();
     fig.points(&data, Marker::Ring, Style::stroke(palette::DATA, 1.5));
     let knots: Vec<[f64; 2]> = s
         .extra_knots

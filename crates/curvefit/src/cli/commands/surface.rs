@@ -3,7 +3,7 @@
 
 use crate::plot::{palette, Figure, Style};
 use crate::spec::surface::*;
-use crate::spec::InputError;
+use crate::spec::{InputError, Rows};
 
 /// An isometric projection of a point of R^2 or R^3 (x to the right-down, y to the left-down,
 /// z up), for wireframe pictures.
@@ -20,6 +20,11 @@ pub enum SurfaceCmd {}
 impl super::super::Command for SurfaceCmd {
     type Problem = SurfaceProblem;
     type Solution = SurfaceSolution;
+
+    /// `--points FILE.csv`: the problem's `points`.
+    fn set_points(p: &mut SurfaceProblem, csv: super::super::input::Csv) -> Result<(), InputError> {
+        super::set_points(&mut p.points, csv)
+    }
 
     fn solve(problem: &SurfaceProblem) -> Result<SurfaceSolution, InputError> {
         crate::spec::surface(problem)
@@ -38,19 +43,21 @@ impl super::super::Command for SurfaceCmd {
                      rows: usize,
                      cols: usize,
                      closed: [bool; 2],
-                     pts: &[Vec<f64>],
+                     pts: &Rows,
                      style: Style| {
             for i in 0..rows {
-                let mut line: Vec<[f64; 2]> =
-                    (0..cols).map(|j| isometric(&pts[i * cols + j])).collect();
+                let mut line: Vec<[f64; 2]> = (0..cols)
+                    .map(|j| isometric(pts.point(i * cols + j)))
+                    .collect();
                 if closed[1] {
                     line.push(line[0]);
                 }
                 fig.polyline(&line, style.clone());
             }
             for j in 0..cols {
-                let mut line: Vec<[f64; 2]> =
-                    (0..rows).map(|i| isometric(&pts[i * cols + j])).collect();
+                let mut line: Vec<[f64; 2]> = (0..rows)
+                    .map(|i| isometric(pts.point(i * cols + j)))
+                    .collect();
                 if closed[0] {
                     line.push(line[0]);
                 }
