@@ -264,3 +264,49 @@ fn writing_to_a_device_keeps_the_device() {
         "/dev/null is still a device"
     );
 }
+
+/// `--format csv|npy` (and the `-o` extension) write the refined points; their numbers are
+/// exactly the JSON result's.
+#[test]
+fn csv_and_npy_outputs_hold_the_json_points() {
+    let dir = scratch_dir("formats");
+    let p = problem_path("refine-interpolate-open-3d.json");
+    let p = p.to_string_lossy();
+    let (code, json, err) = run_cli(&["refine", &p], "");
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let want: Vec<f64> = v["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+        .collect();
+    let n = v["points"].as_array().unwrap().len();
+    // CSV on standard output, with a header.
+    let (code, csv, err) = run_cli(&["refine", &p, "--format", "csv"], "");
+    assert_eq!(code, 0, "{err}");
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("x,y,z"));
+    let got: Vec<f64> = lines
+        .flat_map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()))
+        .collect();
+    assert_eq!(got, want);
+    // .npy chosen by the extension.
+    let npy = dir.join("points.npy");
+    let (code, _, err) = run_cli(&["refine", &p, "-o", &npy.to_string_lossy()], "");
+    assert_eq!(code, 0, "{err}");
+    let bytes = std::fs::read(&npy).unwrap();
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+    assert!(header.contains(&format!("'shape': ({n}, 3)")), "{header}");
+    let got: Vec<f64> = bytes[10 + hlen..]
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    assert_eq!(got, want);
+    // `scheme` has no array format; strip's rows are its pieces.
+    let s = problem_path("strip-small.json");
+    let (code, csv, err) = run_cli(&["strip", &s.to_string_lossy(), "--format", "csv"], "");
+    assert_eq!(code, 0, "{err}");
+    assert!(csv.starts_with("start,end,c0,c1,c2,c3\n"), "{csv}");
+}

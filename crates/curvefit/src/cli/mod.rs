@@ -6,6 +6,7 @@
 
 mod commands;
 pub mod demo;
+pub mod format;
 pub mod input;
 pub mod output;
 
@@ -43,6 +44,10 @@ pub trait Command {
             "--points",
             "this subcommand reads no points from a CSV file",
         ))
+    }
+    /// The result's main array for `--format csv|npy`, or `None` (JSON only).
+    fn table(_solution: &Self::Solution) -> Option<format::Table<'_>> {
+        None
     }
     /// A mesh for `--obj` (Wavefront OBJ text), or `None` when the command has none.
     fn obj(
@@ -151,6 +156,10 @@ pub struct JsonArgs {
     /// Read the problem's `points` from a CSV file (one point per line, comma-separated coordinates).
     #[arg(long = "points", value_name = "FILE.csv")]
     pub points_csv: Option<PathBuf>,
+    /// Output format: the whole JSON result, or the result's main array (refined points,
+    /// strip pieces) as CSV or as a NumPy .npy file [default: json, or the -o file's extension]
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub format: Option<format::Format>,
     /// Print one JSON line {"parse_s", "solve_s", "write_s"} on standard error.
     #[arg(long)]
     pub timings: bool,
@@ -397,12 +406,10 @@ pub fn run_json_with<C: Command>(
         None => None,
     };
     let mut outputs = Outputs::new();
-    // The JSON result is streamed into its file (or standard output): no copy of it in memory.
-    let json_to = |w: &mut dyn Write| -> std::io::Result<()> {
-        serde_json::to_writer(&mut *w, &solution).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
-    };
-    outputs.add("-o", args.output.as_deref(), Box::new(json_to))?;
+    // The result is streamed into its file (or standard output): no copy of it in memory.
+    let fmt = format::Format::choose(args.format, args.output.as_deref());
+    let result = format::writer(fmt, &solution, C::table(&solution), name)?;
+    outputs.add("-o", args.output.as_deref(), result)?;
     if let Some(path) = obj {
         let text = C::obj(&problem, &solution)
             .ok_or_else(|| InputError::new("--obj", format!("`{name}` has no mesh output")))??;

@@ -1,6 +1,7 @@
 //! `curvefit natural`: the subcommand (the JSON contract is [`crate::spec::natural`]) and its
 //! picture.
 
+use super::super::format::Table;
 use crate::plot::{palette, Figure, Marker, Style};
 use crate::spec::natural::*;
 use crate::spec::{InputError, Rows};
@@ -15,6 +16,15 @@ impl super::super::Command for NaturalCmd {
     /// `--points FILE.csv`: the problem's `points`.
     fn set_points(p: &mut NaturalProblem, csv: super::super::input::Csv) -> Result<(), InputError> {
         super::set_points(&mut p.points, csv)
+    }
+
+    /// The last level's points.
+    fn table(s: &NaturalSolution) -> Option<Table<'_>> {
+        let last = s.levels.last()?;
+        Some(Table {
+            columns: Table::point_columns(last.points.dim()),
+            data: last.points.coords().into(),
+        })
     }
 
     fn solve(problem: &NaturalProblem) -> Result<NaturalSolution, InputError> {

@@ -1,6 +1,7 @@
 //! `curvefit refine`: the subcommand (the JSON contract is [`crate::spec::refine`]) and its
 //! picture.
 
+use super::super::format::Table;
 use crate::spec::refine::*;
 use crate::spec::InputError;
 
@@ -14,6 +15,14 @@ impl super::super::Command for RefineCmd {
     /// `--points FILE.csv`: the problem's `points`.
     fn set_points(p: &mut RefineProblem, csv: super::super::input::Csv) -> Result<(), InputError> {
         super::set_points(&mut p.points, csv)
+    }
+
+    /// The refined points, one row per vertex.
+    fn table(r: &RefineResult) -> Option<Table<'_>> {
+        Some(Table {
+            columns: Table::point_columns(r.points.dim()),
+            data: r.points.coords().into(),
+        })
     }
 
     fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {

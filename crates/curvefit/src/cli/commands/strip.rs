@@ -1,5 +1,6 @@
 //! `curvefit strip`: the subcommand (the JSON contract is [`crate::spec::strip`]) and its picture.
 
+use super::super::format::Table;
 use crate::plot::{palette, Figure, Marker, Style};
 use crate::spec::strip::*;
 use crate::spec::{InputError, Numbers};
@@ -10,6 +11,22 @@ pub enum Strip {}
 impl super::super::Command for Strip {
     type Problem = Problem;
     type Solution = Solution;
+
+    /// One row per piece: its interval and its coefficients in s = t − start.
+    fn table(s: &Solution) -> Option<Table<'_>> {
+        let mut data = Vec::with_capacity(6 * s.coefficients.len());
+        for (j, c) in s.coefficients.iter().enumerate() {
+            data.extend_from_slice(&[s.breaks[j], s.breaks[j + 1]]);
+            data.extend_from_slice(c);
+        }
+        Some(Table {
+            columns: ["start", "end", "c0", "c1", "c2", "c3"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            data: data.into(),
+        })
+    }
 
     fn solve(p: &Problem) -> Result<Solution, InputError> {
         crate::spec::strip(p)

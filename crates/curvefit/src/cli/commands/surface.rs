@@ -1,6 +1,7 @@
 //! `curvefit surface`: the subcommand (the JSON contract is [`crate::spec::surface`]), its OBJ
 //! mesh and its picture.
 
+use super::super::format::Table;
 use crate::plot::{palette, Figure, Style};
 use crate::spec::surface::*;
 use crate::spec::{InputError, Rows};
@@ -24,6 +25,14 @@ impl super::super::Command for SurfaceCmd {
     /// `--points FILE.csv`: the problem's `points`.
     fn set_points(p: &mut SurfaceProblem, csv: super::super::input::Csv) -> Result<(), InputError> {
         super::set_points(&mut p.points, csv)
+    }
+
+    /// The refined grid points, row-major (point (i, j) is row i·cols + j).
+    fn table(s: &SurfaceSolution) -> Option<Table<'_>> {
+        Some(Table {
+            columns: Table::point_columns(s.points.dim()),
+            data: s.points.coords().into(),
+        })
     }
 
     fn solve(problem: &SurfaceProblem) -> Result<SurfaceSolution, InputError> {
