@@ -213,6 +213,15 @@ enum Cmd {
     Scheme(SchemeArgs),
     /// The tensor-product n-ary scheme on a quad grid; `--obj` writes the refined quad mesh.
     Surface(SurfaceArgs),
+    /// The JSON Schema of a subcommand's problem (generated from the types).
+    Schema {
+        /// refine, strip, scheme, surface or natural.
+        #[arg(value_parser = clap::builder::PossibleValuesParser::new(crate::spec::SUBCOMMANDS))]
+        subcommand: String,
+        /// Write the schema here (default: standard output).
+        #[arg(short = 'o', long = "output", value_name = "FILE")]
+        output: Option<PathBuf>,
+    },
     /// The main job on built-in data: solves the seeds' examples, writes SVGs, index.html and a summary.
     Demo {
         /// Output directory.
@@ -326,6 +335,19 @@ fn dispatch(
         ),
         Cmd::Scheme(a) => run_scheme_cmd(&a, stdout, stderr),
         Cmd::Demo { out } => Ok(demo::run(&out, stdout, solve_example)?),
+        Cmd::Schema { subcommand, output } => {
+            let schema = crate::spec::schema(&subcommand).ok_or_else(|| {
+                InputError::new("subcommand", format!("no schema for `{subcommand}`"))
+            })?;
+            let text = serde_json::to_string_pretty(&schema).map_err(|e| InputError::new("", e))?;
+            let mut outputs = Outputs::new();
+            outputs.add(
+                "-o",
+                output.as_deref(),
+                bytes_writer((text + "\n").into_bytes()),
+            )?;
+            Ok(outputs.commit(stdout)?)
+        }
     }
 }
 

@@ -130,6 +130,53 @@ pub fn natural(problem: &NaturalProblem) -> Result<NaturalResult, InputError> {
     self::natural::solve(problem)
 }
 
+/// The subcommands whose problems [`schema`] describes.
+pub const SUBCOMMANDS: [&str; 5] = ["refine", "strip", "scheme", "surface", "natural"];
+
+/// The JSON Schema (draft 2020-12) of a subcommand's problem, generated from its type, or
+/// `None` for an unknown subcommand.
+#[cfg(feature = "schema")]
+pub fn schema(subcommand: &str) -> Option<serde_json::Value> {
+    let schema = match subcommand {
+        "refine" => schemars::schema_for!(RefineProblem),
+        "strip" => schemars::schema_for!(StripProblem),
+        "scheme" => schemars::schema_for!(SchemeProblem),
+        "surface" => schemars::schema_for!(SurfaceProblem),
+        "natural" => schemars::schema_for!(NaturalProblem),
+        _ => return None,
+    };
+    let mut v = schema.to_value();
+    // Points (strip: t and y) are required: the types default them to empty only so that the
+    // command line can fill them from `--points FILE.csv`.
+    let required: &[&str] = match subcommand {
+        "refine" | "natural" | "surface" => &["points"],
+        "strip" => &["t", "y"],
+        _ => &[],
+    };
+    if let Some(obj) = v.as_object_mut() {
+        let list = obj
+            .entry("required")
+            .or_insert_with(|| serde_json::Value::Array(Vec::new()));
+        if let Some(list) = list.as_array_mut() {
+            for r in required {
+                if !list.iter().any(|x| x == r) {
+                    list.push(serde_json::Value::from(*r));
+                }
+            }
+        }
+        for r in required {
+            if let Some(field) = obj
+                .get_mut("properties")
+                .and_then(|p| p.get_mut(*r))
+                .and_then(|f| f.as_object_mut())
+            {
+                field.remove("default");
+            }
+        }
+    }
+    Some(v)
+}
+
 /// Parses a problem from JSON text; errors name the field path (`points[1][1]`) and say what
 /// is expected.
 ///

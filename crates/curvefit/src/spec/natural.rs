@@ -17,7 +17,8 @@ use super::{InputError, Rows};
 pub const MAX_NATURAL_OUTPUT_COORDS: usize = 10_000_000;
 
 /// The `natural` problem.
-#[derive(Debug, Clone, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct NaturalProblem {
     /// Control points p_0 at the integers 0..L.

@@ -51,8 +51,11 @@ impl<const MAX: usize> Serialize for Rows<MAX> {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeSeq;
         let mut seq = s.serialize_seq(Some(self.0.len()))?;
-        for p in self.0.iter() {
-            seq.serialize_element(p)?;
+        // An empty `Rows` (the default) has dimension 0, which has no rows to iterate.
+        if self.0.dim() > 0 {
+            for p in self.0.iter() {
+                seq.serialize_element(p)?;
+            }
         }
         seq.end()
     }
@@ -185,6 +188,35 @@ impl<'de> Deserialize<'de> for Numbers {
     }
 }
 
+#[cfg(feature = "schema")]
+impl<const MAX: usize> schemars::JsonSchema for Rows<MAX> {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Points".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "Points [[x, y, …], …]: each an array of numbers, all of one length d ≥ 1.",
+            "type": "array",
+            "items": {"type": "array", "items": {"type": "number"}, "minItems": 1},
+            "maxItems": MAX
+        })
+    }
+}
+
+#[cfg(feature = "schema")]
+impl schemars::JsonSchema for Numbers {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Numbers".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "type": "array",
+            "items": {"type": "number"},
+            "maxItems": MAX_NUMBERS
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -203,6 +235,7 @@ mod tests {
             "[[0.0,1.0],[2.0,3.5],[4.0,5.0]]"
         );
         assert!(rows("[]").unwrap().is_empty());
+        assert_eq!(serde_json::to_string(&Rows::<10>::default()).unwrap(), "[]");
     }
 
     #[test]

@@ -17,11 +17,12 @@ fn one() -> usize {
 /// A Kersey refinement problem. Defaults: `closed` true, `parametrization` centripetal, `k` 3,
 /// `knot_iterations` 3, `levels` 0, `level_k` 1, `constraint` interpolate, `derivative` bessel,
 /// `boundary` natural, `solver` exact.
-#[derive(Clone, Debug, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RefineProblem {
-    /// The data q_1..q_n, all of the same dimension d ≥ 1 (required: absent reads as empty and
-    /// is refused by validation; the command line may fill it from `--points FILE.csv`).
+    /// The data points q_1..q_n, all of the same dimension d ≥ 1 (required; the command line can
+    /// read them from `--points FILE.csv` instead).
     #[serde(default)]
     pub points: Rows,
     /// Closed curve (the last span closes it) or open.
@@ -63,7 +64,8 @@ pub struct RefineProblem {
 }
 
 /// `"uniform" | "centripetal" | "chordal" | {"exponent": e}`.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ParamSpec {
     /// e = 0.
@@ -78,7 +80,8 @@ pub enum ParamSpec {
 }
 
 /// One half-space `normal · x ≤ offset`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct HalfSpaceSpec {
     /// Outward normal (length d, non-zero).
@@ -88,7 +91,8 @@ pub struct HalfSpaceSpec {
 }
 
 /// The constraint on the data vertices.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ConstraintSpec {
     /// p_{i_k} = q_i.
@@ -112,7 +116,8 @@ pub enum ConstraintSpec {
 }
 
 /// A constraint on the derivative Df at a data vertex.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TangentSpec {
     /// |Df − center| ≤ radius.
@@ -142,7 +147,8 @@ pub enum TangentSpec {
 }
 
 /// `"average" | "bessel"`.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum DerivativeSpec {
     /// (2.2): ½(s_{i−1} + s_i); one-sided differences at open ends.
@@ -153,7 +159,8 @@ pub enum DerivativeSpec {
 }
 
 /// End conditions of an open curve.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundarySpec {
     /// Natural ends (default).
@@ -178,7 +185,8 @@ pub enum BoundarySpec {
 }
 
 /// `"exact" | "paper"`.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverSpec {
     /// Interior point + polish: the exact optimum with a KKT certificate.

@@ -29,7 +29,8 @@ pub const MAX_CLI_ARITY: usize = 16;
 pub const MAX_CLI_POLYGON_COORDS: usize = 10_000_000;
 
 /// The polygon file of `--apply`.
-#[derive(Debug, Clone, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PolygonInput {
     /// The vertices, each `[x, y, …]`.
@@ -101,7 +102,8 @@ fn one() -> usize {
 
 /// The `scheme` problem: the rule P = `points`, N = `arity`; `surface` adds the tensor-product
 /// masks; `polygon` (with `levels`) adds the refined polygon.
-#[derive(Debug, Clone, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SchemeProblem {
     /// Stencil size P = 2m + 2 (even, 2 ≤ P ≤ 16).

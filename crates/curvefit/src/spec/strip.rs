@@ -20,7 +20,8 @@ use super::{InputError, Numbers};
 pub const MAX_POINTS: usize = 2_000_000;
 
 /// A bound in the JSON problem.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundSpec {
     /// One cubic per data interval, coefficients in s = t − t_i.
@@ -30,7 +31,8 @@ pub enum BoundSpec {
 }
 
 /// The JSON problem of `curvefit strip`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Problem {
     /// Data sites, strictly increasing (required; the command line may read `t` and `y` from

@@ -24,7 +24,8 @@ use super::{InputError, Rows};
 pub const MAX_SURFACE_OUTPUT_COORDS: usize = 10_000_000;
 
 /// The scheme of a grid problem.
-#[derive(Debug, Clone, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SchemeSpec {
     /// Stencil size P = 2m + 2 (default 4).
@@ -55,7 +56,8 @@ fn one() -> usize {
 }
 
 /// The `surface` problem (a quad grid).
-#[derive(Debug, Clone, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceProblem {
     /// Number of rows (range of i), at least 2.
