@@ -164,7 +164,7 @@ fn deeply_nested_json_is_refused_without_a_stack_overflow() {
             // The typed parser stops at the first level that cannot be a point (`points[0][0]`;
             // `strip` has no such field) — no `Value` tree is built (ROBUSTNESS.md finding 10).
             refused(sub, &format!(r#"{{"points": {nested}}}"#), "points");
-            refused(sub, &nested, "invalid type");
+            refused(sub, &nested, "must be a JSON object");
         }
         // Nested objects inside a field the parser would otherwise descend into.
         let objs = format!("{}1{}", r#"{"a":"#.repeat(depth), "}".repeat(depth));

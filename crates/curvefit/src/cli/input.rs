@@ -80,7 +80,32 @@ pub fn read_json<P: serde::de::DeserializeOwned>(
         exceeded: &exceeded,
     };
     let result = {
-        let buffered = std::io::BufReader::with_capacity(BUFFER, limited);
+        let mut buffered = std::io::BufReader::with_capacity(BUFFER, limited);
+        // Peek at the first non-whitespace byte: a problem is an object.
+        let first = loop {
+            match buffered.fill_buf() {
+                Ok([]) => break None,
+                Ok(buf) => match buf.iter().position(|b| !b.is_ascii_whitespace()) {
+                    Some(i) => {
+                        let b = buf[i];
+                        buffered.consume(i);
+                        break Some(b);
+                    }
+                    None => {
+                        let n = buf.len();
+                        buffered.consume(n);
+                    }
+                },
+                Err(_) if exceeded.get() => return Err(too_large(what)),
+                Err(e) => {
+                    return Err(InputError::new(
+                        "problem",
+                        format!("cannot read {what}: {e}"),
+                    ))
+                }
+            }
+        };
+        crate::spec::not_an_object(first)?;
         let mut de = serde_json::Deserializer::from_reader(buffered);
         crate::spec::from_deserializer(&mut de).and_then(|p| {
             de.end()

@@ -26,6 +26,7 @@
 //! assert_eq!(bad.unwrap_err().field, "points[1][1]");
 //! ```
 
+pub mod messages;
 pub mod natural;
 pub(crate) mod points;
 pub mod refine;
@@ -183,6 +184,7 @@ pub fn schema(subcommand: &str) -> Option<serde_json::Value> {
 /// # Errors
 /// An [`InputError`]: `problem` for malformed JSON, else the path of the offending field.
 pub fn from_json<P: serde::de::DeserializeOwned>(text: &str) -> Result<P, InputError> {
+    not_an_object(text.bytes().find(|b| !b.is_ascii_whitespace()))?;
     let mut de = serde_json::Deserializer::from_str(text);
     let problem = from_deserializer(&mut de)?;
     de.end()
@@ -203,20 +205,42 @@ where
     serde_path_to_error::deserialize(de).map_err(path_error)
 }
 
+/// A problem is a JSON object: anything else (serde would read an array positionally, as the
+/// struct's fields in order) is refused by its first character.
+///
+/// # Errors
+/// When `first` (the first non-whitespace byte, if any) does not open an object.
+pub fn not_an_object(first: Option<u8>) -> Result<(), InputError> {
+    match first {
+        Some(b'{') => Ok(()),
+        None => Err(InputError::new(
+            "problem",
+            "is empty: it must be a JSON object like {\"points\": [...]}",
+        )),
+        Some(_) => Err(InputError::new(
+            "problem",
+            "must be a JSON object like {\"points\": [...]}",
+        )),
+    }
+}
+
 fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputError {
     let path = e.path().to_string();
     let field = if path == "." { String::new() } else { path };
     let inner = e.into_inner();
+    // The field path says where; the line and column serde_json appends add nothing.
+    let text = inner.to_string();
+    let bare = match text.rfind(" at line ") {
+        Some(i) if inner.line() > 0 => text[..i].to_string(),
+        _ => text,
+    };
     if inner.is_syntax() || inner.is_eof() {
-        InputError::new("problem", format!("malformed JSON: {inner}"))
+        match messages::syntax_at_field(&field, &bare) {
+            Some(m) => InputError::new(field, m),
+            None => InputError::new("problem", format!("malformed JSON: {inner}")),
+        }
     } else {
-        // The field path says where; the line and column serde_json appends add nothing.
-        let text = inner.to_string();
-        let text = match text.rfind(" at line ") {
-            Some(i) if inner.line() > 0 => text[..i].to_string(),
-            _ => text,
-        };
-        InputError::new(field, text)
+        InputError::new(field.clone(), messages::rewrite(&field, &bare))
     }
 }
 

@@ -222,7 +222,8 @@ mod tests {
     use super::*;
 
     fn rows(s: &str) -> Result<Rows, String> {
-        super::super::from_json::<Rows>(s).map_err(|e| e.to_string())
+        let mut de = serde_json::Deserializer::from_str(s);
+        super::super::from_deserializer::<Rows, _>(&mut de).map_err(|e| e.to_string())
     }
 
     #[test]

@@ -38,7 +38,10 @@ fn finite(field: impl Fn() -> String, x: f64) -> Result<f64, InputError> {
 fn nonneg(field: impl Fn() -> String, x: f64) -> Result<f64, InputError> {
     let x = finite(&field, x)?;
     if x < 0.0 {
-        return Err(InputError::new(field(), format!("must be ≥ 0, got {x}")));
+        return Err(InputError::new(
+            field(),
+            format!("must be ≥ 0, got {}", super::messages::num(x)),
+        ));
     }
     Ok(x)
 }
@@ -204,7 +207,10 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
                     if a >= std::f64::consts::FRAC_PI_2 {
                         return Err(InputError::new(
                             format!("{f}.half_angle"),
-                            format!("must be below π/2 (a convex wedge), got {a}"),
+                            format!(
+                                "must be below π/2 (a convex wedge), got {}",
+                                super::messages::num(a)
+                            ),
                         ));
                     }
                 }

@@ -13,6 +13,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::messages::num;
 use super::{InputError, Numbers};
 
 /// Largest number of data points accepted (the solver is O(n) per iteration; this guards
@@ -123,9 +124,7 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
     match e {
         E::TooFewPoints { .. } => InputError::new("t", e),
         E::LengthMismatch { field, .. } => InputError::new(*field, e),
-        E::NonFinite { field, index } | E::TooLarge { field, index, .. } => {
-            InputError::new(format!("{field}[{index}]"), e)
-        }
+        E::NonFinite { field, index } => InputError::new(format!("{field}[{index}]"), e),
         E::NonIncreasingSites { index } => InputError::new(format!("t[{index}]"), e),
         E::NonIncreasingPolyline { side, index } => {
             InputError::new(format!("{}.polyline[{index}]", side_name(*side)), e)
@@ -133,23 +132,76 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
         E::PolylineDoesNotCover { side } => {
             InputError::new(format!("{}.polyline", side_name(*side)), e)
         }
-        E::DataOutsideBounds { index, .. } => InputError::new(format!("y[{index}]"), e),
-        E::EmptyStrip { interval, .. } => {
-            let f = bound_field(strip::Side::Lower);
-            if f.ends_with("pieces") {
-                InputError::new(format!("{f}[{interval}]"), e)
-            } else {
-                InputError::new(f, e)
-            }
-        }
+        // The strip crate prints these numbers in exponent form; the user reads them as written.
+        E::DataOutsideBounds {
+            index,
+            interval,
+            side,
+            by,
+        } => InputError::new(
+            format!("y[{index}]"),
+            format!(
+                "lies outside the {side} bound by {} at an end of interval {interval}",
+                num(*by)
+            ),
+        ),
+        E::TooLarge { field, index, max } => InputError::new(
+            format!("{field}[{index}]"),
+            format!("exceeds {} in magnitude", num(*max)),
+        ),
         E::NoFeasibleCandidate { interval } => InputError::new(
             format!("lower.pieces[{interval}]"),
             format!(
                 "{e} (cubic bounds with more than two contacts per interval are not supported)"
             ),
         ),
-        E::StripViolated { side, .. } => InputError::new(side_name(*side), e),
-        E::Discontinuous { .. } => InputError::new("t", e),
+        E::StripViolated {
+            side,
+            interval,
+            by,
+            tolerance,
+        } => InputError::new(
+            side_name(*side),
+            format!(
+                "the solution leaves the {side} bound by {} in interval {interval} (tolerance {})",
+                num(*by),
+                num(*tolerance)
+            ),
+        ),
+        E::Discontinuous { at, by, tolerance } => InputError::new(
+            "t",
+            format!(
+                "the solution's pieces do not join at t = {} (by {}, tolerance {}): rescale t and y",
+                num(*at),
+                num(*by),
+                num(*tolerance)
+            ),
+        ),
+        E::EmptyStrip { interval, t } => {
+            let f = bound_field(strip::Side::Lower);
+            let f = if f.ends_with("pieces") {
+                format!("{f}[{interval}]")
+            } else {
+                f
+            };
+            InputError::new(
+                f,
+                format!(
+                    "the lower bound is not below the upper bound in interval {interval} (at t = {})",
+                    num(*t)
+                ),
+            )
+        }
+        E::NotConverged {
+            iterations,
+            gradient_norm,
+        } => InputError::new(
+            "",
+            format!(
+                "not converged in {iterations} iterations (gradient norm {})",
+                num(*gradient_norm)
+            ),
+        ),
         _ => InputError::new("", e),
     }
 }
