@@ -162,7 +162,7 @@ fn catalogue_of_bad_inputs() {
         ),
         (
             "refine",
-            r#"{"points": [[0, 0], [1, 0], [0, 1]], "knots": [0, 2, 1, 3]}"#,
+            r#"{"points": [[0, 0], [1, 0], [0, 1]], "closed": true, "knots": [0, 2, 1, 3]}"#,
             "knots[2]",
         ),
         (

@@ -265,7 +265,7 @@ mod tests {
     #[test]
     fn refine_defaults_follow_the_contract() {
         let p = parse(r#"{"points": [[0,0],[1,0],[0,1]]}"#).unwrap();
-        assert!(p.closed && p.knots.is_none());
+        assert!(!p.closed && p.knots.is_none());
         assert_eq!((p.k, p.knot_iterations, p.levels, p.level_k), (3, 3, 0, 1));
         assert_eq!(p.parametrization, ParamSpec::Centripetal);
         assert_eq!(p.constraint, ConstraintSpec::Interpolate);

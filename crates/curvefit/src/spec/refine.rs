@@ -390,15 +390,20 @@ mod tests {
     #[test]
     fn validation_names_fields_and_indices() {
         let cases = [
-            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
+            (r#"{"points": [[0,0],[1,0]], "closed": true}"#, "points"),
+            (r#"{"points": [[0,0]]}"#, "points"),
             (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
             (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
             (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": true, "knots": [0,1,1,2]}"#,
                 "knots[2]",
             ),
             (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": true, "knots": [0,1,2]}"#,
+                "knots",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2,3]}"#,
                 "knots",
             ),
             (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
@@ -416,7 +421,7 @@ mod tests {
                 "tangents[1].direction",
             ),
             (
-                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": true, "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
                 "boundary",
             ),
             (

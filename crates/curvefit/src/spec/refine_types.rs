@@ -4,9 +4,6 @@ use serde::{Deserialize, Serialize};
 
 pub use super::points::Rows;
 
-fn yes() -> bool {
-    true
-}
 fn three() -> usize {
     3
 }
@@ -14,7 +11,7 @@ fn one() -> usize {
     1
 }
 
-/// A Kersey refinement problem. Defaults: `closed` true, `parametrization` centripetal, `k` 3,
+/// A Kersey refinement problem. Defaults: `closed` false, `parametrization` centripetal, `k` 3,
 /// `knot_iterations` 3, `levels` 0, `level_k` 1, `constraint` interpolate, `derivative` bessel,
 /// `boundary` natural, `solver` exact.
 #[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
@@ -25,8 +22,9 @@ pub struct RefineProblem {
     /// read them from `--points FILE.csv` instead).
     #[serde(default)]
     pub points: Rows,
-    /// Closed curve (the last span closes it) or open.
-    #[serde(default = "yes")]
+    /// Closed curve (the last span, from the last point back to the first, closes it) or open
+    /// (default: open, as scipy's splines and most curve fitters are).
+    #[serde(default)]
     pub closed: bool,
     /// Data parameters: open n values, closed n + 1 (the last closes the curve).
     #[serde(default)]

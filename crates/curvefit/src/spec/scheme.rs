@@ -10,9 +10,9 @@
 //! in (a, b) and in (r, s)). `--apply` adds `"polygon": {"closed", "levels", "input", "output"}`.
 //!
 //! The polygon file (`--apply`) is JSON: `{"points": [[x, y, …], …], "closed": true}` — at least
-//! two points, all of the same dimension d ≥ 1, finite coordinates; `closed` defaults to `true`
-//! (a periodic polygon; `false` keeps the end points and uses one-sided end stencils that keep
-//! the polynomial reproduction, see `subdivision::NaryScheme`). Unknown fields are an error.
+//! two points, all of the same dimension d ≥ 1, finite coordinates; `closed` defaults to `false`
+//! (an open polygon keeps its end points and uses one-sided end stencils that keep the
+//! polynomial reproduction, see `subdivision::NaryScheme`; `true` is a periodic polygon). Unknown fields are an error.
 
 use divdiff::{Points, Topology};
 use serde::{Deserialize, Serialize};
@@ -35,13 +35,9 @@ pub const MAX_CLI_POLYGON_COORDS: usize = 10_000_000;
 pub struct PolygonInput {
     /// The vertices, each `[x, y, …]`.
     pub points: Rows,
-    /// Closed (periodic) polygon; default `true`.
-    #[serde(default = "yes")]
+    /// Closed (periodic) polygon, or open (default: open, like `refine`'s curves).
+    #[serde(default)]
     pub closed: bool,
-}
-
-fn yes() -> bool {
-    true
 }
 
 /// An exact weight as `"num/den"` in lowest terms with den > 0, or `"num"` when it is an
