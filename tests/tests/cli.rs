@@ -226,9 +226,12 @@ fn catalogue_of_bad_inputs() {
 #[test]
 fn scheme_flags_are_validated() {
     for (args, field) in [
-        (&["scheme", "--points", "3", "--arity", "2"][..], "--points"),
-        (&["scheme", "--points", "4", "--arity", "1"][..], "--arity"),
-        (&["scheme", "--points", "4"][..], "arity"),
+        (
+            &["scheme", "--stencil", "3", "--arity", "2"][..],
+            "--stencil",
+        ),
+        (&["scheme", "--stencil", "4", "--arity", "1"][..], "--arity"),
+        (&["scheme", "--stencil", "4"][..], "arity"),
     ] {
         let (code, _, err) = run_cli(args, "");
         assert_eq!(code, 2, "{args:?}");
@@ -309,4 +312,94 @@ fn csv_and_npy_outputs_hold_the_json_points() {
     let (code, csv, err) = run_cli(&["strip", &s.to_string_lossy(), "--format", "csv"], "");
     assert_eq!(code, 0, "{err}");
     assert!(csv.starts_with("start,end,c0,c1,c2,c3\n"), "{csv}");
+}
+
+/// A bare `curvefit` prints the usage and every subcommand (on standard error, exit 2).
+#[test]
+fn bare_curvefit_prints_usage_and_subcommands() {
+    let (code, out, err) = run_cli(&[], "");
+    assert_eq!(code, 2);
+    assert!(out.is_empty());
+    assert!(err.contains("Usage: curvefit <COMMAND>"), "{err}");
+    for sub in [
+        "refine", "strip", "natural", "scheme", "surface", "schema", "demo",
+    ] {
+        assert!(err.contains(&format!("  {sub} ")), "lists {sub}: {err}");
+    }
+}
+
+/// `curvefit refine < f.json` reads standard input without `-`; with standard input a terminal,
+/// a missing problem file is a one-line refusal instead of a wait.
+#[test]
+fn no_problem_file_reads_standard_input() {
+    let p = problem_path("refine-interpolate-closed.json");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let (code, out, err) = run_cli(&["refine"], &text);
+    assert_eq!(code, 0, "{err}");
+    let (_, want, _) = run_cli(&["refine", &p.to_string_lossy()], "");
+    assert_eq!(out, want);
+    let (mut o, mut e) = (Vec::new(), Vec::new());
+    let code = curvefit::cli::run_with_terminal(
+        ["curvefit", "refine"],
+        &mut std::io::empty(),
+        true,
+        &mut o,
+        &mut e,
+    );
+    let e = String::from_utf8_lossy(&e);
+    assert_eq!(code, 2);
+    assert!(e.contains("problem: no problem given"), "{e}");
+}
+
+/// `strip --points FILE.csv` reads the sites and values from two columns (as `--help` says),
+/// with or without a header, and gives the same result as the JSON problem.
+#[test]
+fn strip_reads_t_and_y_from_a_csv() {
+    let dir = scratch_dir("strip-csv");
+    let csv = dir.join("ty.csv");
+    std::fs::write(&csv, "t,y\n0,0\n1,1\n2,0\n3,0\n4,1\n").unwrap();
+    let c = csv.to_string_lossy().into_owned();
+    let (code, out, err) = run_cli(&["strip", "--points", &c], "");
+    assert_eq!(code, 0, "{err}");
+    let (code, want, err) = run_cli(
+        &["strip", "-"],
+        r#"{"t": [0, 1, 2, 3, 4], "y": [0, 1, 0, 0, 1]}"#,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out, want);
+    // With bounds from the problem file.
+    let (code, _, err) = run_cli(
+        &["strip", "-", "--points", &c],
+        r#"{"lower": {"pieces": [[-0.05,0,0,0],[-0.05,0,0,0],[-0.05,0,0,0],[-0.05,0,0,0]]}}"#,
+    );
+    assert_eq!(code, 0, "{err}");
+    std::fs::write(&csv, "0,0,1\n1,1,2\n").unwrap();
+    assert_refused(&["strip", "--points", &c], "", "--points");
+    assert_refused(
+        &["strip", "-", "--points", &c],
+        r#"{"t": [0, 1], "y": [0, 1]}"#,
+        "t",
+    );
+}
+
+/// One documented CSV separator, the comma: anything else is an error naming the line.
+#[test]
+fn csv_separators_other_than_comma_name_the_line() {
+    let dir = scratch_dir("csv-sep");
+    let csv = dir.join("p.csv");
+    let c = csv.to_string_lossy().into_owned();
+    for (text, words) in [
+        ("x;y\n0;0\n1;0\n0;1\n", "line 1"),
+        ("0;0\n1;0\n0;1\n", "semicolon"),
+        ("0,0\n1,0,\n0,1\n", "line 2"),
+        ("0,0\n1 0\n0,1\n", "not whitespace"),
+    ] {
+        std::fs::write(&csv, text).unwrap();
+        let (code, _, err) = run_cli(&["refine", "--points", &c], "");
+        assert_eq!(code, 2, "{text:?}");
+        assert!(err.contains(words), "{text:?}: {err}");
+    }
+    std::fs::write(&csv, "x,y\n0,0\n1,0\n0,1\n").unwrap();
+    let (code, _, err) = run_cli(&["refine", "--points", &c], "");
+    assert_eq!(code, 0, "a header line is accepted: {err}");
 }

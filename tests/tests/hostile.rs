@@ -127,8 +127,8 @@ fn other_subcommands_refuse_oversized_results() {
     );
     // `scheme` takes flags: an absurd stencil and arity.
     for args in [
-        vec!["scheme", "--points", "1000000000", "--arity", "2"],
-        vec!["scheme", "--points", "4", "--arity", "1000000000"],
+        vec!["scheme", "--stencil", "1000000000", "--arity", "2"],
+        vec!["scheme", "--stencil", "4", "--arity", "1000000000"],
     ] {
         let (code, stdout, stderr) = run_cli(&args, "");
         assert_eq!(code, 2, "{args:?}: {stderr}");

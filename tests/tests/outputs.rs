@@ -111,7 +111,7 @@ fn full_standard_output_leaves_no_file() {
     let q = problem_path("strip-small.json");
     let (code, err) = run(&["strip", &q.to_string_lossy()], &mut Full);
     assert_eq!(code, 2, "{err}");
-    let (code, err) = run(&["scheme", "--points", "4", "--arity", "2"], &mut Full);
+    let (code, err) = run(&["scheme", "--stencil", "4", "--arity", "2"], &mut Full);
     assert_eq!(code, 2, "{err}");
     let out = dir.join("demo");
     let (code, err) = run(&["demo", "--out", &out.to_string_lossy()], &mut Full);

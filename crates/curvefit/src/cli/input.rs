@@ -231,8 +231,10 @@ pub fn read_csv_limited(
             coords.truncate(start);
             // A header: the first line, every field a name (starting with a letter, `_` or a
             // quote), so that `0;1` is a wrong separator and not a header.
-            let is_name =
-                |s: &String| s.starts_with(|c: char| c.is_alphabetic() || c == '_' || c == '"');
+            let is_name = |s: &String| {
+                s.starts_with(|c: char| c.is_alphabetic() || c == '_' || c == '"')
+                    && !s.contains([';', '\t'])
+            };
             if rows == 0 && header.is_none() && numbers == 0 && names.iter().all(is_name) {
                 header = Some(names);
                 continue;

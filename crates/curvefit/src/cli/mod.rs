@@ -82,7 +82,7 @@ fn run_scheme_cmd(
     };
     let t1 = Instant::now();
     let problem = crate::spec::SchemeProblem {
-        points: a.points,
+        points: a.stencil,
         arity: a.arity,
         surface: a.surface,
         polygon,
@@ -91,7 +91,7 @@ fn run_scheme_cmd(
     // Field names of the JSON problem back to the flags they came from.
     let value = crate::spec::scheme(&problem).map_err(|e| {
         let field = match e.field.as_str() {
-            "points" => "--points".to_string(),
+            "points" => "--stencil".to_string(),
             "arity" => "--arity".to_string(),
             "levels" => "--levels".to_string(),
             f => f.to_string(),
@@ -136,7 +136,14 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 pub const EXIT_INTERNAL: i32 = 70;
 
 #[derive(Parser, Debug)]
-#[command(name = "curvefit", version, about = "Variational curve refinement and constrained spline interpolation", long_about = None)]
+#[command(
+    name = "curvefit",
+    version,
+    about = "Variational curve refinement and constrained spline interpolation",
+    long_about = None,
+    arg_required_else_help = true,
+    after_help = "Every JSON subcommand reads its problem from a file, `-` or standard input; `curvefit schema SUBCOMMAND` prints its fields, docs/input.md explains them."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Cmd,
@@ -145,7 +152,8 @@ struct Cli {
 /// Options shared by the JSON subcommands.
 #[derive(Args, Debug, Clone, Default)]
 pub struct JsonArgs {
-    /// Problem file (JSON), or `-` for standard input. May be omitted when `--points` is given.
+    /// Problem file (JSON); `-` or nothing reads standard input (nothing: unless `--points` is
+    /// given, then the problem is `{}` with those points).
     pub problem: Option<PathBuf>,
     /// Write the JSON result here (default: standard output).
     #[arg(short = 'o', long = "output", value_name = "FILE")]
@@ -153,7 +161,8 @@ pub struct JsonArgs {
     /// Also draw the result as an SVG picture.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
-    /// Read the problem's `points` from a CSV file (one point per line, comma-separated coordinates).
+    /// Read the problem's points from a CSV file: one point per line, coordinates separated by
+    /// commas, an optional header line (`x,y`); for `strip` two columns, t and y.
     #[arg(long = "points", value_name = "FILE.csv")]
     pub points_csv: Option<PathBuf>,
     /// Output format: the whole JSON result, or the result's main array (refined points,
@@ -163,14 +172,18 @@ pub struct JsonArgs {
     /// Print one JSON line {"parse_s", "solve_s", "write_s"} on standard error.
     #[arg(long)]
     pub timings: bool,
+    /// Whether standard input is a terminal (then no problem file is an error, not a wait).
+    #[arg(skip)]
+    pub stdin_is_terminal: bool,
 }
 
 /// Options of `curvefit scheme`.
 #[derive(Args, Debug, Clone)]
 pub struct SchemeArgs {
-    /// Number of points P = 2m + 2 of the rule (even, ≥ 2).
+    /// Stencil size: the number of points P = 2m + 2 of the rule (even, 2 ≤ P ≤ 16; the JSON
+    /// result's "points").
     #[arg(long, value_name = "P")]
-    pub points: usize,
+    pub stencil: usize,
     /// Arity N ≥ 2 (binary 2, ternary 3, …).
     #[arg(long, value_name = "N")]
     pub arity: usize,
@@ -261,8 +274,30 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
+    run_with_terminal(args, stdin, false, stdout, stderr)
+}
+
+/// [`run`], told whether standard input is a terminal: then a JSON subcommand without a problem
+/// file refuses instead of waiting for input.
+pub fn run_with_terminal<I, T>(
+    args: I,
+    stdin: &mut dyn Read,
+    stdin_is_terminal: bool,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            // A bare `curvefit` (or `curvefit scheme` without flags): the usage and the list of
+            // subcommands, on standard error, exit 2.
+            let _ = write!(stderr, "{}", e.render());
+            return EXIT_BAD_INPUT;
+        }
         Err(e) => {
             let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
             let text = e.render().to_string();
@@ -297,7 +332,7 @@ where
         }
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        dispatch(cli, stdin, stdout, stderr)
+        dispatch(cli, stdin, stdin_is_terminal, stdout, stderr)
     }));
     match result {
         Ok(Ok(())) => 0,
@@ -318,10 +353,17 @@ where
 fn dispatch(
     cli: Cli,
     stdin: &mut dyn Read,
+    stdin_is_terminal: bool,
     stdout: &mut dyn Write,
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
-    match cli.command {
+    let mut command = cli.command;
+    match &mut command {
+        Cmd::Refine(a) | Cmd::Strip(a) | Cmd::Natural(a) => a.stdin_is_terminal = stdin_is_terminal,
+        Cmd::Surface(a) => a.json.stdin_is_terminal = stdin_is_terminal,
+        _ => {}
+    }
+    match command {
         Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
         Cmd::Strip(a) => run_json::<strip::Strip>(&a, "strip", stdin, stdout, stderr),
         Cmd::Natural(a) => run_json::<natural::NaturalCmd>(&a, "natural", stdin, stdout, stderr),
@@ -475,13 +517,14 @@ fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C:
         Some(p) if p.as_os_str() == "-" => input::read_json(stdin, "standard input")?,
         Some(p) => input::read_json(input::open(p, "problem")?, &p.display().to_string())?,
         None if args.points_csv.is_some() => crate::spec::from_json("{}")?,
-        None => {
+        None if args.stdin_is_terminal => {
             return Err(InputError::new(
                 "problem",
-                "no problem file given (a path, or - for standard input)",
+                "no problem given: name a JSON file, or pipe one into standard input (curvefit refine < problem.json)",
             )
             .into())
         }
+        None => input::read_json(stdin, "standard input")?,
     };
     if let Some(csv) = &args.points_csv {
         let what = csv.display().to_string();
