@@ -137,10 +137,12 @@ fn every_readme_example_runs() {
         let argv: Vec<&str> = args.iter().map(String::as_str).collect();
         let (code, out, err) = run_cli(&argv, "");
         assert_eq!(code, 0, "README example `curvefit {cmd}` failed: {err}");
+        let csv = cmd.contains("--format csv");
         assert!(
-            out.is_empty() || serde_json::from_str::<serde_json::Value>(&out).is_ok(),
+            out.is_empty() || csv || serde_json::from_str::<serde_json::Value>(&out).is_ok(),
             "JSON output"
         );
+        assert!(!csv || out.starts_with("x,y\n"), "CSV output: {out}");
         ran += 1;
     }
     assert!(ran >= 6, "found the README's examples ({ran})");

@@ -101,3 +101,40 @@ fn unknown_subcommands_have_no_schema() {
     assert_eq!(code, 2);
     assert!(out.is_empty() && err.contains("bogus"), "{err}");
 }
+
+/// Every field the schemas know (top level and inside every object form) appears in
+/// docs/input.md, so a new field cannot go undocumented.
+#[test]
+fn docs_input_names_every_field() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let doc = std::fs::read_to_string(root.join("docs/input.md")).unwrap();
+    fn names(v: &Value, out: &mut Vec<String>) {
+        match v {
+            Value::Object(o) => {
+                if let Some(Value::Object(props)) = o.get("properties") {
+                    out.extend(props.keys().cloned());
+                }
+                if let Some(c) = o.get("const").and_then(Value::as_str) {
+                    out.push(c.to_string());
+                }
+                o.values().for_each(|x| names(x, out));
+            }
+            Value::Array(a) => a.iter().for_each(|x| names(x, out)),
+            _ => {}
+        }
+    }
+    for sub in ["refine", "strip", "scheme", "surface", "natural"] {
+        let mut all = Vec::new();
+        names(&schema(sub), &mut all);
+        let section = doc
+            .split("\n## ")
+            .find(|s| s.starts_with(sub))
+            .unwrap_or_else(|| panic!("docs/input.md has a section {sub}"));
+        for n in all {
+            assert!(
+                section.contains(&format!("`{n}`")) || section.contains(&format!("\"{n}\"")),
+                "docs/input.md, section {sub}, does not mention `{n}`"
+            );
+        }
+    }
+}
