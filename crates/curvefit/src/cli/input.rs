@@ -1,10 +1,11 @@
 //! Reading problems: JSON and CSV, streamed from the file (or standard input) into the typed
 //! problem, with memory bounded by the input.
 //!
-//! Nothing holds the input text: the JSON parser reads from a buffered reader straight into the
-//! typed problem, whose `points` go into one flat vector ([`crate::spec::Rows`]), and a CSV is
-//! read line by line into a flat vector. Peak memory is therefore the parsed data (8 bytes per
-//! coordinate, ≤ 4 × the input even for one-digit numbers) plus a 64 KiB buffer; arrays are
+//! No more than 8 MiB of the input text is held ([`READ_WHOLE_BYTES`]: smaller inputs are parsed
+//! from memory, faster; larger ones stream from a buffered reader) and the parser reads straight
+//! into the typed problem, whose `points` go into one flat vector ([`crate::spec::Rows`]); a CSV
+//! is read line by line into a flat vector. Peak memory is therefore the parsed data (8 bytes per
+//! coordinate, ≤ 4 × the input even for one-digit numbers) plus at most 8 MiB; arrays are
 //! refused as soon as they pass their limit ([`crate::spec::MAX_POINT_COORDS`]), and a regular
 //! file above [`MAX_INPUT_BYTES`] is refused from its size before a byte is read.
 
@@ -65,7 +66,14 @@ pub fn open(path: &Path, field: &str) -> Result<std::fs::File, InputError> {
     }
 }
 
-/// Parses a JSON problem from `reader` (`what` names it in messages), streaming.
+/// Inputs up to this size are read whole and parsed from memory (serde_json's slice reader
+/// runs ~30 % fewer instructions than its byte-wise stream reader: 157 against 219 million on a
+/// 4.3 MB problem); larger ones are streamed, holding only this prefix.
+pub const READ_WHOLE_BYTES: usize = 8 << 20;
+
+/// Parses a JSON problem from `reader` (`what` names it in messages): read whole when it is at
+/// most [`READ_WHOLE_BYTES`], else streamed (the first [`READ_WHOLE_BYTES`] held, then the rest
+/// through a buffer), so memory is the parsed problem plus at most 8 MiB.
 ///
 /// # Errors
 /// Malformed JSON (`problem`), a field that is wrong (its path), an input above the limit.
@@ -74,53 +82,47 @@ pub fn read_json<P: serde::de::DeserializeOwned>(
     what: &str,
 ) -> Result<P, InputError> {
     let exceeded = std::cell::Cell::new(false);
-    let limited = Limited {
+    let mut limited = Limited {
         inner: reader,
         read: 0,
         exceeded: &exceeded,
     };
-    let result = {
-        let mut buffered = std::io::BufReader::with_capacity(BUFFER, limited);
-        // Peek at the first non-whitespace byte: a problem is an object.
-        let first = loop {
-            match buffered.fill_buf() {
-                Ok([]) => break None,
-                Ok(buf) => match buf.iter().position(|b| !b.is_ascii_whitespace()) {
-                    Some(i) => {
-                        let b = buf[i];
-                        buffered.consume(i);
-                        break Some(b);
-                    }
-                    None => {
-                        let n = buf.len();
-                        buffered.consume(n);
-                    }
-                },
-                Err(_) if exceeded.get() => return Err(too_large(what)),
-                Err(e) => {
-                    return Err(InputError::new(
-                        "problem",
-                        format!("cannot read {what}: {e}"),
-                    ))
-                }
-            }
-        };
-        crate::spec::not_an_object(first)?;
-        let mut de = serde_json::Deserializer::from_reader(buffered);
+    let read_error = |e: std::io::Error| {
+        if exceeded.get() {
+            too_large(what)
+        } else {
+            InputError::new("problem", format!("cannot read {what}: {e}"))
+        }
+    };
+    let mut prefix = Vec::new();
+    (&mut limited)
+        .take(READ_WHOLE_BYTES as u64 + 1)
+        .read_to_end(&mut prefix)
+        .map_err(read_error)?;
+    // A problem is an object (serde would read an array as the struct's fields in order).
+    crate::spec::not_an_object(prefix.iter().copied().find(|b| !b.is_ascii_whitespace()))?;
+    let end = |e: serde_json::Error| InputError::new("problem", format!("malformed JSON: {e}"));
+    let result = if prefix.len() <= READ_WHOLE_BYTES {
+        let mut de = serde_json::Deserializer::from_slice(&prefix);
         crate::spec::from_deserializer(&mut de).and_then(|p| {
-            de.end()
-                .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
+            de.end().map_err(end)?;
+            Ok(p)
+        })
+    } else {
+        let rest = std::io::Cursor::new(&prefix[..]).chain(limited);
+        let mut de =
+            serde_json::Deserializer::from_reader(std::io::BufReader::with_capacity(BUFFER, rest));
+        crate::spec::from_deserializer(&mut de).and_then(|p| {
+            de.end().map_err(end)?;
             Ok(p)
         })
     };
     match result {
         Err(_) if exceeded.get() => Err(too_large(what)),
-        Err(e) if e.message.contains("io error") || e.message.starts_with("malformed JSON: io") => {
-            Err(InputError::new(
-                "problem",
-                format!("cannot read {what}: {}", e.message),
-            ))
-        }
+        Err(e) if e.message.starts_with("malformed JSON: io error") => Err(InputError::new(
+            "problem",
+            format!("cannot read {what}: {}", e.message),
+        )),
         r => r,
     }
 }
