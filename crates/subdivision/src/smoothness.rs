@@ -45,7 +45,7 @@ use num_traits::{One, Zero};
 
 use crate::jsr::{self, Square};
 use crate::matrix::RationalMatrix;
-use crate::nary::{NaryScheme, MAX_ARITY};
+use crate::nary::{check_arity, NaryScheme};
 use crate::rational::rational_to_f64;
 use crate::Error;
 
@@ -136,7 +136,7 @@ impl Mask {
     ///
     /// # Errors
     /// [`Error::TooFew`] (`arity`) below 2 or (`coeffs`) for no coefficient,
-    /// [`Error::TooLarge`] (`arity`) above [`MAX_ARITY`], [`Error::InvalidValue`] (`coeffs`)
+    /// [`Error::TooLarge`] (`arity`) above [`crate::MAX_ARITY`], [`Error::InvalidValue`] (`coeffs`)
     /// unless the coefficients sum to n (each of the n rules reproducing constants).
     pub fn new(arity: usize, first: isize, coeffs: Vec<BigRational>) -> Result<Mask, Error> {
         let len = coeffs.len();
@@ -144,7 +144,7 @@ impl Mask {
     }
 
     /// A bivariate mask on the box `first + [0, shape[0]) × [0, shape[1])`, row-major:
-    /// `coeffs[r * shape[1] + s]` is a_{(first[0] + r, first[1] + s)}.
+    /// `coeffs[r * shape[1] + s]` is a_{(first\[0\] + r, first\[1\] + s)}.
     ///
     /// # Errors
     /// As [`Mask::new`] (the coefficients must sum to n²), and [`Error::WrongLength`]
@@ -202,20 +202,7 @@ impl Mask {
         shape: Vec<usize>,
         coeffs: Vec<BigRational>,
     ) -> Result<Mask, Error> {
-        if arity < 2 {
-            return Err(Error::TooFew {
-                field: "arity",
-                minimum: 2,
-                got: arity,
-            });
-        }
-        if arity > MAX_ARITY {
-            return Err(Error::TooLarge {
-                field: "arity",
-                limit: MAX_ARITY,
-                got: arity,
-            });
-        }
+        check_arity(arity)?;
         if coeffs.is_empty() {
             return Err(Error::TooFew {
                 field: "coeffs",
@@ -612,22 +599,18 @@ fn order_jsr(
         // stays below the largest lower bound so far needs no lower bound of its own.
         let known = best.as_ref().map_or(0.0, |b| b.bounds.lower);
         let b = if known > 0.0 {
+            // The upper bound is valid whatever its stopping target; the lower bound is needed
+            // only if this scheme might exceed the largest JSR found so far.
             let upper = jsr::upper_bound(&family, options.upper_products, options.tolerance, known);
-            if upper <= known {
-                jsr::JsrBounds {
-                    lower: 0.0,
-                    upper,
-                    word: Vec::new(),
-                }
+            let (lower, word) = if upper <= known {
+                (0.0, Vec::new())
             } else {
-                jsr::bounds(
-                    &family,
-                    options.max_length,
-                    options.lower_words,
-                    options.upper_products,
-                    options.tolerance,
-                    known,
-                )
+                jsr::lower_bound(&family, options.max_length, options.lower_words)
+            };
+            jsr::JsrBounds {
+                lower,
+                upper: upper.max(lower),
+                word,
             }
         } else {
             jsr::bounds(
