@@ -24,10 +24,14 @@
 //!   to open polygons with one-sided end stencils of the same width.
 //! - **(4.1)–(4.2)** ([`NaryScheme::subdivide_grid`], [`NaryScheme::surface_rules`],
 //!   [`QuadGrid`], [`quad_mesh_obj`]): the tensor product on a regular quad grid,
-//!   p^{k+1}_{n i + a, n j + b} = Σ_{r,s} L_r(a/n) L_s(b/n) p^k_{i+r, j+s}; Lemma 4.1 / Remark
-//!   4.2 (the support of the surface basis function is the product of the curve supports) and
-//!   Lemma 4.2 (the tensor product is as smooth as the curve scheme) are checked by
-//!   `cargo xtask verify`.
+//!   p^{k+1}_{n i + a, n j + b} = Σ_{r,s} L_r(a/n) L_s(b/n) p^k_{i+r, j+s}.
+//! - **Support and smoothness** ([`Mask`], [`smoothness`]): the masks of the curve and surface
+//!   schemes ([`NaryScheme::mask`], [`NaryScheme::surface_mask`]), the support of their basic
+//!   limit functions (±(n(m+1) − 1)/(n − 1) per direction: Lemma 4.1 and Remark 4.2, four-sided
+//!   support, the product of the curve supports), and their Hölder exponent and Cᵏ class from
+//!   difference schemes and joint-spectral-radius bounds (Lemma 4.2: the tensor product is as
+//!   smooth as the curve scheme). The seed states no smoothness per (m, n); the computed values
+//!   are compared with the literature in the tests and in `cargo xtask verify`.
 //!
 //! # Warren–Weimer: natural cubic splines by variational subdivision
 //!
@@ -78,10 +82,12 @@
 //! ```
 
 mod error;
+mod jsr;
 mod matrix;
 mod nary;
 mod natural;
 mod rational;
+mod smoothness;
 mod surface;
 
 pub use error::Error;
@@ -93,4 +99,5 @@ pub use natural::{
 };
 pub use num_rational::BigRational;
 pub use rational::{lagrange_weights, rational_to_f64};
+pub use smoothness::{smoothness, Bounds, Mask, Smoothness, SmoothnessOptions};
 pub use surface::{quad_mesh_obj, QuadGrid, SurfaceRule};

@@ -94,6 +94,40 @@ impl RationalMatrix {
         Some(p)
     }
 
+    /// The determinant (exact Gaussian elimination; 0 for a non-square matrix).
+    pub fn determinant(&self) -> BigRational {
+        let n = self.rows;
+        if self.cols != n {
+            return BigRational::zero();
+        }
+        let mut a = self.data.clone();
+        let mut det = BigRational::one();
+        for k in 0..n {
+            let Some(piv) = (k..n).find(|&r| !a[r * n + k].is_zero()) else {
+                return BigRational::zero();
+            };
+            if piv != k {
+                for j in 0..n {
+                    a.swap(k * n + j, piv * n + j);
+                }
+                det = -det;
+            }
+            let p = a[k * n + k].clone();
+            det *= &p;
+            for r in k + 1..n {
+                if a[r * n + k].is_zero() {
+                    continue;
+                }
+                let f = &a[r * n + k] / &p;
+                for j in k..n {
+                    let v = &f * &a[k * n + j];
+                    a[r * n + j] -= v;
+                }
+            }
+        }
+        det
+    }
+
     /// The matrix with every entry correctly rounded to `f64`, as rows.
     pub fn to_f64_rows(&self) -> Vec<Vec<f64>> {
         (0..self.rows)

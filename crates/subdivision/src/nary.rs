@@ -124,20 +124,7 @@ impl NaryScheme {
                 got: points,
             });
         }
-        if arity < 2 {
-            return Err(Error::TooFew {
-                field: "arity",
-                minimum: 2,
-                got: arity,
-            });
-        }
-        if arity > MAX_ARITY {
-            return Err(Error::TooLarge {
-                field: "arity",
-                limit: MAX_ARITY,
-                got: arity,
-            });
-        }
+        check_arity(arity)?;
         let exact = rule_table(points, arity);
         let floats = flatten(&exact);
         let m = (points - 2) / 2;
@@ -519,6 +506,25 @@ fn interior_general(
             combine_window::<0>(dim, &rules[(a + 1) * p..(a + 2) * p], window, dst);
         }
     }
+}
+
+/// The arity n must lie in 2..=[`MAX_ARITY`] (for schemes and masks alike).
+pub(crate) fn check_arity(arity: usize) -> Result<(), Error> {
+    if arity < 2 {
+        return Err(Error::TooFew {
+            field: "arity",
+            minimum: 2,
+            got: arity,
+        });
+    }
+    if arity > MAX_ARITY {
+        return Err(Error::TooLarge {
+            field: "arity",
+            limit: MAX_ARITY,
+            got: arity,
+        });
+    }
+    Ok(())
 }
 
 fn check_count(count: usize) -> Result<(), Error> {
