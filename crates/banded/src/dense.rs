@@ -1,6 +1,8 @@
 //! Small dense kernels on row-major d×d blocks stored in slices, for the block factorization.
 //!
-//! Every kernel takes the block size `d` at run time and is `#[inline(always)]`: the block
+//! Sums of products start from their first product, not from 0.0 (0.0 + x is not x for
+//! x = −0.0, so the compiler keeps such an addition). Every kernel takes the block size `d` (≥ 1)
+//! at run time and is `#[inline(always)]`: the block
 //! factorization calls them with a compile-time constant (d = 1..4) or a run-time value (the
 //! general path), so the constant ones unroll completely. Triangular factors store their
 //! diagonal *inverted* (1/l_cc): every use of it is a division, and the solves' recurrences are
@@ -15,8 +17,8 @@ pub(crate) fn sub_mul_t(s: &mut [f64], a: &[f64], b: &[f64], d: usize) {
     let (s, a, b) = (&mut s[..d * d], &a[..d * d], &b[..d * d]);
     for r in 0..d {
         for c in 0..d {
-            let mut t = 0.0;
-            for q in 0..d {
+            let mut t = a[r * d] * b[c * d];
+            for q in 1..d {
                 t += a[r * d + q] * b[c * d + q];
             }
             s[r * d + c] -= t;
@@ -30,8 +32,8 @@ pub(crate) fn sub_gram_lower(s: &mut [f64], a: &[f64], d: usize) {
     let (s, a) = (&mut s[..d * d], &a[..d * d]);
     for r in 0..d {
         for c in 0..=r {
-            let mut t = 0.0;
-            for q in 0..d {
+            let mut t = a[r * d] * a[c * d];
+            for q in 1..d {
                 t += a[r * d + q] * a[c * d + q];
             }
             s[r * d + c] -= t;
@@ -92,8 +94,8 @@ pub(crate) fn cholesky(s: &mut [f64], kref: &[f64], rtol: f64, d: usize) -> Resu
 pub(crate) fn sub_mul_vec(x: &mut [f64], vo: usize, a: &[f64], uo: usize, st: usize, d: usize) {
     let a = &a[..d * d];
     for r in 0..d {
-        let mut t = 0.0;
-        for c in 0..d {
+        let mut t = a[r * d] * x[uo];
+        for c in 1..d {
             t += a[r * d + c] * x[uo + c * st];
         }
         x[vo + r * st] -= t;
@@ -105,8 +107,8 @@ pub(crate) fn sub_mul_vec(x: &mut [f64], vo: usize, a: &[f64], uo: usize, st: us
 pub(crate) fn sub_mul_t_vec(x: &mut [f64], vo: usize, a: &[f64], uo: usize, st: usize, d: usize) {
     let a = &a[..d * d];
     for c in 0..d {
-        let mut t = 0.0;
-        for r in 0..d {
+        let mut t = a[c] * x[uo];
+        for r in 1..d {
             t += a[r * d + c] * x[uo + r * st];
         }
         x[vo + c * st] -= t;

@@ -157,8 +157,13 @@ impl<const W: usize> BlockBand<W> {
         let blocks = &self.blocks[..];
         let has_blocks = !blocks.is_empty();
         for i in 0..m {
+            // Constant loop bounds (W, not W.min(i)) keep `low` in registers: the loops unroll
+            // and index it with constants.
             let mut low: [Blk<D>; W] = [[[0.0; D]; D]; W];
-            for k in (1..=W.min(i)).rev() {
+            for k in (1..=W).rev() {
+                if k > i {
+                    continue;
+                }
                 let j = i - k;
                 // A_{i,j} = S_{j,i} I + B_{j,i}ᵀ (stored at row j, slot k). Band rows never alias.
                 let mut a = [[0.0f64; D]; D];
@@ -177,14 +182,15 @@ impl<const W: usize> BlockBand<W> {
                     }
                 }
                 let rj = &rows[j * rs..(j + 1) * rs];
-                for kk in k + 1..=W.min(i) {
-                    // q = i − kk: L_{iq} (this row) and L_{jq} (row j, slot kk − k).
+                for kk in k + 1..=W {
+                    // q = i − kk: L_{iq} (this row) and L_{jq} (row j, slot kk − k); both zero
+                    // when q < 0 (kk > i), so no guard is needed.
                     let ljq = &rj[(kk - k) * dd..(kk - k + 1) * dd];
                     let liq = &low[kk - 1];
                     for r in 0..D {
                         for c in 0..D {
-                            let mut t = 0.0;
-                            for q in 0..D {
+                            let mut t = liq[r][0] * ljq[c * D];
+                            for q in 1..D {
                                 t += liq[r][q] * ljq[c * D + q];
                             }
                             a[r][c] -= t;
@@ -229,8 +235,8 @@ impl<const W: usize> BlockBand<W> {
             for l in low.iter() {
                 for r in 0..D {
                     for c in 0..=r {
-                        let mut t = 0.0;
-                        for q in 0..D {
+                        let mut t = l[r][0] * l[c][0];
+                        for q in 1..D {
                             t += l[r][q] * l[c][q];
                         }
                         sblk[r][c] -= t;

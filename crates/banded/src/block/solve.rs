@@ -124,10 +124,21 @@ impl<const W: usize> BlockFactor<W> {
         for i in range {
             let row = &self.rows[i * rs..(i + 1) * rs];
             let mut v = load::<D, S>(x, i, st, c0);
-            // Oldest first: z_{i−1}, the newest, enters last (off the critical path).
-            for k in (1..=W).rev() {
-                sub_mv::<D>(&mut v, &row[k * dd..(k + 1) * dd], &zw[k - 1]);
+            // Oldest first: z_{i−1}, the newest, enters last (off the critical path). For d = 1
+            // the older values are read back from x under a branch, as in the scalar kind
+            // (`SymBandFactor::forward`): a window of scalars gets packed into one vector
+            // multiply with the newest value, which lengthens each row's dependency chain.
+            for k in (2..=W).rev() {
+                if D == 1 {
+                    if i >= k {
+                        let older = load::<D, S>(x, i - k, st, c0);
+                        sub_mv::<D>(&mut v, &row[k * dd..(k + 1) * dd], &older);
+                    }
+                } else {
+                    sub_mv::<D>(&mut v, &row[k * dd..(k + 1) * dd], &zw[k - 1]);
+                }
             }
+            sub_mv::<D>(&mut v, &row[dd..2 * dd], &zw[0]);
             let l = &row[..dd];
             for r in 0..D {
                 let mut s = v[r];
@@ -360,8 +371,10 @@ fn store<const D: usize, const S: usize>(
 fn sub_mv<const D: usize>(v: &mut [f64; D], a: &[f64], u: &[f64; D]) {
     let a = &a[..D * D];
     for r in 0..D {
-        let mut s = 0.0;
-        for c in 0..D {
+        // From the first product, not from 0.0: 0.0 + x is not x for x = −0.0, so the compiler
+        // would keep an addition on the dependency chain.
+        let mut s = a[r * D] * u[0];
+        for c in 1..D {
             s += a[r * D + c] * u[c];
         }
         v[r] -= s;
@@ -373,8 +386,8 @@ fn sub_mv<const D: usize>(v: &mut [f64; D], a: &[f64], u: &[f64; D]) {
 fn sub_mtv<const D: usize>(v: &mut [f64; D], a: &[f64], u: &[f64; D]) {
     let a = &a[..D * D];
     for c in 0..D {
-        let mut s = 0.0;
-        for r in 0..D {
+        let mut s = a[c] * u[0];
+        for r in 1..D {
             s += a[r * D + c] * u[r];
         }
         v[c] -= s;
