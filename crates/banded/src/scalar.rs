@@ -504,12 +504,12 @@ impl<const W: usize> SymBand<W> {
                     s -= uw[k - 1][r] * row.l[k - 1];
                 }
                 let gv = s * row.inv;
-                // Cholesky-scaled magnitude |L̂| = |L| √D = |u| / √D.
-                let mag = s.abs() * row.inv.sqrt();
-                if mag < BORDER_FLUSH_RTOL * scale[r] {
+                // Squared Cholesky-scaled magnitude |L̂|² = L² D = u² / D (no square root).
+                let mag2 = s * s * row.inv;
+                if mag2 < BORDER_FLUSH_RTOL * BORDER_FLUSH_RTOL * scale[r] {
                     continue;
                 }
-                scale[r] = scale[r].max(mag);
+                scale[r] = scale[r].max(mag2);
                 g[r] = gv;
                 u[r] = s;
             }

@@ -306,14 +306,15 @@ impl<const W: usize> BlockBand<W> {
                 self.add_entry(i, j, out);
             }
         };
-        // The Schur complement T = A₂₂ − Σ_j G_j G_jᵀ, dense (t·d)², lower triangle used.
+        // The Schur complement T = A₂₂ − Σ_j G_j G_jᵀ: its lower blocks accumulate in `acc`
+        // (block (r, s) at (r W + s) d², so the loops below have constant bounds and offsets for
+        // a fixed d), and go to the dense (t·d)² `f.tail` at the end.
         let td = t * d;
-        f.tail.clear();
-        f.tail.resize(td * td, 0.0);
         let mut scratch = std::mem::take(&mut f.scratch);
         scratch.clear();
-        scratch.resize(dd + td, 0.0);
-        let (blk, kref) = scratch.split_at_mut(dd);
+        scratch.resize(dd + td + W * W * dd, 0.0);
+        let (blk, rest) = scratch.split_at_mut(dd);
+        let (kref, acc) = rest.split_at_mut(td);
         let mut scale = [0.0f64; W];
         let tail0 = m.saturating_sub(W);
         let mut border = Border { head: m, tail: m };
@@ -334,13 +335,16 @@ impl<const W: usize> BlockBand<W> {
             let lj = &f.rows[j * rs..(j + 1) * rs];
             f.g.resize((slot + 1) * gs, 0.0);
             let mut nonzero = false;
-            for r in 0..t {
+            for r in 0..W {
+                if r >= t {
+                    break;
+                }
                 blk.fill(0.0);
                 if direct {
                     entry(m + r, j, blk);
                 }
-                for k in 1..=W.min(j) {
-                    if let Some(p) = prev[k - 1] {
+                for k in 1..=W {
+                    if let (true, Some(p)) = (k <= j, prev[k - 1]) {
                         // G_{r, j−k} L_{j, j−k}ᵀ
                         let gp = &f.g[p * gs + r * dd..][..dd];
                         dense::sub_mul_t(blk, gp, &lj[k * dd..(k + 1) * dd], d);
@@ -360,17 +364,12 @@ impl<const W: usize> BlockBand<W> {
             // T_{rs} −= G_r G_sᵀ (lower blocks, s ≤ r).
             if nonzero {
                 let g = &f.g[slot * gs..(slot + 1) * gs];
-                for r in 0..t {
+                for r in 0..W {
                     for s in 0..=r {
-                        let (gr, gs_) = (&g[r * dd..(r + 1) * dd], &g[s * dd..(s + 1) * dd]);
-                        for a in 0..d {
-                            for b in 0..d {
-                                let mut v = 0.0;
-                                for q in 0..d {
-                                    v += gr[a * d + q] * gs_[b * d + q];
-                                }
-                                f.tail[(r * d + a) * td + s * d + b] -= v;
-                            }
+                        if r < t {
+                            let ars = &mut acc[(r * W + s) * dd..(r * W + s + 1) * dd];
+                            let (gr, gsb) = (&g[r * dd..(r + 1) * dd], &g[s * dd..(s + 1) * dd]);
+                            dense::sub_mul_t(ars, gr, gsb, d);
                         }
                     }
                 }
@@ -383,14 +382,17 @@ impl<const W: usize> BlockBand<W> {
             j += 1;
         }
         f.border = border;
-        // T += A₂₂ (lower blocks), then its dense Cholesky factor.
+        // T = A₂₂ + acc (lower blocks), then its dense Cholesky factor.
+        f.tail.clear();
+        f.tail.resize(td * td, 0.0);
         for r in 0..t {
             for s in 0..=r {
                 blk.fill(0.0);
                 entry(m + r, m + s, blk);
+                let ars = &acc[(r * W + s) * dd..(r * W + s + 1) * dd];
                 for a in 0..d {
                     for b in 0..d {
-                        f.tail[(r * d + a) * td + s * d + b] += blk[a * d + b];
+                        f.tail[(r * d + a) * td + s * d + b] = blk[a * d + b] + ars[a * d + b];
                     }
                 }
                 if r == s {
