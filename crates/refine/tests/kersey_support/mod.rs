@@ -217,6 +217,47 @@ pub fn clarabel_problem(
     }
 }
 
+/// Corollary 3.3 checked independently of the solver's certificate: the data vertices strictly
+/// inside their ball (|p_{i_k} − q_i| < ε_i (1 − 1e-6), so weakly active balls do not count) and
+/// the largest |jmp| there relative to the largest |jmp| of the curve, jmp from
+/// `divdiff::jumps`. Returns (number of inactive data vertices, relative |jmp|). The scale is
+/// at least 1e9 times the rounding level of jmp = ½Hp evaluated from points of size |p|,
+/// 8 ε ‖H‖_∞ |p| (‖H‖_∞ ≤ 5 max|H_jk|): when E is 0 up to rounding, every jmp is rounding.
+pub fn corollary_3_3(q: &Points, radii: &[f64], r: &refine::Refinement) -> (usize, f64) {
+    let j = divdiff::jumps(&r.knots, &r.points).expect("one point per vertex");
+    let pmax = r.points.coords().iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let rounding = 8.0 * f64::EPSILON * 5.0 * energy::Hessian::new(&r.knots).max_abs() * pmax;
+    let scale = j
+        .coords()
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(rounding / 1e-9);
+    let (mut count, mut worst) = (0usize, 0.0f64);
+    for (i, &v) in r.data_vertex.iter().enumerate() {
+        let dist = r
+            .points
+            .point(v)
+            .iter()
+            .zip(q.point(i))
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        if dist < radii[i] * (1.0 - 1e-6) {
+            count += 1;
+            for x in j.point(v) {
+                let rel = x.abs() / scale.max(f64::MIN_POSITIVE);
+                // NaN is kept (a comparison with NaN would drop it).
+                worst = if rel.is_nan() {
+                    f64::NAN
+                } else {
+                    worst.max(rel)
+                };
+            }
+        }
+    }
+    (count, worst)
+}
+
 fn clarabel_solve_tol(
     knots: &Knots,
     q: &Points,
@@ -396,45 +437,4 @@ fn solve_socp_tol(data: SocpData, d: usize, tol: f64) -> Result<Reference, Strin
         objective: sol.obj_val + constant,
         iterations: sol.iterations,
     })
-}
-
-/// Corollary 3.3 checked independently of the solver's certificate: the data vertices strictly
-/// inside their ball (|p_{i_k} − q_i| < ε_i (1 − 1e-6), so weakly active balls do not count) and
-/// the largest |jmp| there relative to the largest |jmp| of the curve, jmp from
-/// `divdiff::jumps`. Returns (number of inactive data vertices, relative |jmp|). The scale is
-/// at least 1e9 times the rounding level of jmp = ½Hp evaluated from points of size |p|,
-/// 8 ε ‖H‖_∞ |p| (‖H‖_∞ ≤ 5 max|H_jk|): when E is 0 up to rounding, every jmp is rounding.
-pub fn corollary_3_3(q: &Points, radii: &[f64], r: &refine::Refinement) -> (usize, f64) {
-    let j = divdiff::jumps(&r.knots, &r.points).expect("one point per vertex");
-    let pmax = r.points.coords().iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let rounding = 8.0 * f64::EPSILON * 5.0 * energy::Hessian::new(&r.knots).max_abs() * pmax;
-    let scale = j
-        .coords()
-        .iter()
-        .fold(0.0f64, |m, x| m.max(x.abs()))
-        .max(rounding / 1e-9);
-    let (mut count, mut worst) = (0usize, 0.0f64);
-    for (i, &v) in r.data_vertex.iter().enumerate() {
-        let dist = r
-            .points
-            .point(v)
-            .iter()
-            .zip(q.point(i))
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt();
-        if dist < radii[i] * (1.0 - 1e-6) {
-            count += 1;
-            for x in j.point(v) {
-                let rel = x.abs() / scale.max(f64::MIN_POSITIVE);
-                // NaN is kept (a comparison with NaN would drop it).
-                worst = if rel.is_nan() {
-                    f64::NAN
-                } else {
-                    worst.max(rel)
-                };
-            }
-        }
-    }
-    (count, worst)
 }
