@@ -40,6 +40,15 @@ pub fn norm2(a: &[f64]) -> f64 {
     dot(a, a)
 }
 
+pub fn sub(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x - y).collect()
+}
+
+/// The Euclidean distance |a − b|.
+pub fn dist(a: &[f64], b: &[f64]) -> f64 {
+    norm2(&sub(a, b)).sqrt()
+}
+
 fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
     for (u, v) in y.iter_mut().zip(x) {
         *u += a * v;

@@ -9,7 +9,7 @@ use refine::{Boundary, Constraint, HalfSpace, Problem, Refinement, Tangent};
 
 use super::clarabel_ref::{clarabel_problem_with_derivatives, clarabel_solve_socp};
 use super::{ellipse, jittered, rel, ENERGY_RTOL};
-use crate::verify::kersey_defs::{dot, norm2, Curve, Df};
+use crate::verify::kersey_defs::{dist, dot, norm2, sub, Curve, Df};
 use crate::verify::{worst, Case, Oracle, Outcome};
 
 /// A derivative-constrained problem family: name, data, topology, position constraint, rule.
@@ -138,8 +138,7 @@ fn tangent_violation(
         let len = norm2(&df).sqrt();
         let v = match t {
             Tangent::Ball { center, radius } => {
-                let diff: Vec<f64> = df.iter().zip(center).map(|(a, b)| a - b).collect();
-                (norm2(&diff).sqrt() - radius) / norm2(center).sqrt().max(*radius)
+                (dist(&df, center) - radius) / norm2(center).sqrt().max(*radius)
             }
             Tangent::Tension { radius } => (len - radius) / radius.max(f64::MIN_POSITIVE),
             Tangent::Wedge {
@@ -161,17 +160,10 @@ fn tangent_violation(
 /// Ball violation of the data constraint, relative to the radius (interpolation: |p − q|).
 fn position_violation(p: &Problem, r: &Refinement) -> f64 {
     worst(r.data_vertex.iter().enumerate().map(|(i, &v)| {
-        let diff: Vec<f64> = r
-            .points
-            .point(v)
-            .iter()
-            .zip(p.points.point(i))
-            .map(|(a, b)| a - b)
-            .collect();
-        let dist = norm2(&diff).sqrt();
+        let d = dist(r.points.point(v), p.points.point(i));
         match &p.constraint {
-            Constraint::Balls(eps) => (dist - eps[i]) / eps[i].max(1e-300),
-            _ => dist,
+            Constraint::Balls(eps) => (d - eps[i]) / eps[i].max(1e-300),
+            _ => d,
         }
     }))
 }
@@ -229,7 +221,7 @@ fn tangent_case(kind: &'static str, what: &str) -> anyhow::Result<Outcome> {
         worst([gap, viol]),
         ENERGY_RTOL,
         format!(
-            "{what}: relative energy difference to Clarabel on the returned knots and the largest relative violation (Df from its definition): {}",
+            "{what}; the data of Figs. 3.6–3.8 are not printed: seeded random data, tangent sets built about each problem's own free tangents so that they are active; relative energy difference to Clarabel on the returned knots and the largest relative violation (Df from its definition): {}",
             detail.join("; ")
         ),
     )
@@ -296,12 +288,11 @@ fn ends_case(near: bool) -> anyhow::Result<Outcome> {
         let cur = Curve::from_lib(&r.knots, &r.points);
         let n = cur.n();
         let mut v = position_violation(&p, &r);
-        let mut dist = Vec::new();
+        let mut gaps = Vec::new();
         for (vertex, want) in [(0, &start), (n - 1, &end)] {
             let df = cur.df(vertex, rule_df(rule));
-            let diff: Vec<f64> = df.iter().zip(want.iter()).map(|(a, b)| a - b).collect();
-            let e = norm2(&diff).sqrt();
-            dist.push(e);
+            let e = dist(&df, want);
+            gaps.push(e);
             v = worst([
                 v,
                 if near {
@@ -315,14 +306,14 @@ fn ends_case(near: bool) -> anyhow::Result<Outcome> {
         viol = worst([viol, v]);
         detail.push(format!(
             "{name}: |Df − v| at the ends {:.2e}, {:.2e}, gap {g:.1e}",
-            dist[0], dist[1]
+            gaps[0], gaps[1]
         ));
     }
     Ok(Outcome::check(
         worst([gap, viol]),
         ENERGY_RTOL,
         format!(
-            "{}: relative energy difference to Clarabel and the relative violation of the end condition (Df from its definition): {}",
+            "{}, seeded random data (Fig. 3.9's data are not printed): relative energy difference to Clarabel and the relative violation of the end condition (Df from its definition): {}",
             if near { "near-clamped |Df(t_1) − v_1| ≤ 0.3, |Df(t_N) − v_n| ≤ 0.3" } else { "clamped Df(t_1) = v_1, Df(t_N) = v_n" },
             detail.join("; ")
         ),
@@ -366,13 +357,7 @@ fn end_condition(c: f64) -> anyhow::Result<(f64, f64, usize, usize)> {
             ),
         ] {
             let w = r.multipliers[i][0];
-            let diff: Vec<f64> = r
-                .points
-                .point(vertex)
-                .iter()
-                .zip(q.point(i))
-                .map(|(a, b)| a - b)
-                .collect();
+            let diff = sub(r.points.point(vertex), q.point(i));
             if norm2(&diff).sqrt() < eps[i] * (1.0 - 1e-6) {
                 inact += 1;
                 natural = worst([natural, worst(dd.iter().map(|x| 2.0 * x.abs() / h)) / force]);

@@ -27,7 +27,7 @@ use divdiff::{jumps, Points};
 use refine::{Constraint, Problem, Refinement};
 
 use super::super::worst;
-use crate::verify::kersey_defs::{dot, norm2};
+use crate::verify::kersey_defs::{dot, norm2, sub};
 
 /// The four parts of the recomputed certificate (all relative, see the module docs).
 #[derive(Clone, Copy, Debug, Default)]
@@ -104,10 +104,6 @@ fn h_norm(knots: &divdiff::Knots) -> f64 {
         }
     }
     worst(rows)
-}
-
-fn sub(a: &[f64], b: &[f64]) -> Vec<f64> {
-    a.iter().zip(b).map(|(x, y)| x - y).collect()
 }
 
 /// Recomputes the KKT conditions of stage 0 of `r` (no further levels, no derivative
