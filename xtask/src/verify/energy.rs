@@ -69,10 +69,10 @@ fn seeded(n: usize, d: usize, topology: Topology, seed: u64) -> Problem {
 }
 
 const NAMES: [&str; 4] = [
-    "closed N=9 d=2",
-    "closed N=7 d=3",
-    "open N=11 d=2",
-    "open N=8 d=1",
+    "seeded random closed N=9 d=2",
+    "seeded random closed N=7 d=3",
+    "seeded random open N=11 d=2",
+    "seeded random open N=8 d=1",
 ];
 
 /// The fixed problem set: two closed and two open curves, d = 1..3, N = 7..11.
