@@ -1,6 +1,6 @@
 //! The typed errors of `strip`.
 
-use crate::cell::Side;
+use crate::types::Side;
 
 /// Everything that can go wrong when setting up or solving a strip problem.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -2,7 +2,7 @@
 //! are designed to show the same phenomena; they are used by the figures, the verification cases
 //! and the benchmarks).
 
-use crate::solve::{Bound, Problem};
+use crate::types::{Bound, Problem};
 
 /// The 16 data values of [`example_5_1`].
 pub const Y16: [f64; 16] = [

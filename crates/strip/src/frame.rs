@@ -22,7 +22,7 @@
 //! rounding.
 
 use crate::error::Error;
-use crate::solve::{Bound, Problem, MAX_MAGNITUDE};
+use crate::types::{polyline_at, Bound, Problem, MAX_MAGNITUDE};
 
 /// The change of frame t = t₀ + λ·u, value = ℓ(t) + c·ṽ with ℓ(t) = a + b·(t − t₀).
 #[derive(Clone, Copy, Debug)]
@@ -77,7 +77,7 @@ fn bound_points(b: &Bound, t: &[f64]) -> Vec<(f64, f64)> {
                 .map(|p| (p[0], p[1]))
                 .collect();
             for &x in [t[0], t[n - 1]].iter() {
-                out.push((x, crate::solve::polyline_at(v, x)));
+                out.push((x, polyline_at(v, x)));
             }
             out
         }

@@ -78,27 +78,27 @@
 // obscure them.
 #![allow(clippy::needless_range_loop)]
 
-mod banded;
-mod bfgs;
+mod assemble;
 mod cell;
+mod check;
 mod error;
 pub mod examples;
 mod frame;
+pub mod interval;
+mod linalg;
+mod outer;
+mod piece;
 mod poly;
 mod qp;
 mod solve;
+mod types;
+mod validate;
 
-pub use cell::{Pruning, Shape, Side};
 pub use error::Error;
 pub use qp::{lower_bound_qp, LowerBoundQp};
-pub use solve::{
-    solve, Bound, ExtraKnot, KnotKind, Method, Options, Problem, Solution, CONTACT_TOL,
-    DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS, FEASIBILITY_TOL,
-    MAX_MAGNITUDE, RESULT_FEASIBILITY_TOL, ROUNDING_TOL,
+pub use solve::solve;
+pub use types::{
+    Bound, ExtraKnot, KnotKind, Method, Options, Problem, Pruning, Shape, Side, Solution,
+    CONTACT_TOL, DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS,
+    FEASIBILITY_TOL, MAX_MAGNITUDE, RESULT_FEASIBILITY_TOL, ROUNDING_TOL,
 };
-
-#[doc(hidden)]
-pub mod internals {
-    //! Per-interval internals exposed for tests and benchmarks (not a stable API).
-    pub use crate::cell::internals::*;
-}

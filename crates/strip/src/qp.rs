@@ -12,7 +12,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::solve::{bound_value, Problem};
+use crate::types::{bound_value, Problem};
 
 /// The QP  min ½xᵀPx  s.t.  A x + s = b,  s ∈ {0}^{n_eq} × R₊^{n_ineq}, in triplet form.
 #[derive(Clone, Debug, PartialEq)]

@@ -5,7 +5,7 @@
 mod common;
 
 use proptest::prelude::*;
-use strip::internals::solve_interval;
+use strip::interval::solve_interval;
 use strip::{solve, Bound, Error, KnotKind, Method, Options, Problem, Pruning, Shape, Side};
 
 /// The 16 data points used throughout (Figure 1-like: oscillating data).
@@ -594,50 +594,6 @@ fn bad_input_is_a_typed_error() {
         solve(&p, &Options::default()),
         Err(Error::PolylineDoesNotCover { side: Side::Lower })
     ));
-}
-
-#[test]
-fn outer_gradient_matches_finite_differences() {
-    // ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)) (and 2 jump f''' for free grid values) against central
-    // differences of Φ, at the starting point and at a perturbed point, for a strip with every
-    // contact kind and for a polyline problem (values and slopes as unknowns).
-    use strip::internals::objective;
-    let cases = [
-        polygon_strip(&Y16, 0.1),
-        Problem {
-            t: vec![0.0, 1.0, 2.0, 3.0, 4.0],
-            y: vec![0.0, 0.2, -0.3, 0.3, 0.0],
-            lower: Bound::from_fn(|x| -0.6 + 0.3 * (2.0 * x).sin(), 0.0, 4.0, 8),
-            upper: Bound::from_fn(|x| 0.6 + 0.25 * (3.0 * x).cos(), 0.0, 4.0, 8),
-            end_slopes: [Some(3.0), None],
-        },
-    ];
-    for p in &cases {
-        let (_, _, x0) = objective(p, None).unwrap();
-        let xs = [
-            x0.clone(),
-            x0.iter()
-                .enumerate()
-                .map(|(k, v)| v + 0.01 * ((k * 7 % 5) as f64 - 2.0))
-                .collect::<Vec<_>>(),
-        ];
-        for x in &xs {
-            let (_, g, _) = objective(p, Some(x)).unwrap();
-            for k in 0..x.len() {
-                let d = 1e-6;
-                let (mut xp, mut xm) = (x.clone(), x.clone());
-                xp[k] += d;
-                xm[k] -= d;
-                let fd = (objective(p, Some(&xp)).unwrap().0 - objective(p, Some(&xm)).unwrap().0)
-                    / (2.0 * d);
-                assert!(
-                    (fd - g[k]).abs() <= 1e-5 * (1.0 + g[k].abs()),
-                    "∂Φ/∂x{k}: {} vs fd {fd}",
-                    g[k]
-                );
-            }
-        }
-    }
 }
 
 proptest! {

@@ -6,7 +6,7 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
 use strip::examples::{example_5_1, example_5_2, example_5_3, polygon_strip, Y16};
-use strip::internals::solve_interval;
+use strip::interval::solve_interval;
 use strip::{solve, Bound, Method, Options, Problem, Pruning, Shape, Side, Solution};
 
 /// min(primal, dual) of the lower-bound QP (see `strip::lower_bound_qp`) solved by Clarabel.

@@ -7,16 +7,18 @@ use argmin::core::{CostFunction, Executor, Gradient, State, TerminationReason};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::BFGS;
 
-use crate::cell::{CellSolution, CellStats};
+use super::newton::DECREMENT_TOL;
+use super::phi::{Hints, Outer, OuterOut};
+use crate::cell::CellStats;
 use crate::error::Error;
-use crate::solve::{Hints, Options, OuterRef, DECREMENT_TOL};
+use crate::types::Options;
 
 /// Evaluations of Φ allowed per permitted iteration (argmin's Moré–Thuente line search has no
 /// iteration limit of its own; this bounds the whole solve).
 const EVALUATIONS_PER_ITERATION: usize = 100;
 
 struct Phi<'a> {
-    outer: &'a OuterRef<'a>,
+    outer: &'a Outer,
     hints: &'a RefCell<Hints>,
     stats: &'a RefCell<(CellStats, usize)>,
     /// The cost reported outside Φ's domain (no feasible candidate in some interval).
@@ -40,8 +42,8 @@ impl Phi<'_> {
         let mut h = self.hints.borrow_mut();
         let mut st = self.stats.borrow_mut();
         let (s, n) = &mut *st;
-        match self.outer.value_grad(x, &mut h, s, n) {
-            Ok((f, g, _)) => Ok((f, g)),
+        match self.outer.eval(x, &mut h, None, s, n) {
+            Ok(e) => Ok((e.phi, e.grad)),
             // outside the domain (no feasible candidate): a cost far above Φ(x₀) makes the line
             // search step back. It must be finite: an infinite cost turns the Moré–Thuente
             // cubic interpolation into NaN, and the search then never terminates.
@@ -69,17 +71,16 @@ impl Gradient for Phi<'_> {
 /// Outside Φ's domain BFGS sees the cost `OUTSIDE_FACTOR`·(1 + |Φ(x₀)|).
 const OUTSIDE_FACTOR: f64 = 1e6;
 
-type Out = (f64, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
-
+/// argmin's BFGS on Φ from `x0` (data-site grids only: no box-constrained unknowns).
 pub(crate) fn bfgs(
-    outer: &OuterRef<'_>,
+    outer: &Outer,
     x0: Vec<f64>,
     opts: &Options,
     stats: &mut CellStats,
     solves: &mut usize,
-) -> Result<Out, Error> {
+) -> Result<OuterOut, Error> {
     let nv = x0.len();
-    let hints = RefCell::new(vec![None; outer.cells()]);
+    let hints = RefCell::new(vec![None; outer.cells.len()]);
     let counters = RefCell::new((CellStats::default(), 0));
     let budget = EVALUATIONS_PER_ITERATION * (opts.max_iterations + 1);
     let evaluations = RefCell::new((0, budget));
@@ -96,7 +97,7 @@ pub(crate) fn bfgs(
     if !f0.is_finite() {
         // the start is outside Φ's domain
         let mut h = hints.borrow().clone();
-        return match outer.value_grad(&x0, &mut h, stats, solves) {
+        return match outer.eval(&x0, &mut h, None, stats, solves) {
             Err(interval) => Err(Error::NoFeasibleCandidate { interval }),
             Ok(_) => Err(Error::Overflow),
         };
@@ -143,9 +144,10 @@ pub(crate) fn bfgs(
     let (st, n) = *counters.borrow();
     stats.candidates += st.candidates;
     *solves += n;
-    let (_, g, sols) = outer
-        .value_grad(&best, &mut h, stats, solves)
+    let ev = outer
+        .eval(&best, &mut h, None, stats, solves)
         .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+    let (g, sols) = (ev.grad, ev.sols);
     // out of iterations with neither the gradient (argmin's 2-norm test) nor Φ converged: an
     // error with the gradient norm in the caller's units (as for Newton), never a silent answer
     let g2 = g.iter().map(|v| v * v).sum::<f64>().sqrt();
