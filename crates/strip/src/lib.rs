@@ -82,20 +82,17 @@ mod assemble;
 mod cell;
 mod check;
 mod error;
-pub mod examples;
 mod frame;
 pub mod interval;
 mod linalg;
 mod outer;
 mod piece;
 mod poly;
-mod qp;
 mod solve;
 mod types;
 mod validate;
 
 pub use error::Error;
-pub use qp::{lower_bound_qp, LowerBoundQp};
 pub use solve::solve;
 pub use types::{
     Bound, ExtraKnot, KnotKind, Method, Options, Problem, Pruning, Shape, Side, Solution,

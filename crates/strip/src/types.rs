@@ -299,15 +299,6 @@ pub(crate) fn polyline_at(p: &[[f64; 2]], t: f64) -> f64 {
     a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
 }
 
-/// The bound's value at t inside data interval `interval` (starting at `ti`).
-pub(crate) fn bound_value(b: &Bound, interval: usize, ti: f64, t: f64) -> Option<f64> {
-    match b {
-        Bound::None => None,
-        Bound::Pieces(p) => Some(cubic3(&p[interval], t - ti).0),
-        Bound::Polyline(p) => Some(polyline_at(p, t)),
-    }
-}
-
 /// The bound on the grid cell \[a, a + h\] of data interval `interval` (starting at `ti`) as a
 /// cubic in s = t − a.
 pub(crate) fn cell_bound(b: &Bound, interval: usize, ti: f64, a: f64, h: f64) -> Option<[f64; 4]> {

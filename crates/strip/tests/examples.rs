@@ -2,8 +2,8 @@
 
 mod common;
 
-use strip::examples::{example_5_1, example_5_2, example_5_3, large};
 use strip::{solve, Options, Shape, Side};
+use strip_testkit::examples::{example_5_1, example_5_2, example_5_3, large};
 
 #[test]
 fn example_5_1_has_touches_a_subarc_and_a_pair() {

@@ -7,30 +7,7 @@ mod common;
 use proptest::prelude::*;
 use strip::interval::solve_interval;
 use strip::{solve, Bound, Error, KnotKind, Method, Options, Problem, Pruning, Shape, Side};
-
-/// The 16 data points used throughout (Figure 1-like: oscillating data).
-const Y16: [f64; 16] = [
-    0.0, 2.0, 1.0, 3.0, 2.0, 2.5, 1.0, 2.0, 1.5, 2.5, 3.0, 0.5, 0.5, 3.0, 1.5, 2.0,
-];
-
-/// Strip of half-width w about the data polygon (linear in every interval).
-fn polygon_strip(y: &[f64], w: f64) -> Problem {
-    let n = y.len();
-    let t: Vec<f64> = (0..n).map(|i| i as f64).collect();
-    let lo = (0..n - 1)
-        .map(|i| [y[i] - w, y[i + 1] - y[i], 0.0, 0.0])
-        .collect();
-    let up = (0..n - 1)
-        .map(|i| [y[i] + w, y[i + 1] - y[i], 0.0, 0.0])
-        .collect();
-    Problem {
-        t,
-        y: y.to_vec(),
-        lower: Bound::Pieces(lo),
-        upper: Bound::Pieces(up),
-        end_slopes: [None, None],
-    }
-}
+use strip_testkit::examples::{polygon_strip, Y16};
 
 /// Natural cubic spline by the independent moment (second-derivative) formulation:
 /// returns the second derivatives M_i at the sites.

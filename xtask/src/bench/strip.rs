@@ -2,44 +2,15 @@
 //! the exact solver against Clarabel's fine-grid QP (M = 10^4 grid points) in the same run.
 
 use super::{time_median, Opts};
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
-use strip::examples::{example_5_1, large};
 use strip::{solve, Method, Options, Shape};
+use strip_testkit::examples::{example_5_1, large};
 
 /// Solves the lower-bound QP on `m` uniform grid points; returns its optimal value.
 fn clarabel_qp(p: &strip::Problem, m: usize) -> anyhow::Result<f64> {
     let (a, b) = (p.t[0], p.t[p.t.len() - 1]);
     let grid: Vec<f64> = (1..m).map(|k| a + (b - a) * k as f64 / m as f64).collect();
-    let qp = strip::lower_bound_qp(p, &grid);
-    let n = qp.n_vars;
-    let rows = qp.b.len();
-    let pm = CscMatrix::new_from_triplets(
-        n,
-        n,
-        qp.p.iter().map(|x| x.0).collect(),
-        qp.p.iter().map(|x| x.1).collect(),
-        qp.p.iter().map(|x| x.2).collect(),
-    );
-    let am = CscMatrix::new_from_triplets(
-        rows,
-        n,
-        qp.a.iter().map(|x| x.0).collect(),
-        qp.a.iter().map(|x| x.1).collect(),
-        qp.a.iter().map(|x| x.2).collect(),
-    );
-    let cones = [
-        SupportedConeT::ZeroConeT(qp.n_eq),
-        SupportedConeT::NonnegativeConeT(qp.n_ineq),
-    ];
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .build()
-        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let mut s = DefaultSolver::new(&pm, &vec![0.0; n], &am, &qp.b, &cones, settings)
-        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    s.solve();
-    Ok(s.solution.obj_val)
+    let lb = strip_testkit::lower_bound(p, &grid, false).map_err(|e| anyhow::anyhow!(e))?;
+    Ok(lb.primal)
 }
 
 /// Runs this group and prints its table.

@@ -1,59 +1,20 @@
 //! Verification cases for `strip` (Dontchev–Kolmanovsky, seed 002; math.md §4).
 
 use super::{Case, Outcome};
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
-use strip::examples::{example_5_1, example_5_2, example_5_3, polygon_strip, Y16};
 use strip::interval::solve_interval;
 use strip::{solve, Bound, Method, Options, Problem, Pruning, Shape, Side, Solution};
+use strip_testkit::examples::{example_5_1, example_5_2, example_5_3, polygon_strip, Y16};
 
-/// min(primal, dual) of the lower-bound QP (see `strip::lower_bound_qp`) solved by Clarabel.
+/// min(primal, dual) of the lower-bound QP (see `strip_testkit::lower_bound_qp`) solved by
+/// Clarabel.
 fn qp_lower_bound(p: &Problem, extra: &[f64]) -> anyhow::Result<f64> {
-    let qp = strip::lower_bound_qp(p, extra);
-    let n = qp.n_vars;
-    let rows = qp.b.len();
-    let trip = |v: &[(usize, usize, f64)], r: usize| {
-        CscMatrix::new_from_triplets(
-            r,
-            n,
-            v.iter().map(|x| x.0).collect(),
-            v.iter().map(|x| x.1).collect(),
-            v.iter().map(|x| x.2).collect(),
-        )
-    };
-    let cones = [
-        SupportedConeT::ZeroConeT(qp.n_eq),
-        SupportedConeT::NonnegativeConeT(qp.n_ineq),
-    ];
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(1e-12)
-        .tol_gap_rel(1e-12)
-        .tol_feas(1e-12)
-        .max_iter(400)
-        .build()
-        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let mut s = DefaultSolver::new(
-        &trip(&qp.p, n),
-        &vec![0.0; n],
-        &trip(&qp.a, rows),
-        &qp.b,
-        &cones,
-        settings,
-    )
-    .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    s.solve();
+    let lb = strip_testkit::lower_bound(p, extra, true).map_err(|e| anyhow::anyhow!(e))?;
     anyhow::ensure!(
-        matches!(
-            s.solution.status,
-            SolverStatus::Solved | SolverStatus::AlmostSolved
-        ),
-        "clarabel: {:?}",
-        s.solution.status
+        lb.solved || lb.status == "AlmostSolved",
+        "clarabel: {}",
+        lb.status
     );
-    Ok(s.solution.obj_val.min(s.solution.obj_val_dual))
+    Ok(lb.value)
 }
 
 /// QP grid: `per` uniform points per data interval plus points clustered at every break.
