@@ -53,7 +53,7 @@
 //!
 //! **Limitations.** For cubic bounds (Remark 3.2) only Theorem 2.1's shapes are enumerated; a
 //! solution needing more than two extra knots in an interval shows up as
-//! [`Error::NoFeasibleCandidate`] or in [`Solution::uncertified`]. Polyline vertices where f
+//! [`Error::Unsupported`] or in [`Solution::uncertified`]. Polyline vertices where f
 //! touches a bound are held ε·width inside (problem (10)); the result is the ε-problem's optimum
 //! (the verification suite measures the gap to Clarabel's lower bound: ~1e-7 relative for
 //! ε = 1e-7).
@@ -92,7 +92,7 @@ mod solve;
 mod types;
 mod validate;
 
-pub use error::Error;
+pub use error::{Error, Infeasibility};
 pub use solve::solve;
 pub use types::{
     Bound, ExtraKnot, KnotKind, Method, Options, Problem, Pruning, Shape, Side, Solution,

@@ -3,8 +3,8 @@
 use crate::assemble::{assemble, caller_grid, to_caller};
 use crate::cell::CellStats;
 use crate::check::worst_violation;
-use crate::error::Error;
-use crate::frame::Frame;
+use crate::error::{Error, Infeasibility};
+use crate::frame::{scaled, Frame};
 use crate::outer::{self, projected_grad, setup, Hints, Setup};
 use crate::piece::cubic3;
 use crate::types::{Method, Options, Problem, Solution, RESULT_FEASIBILITY_TOL, ROUNDING_TOL};
@@ -24,27 +24,29 @@ use crate::validate::validate;
 /// # Errors
 /// Invalid input (lengths, non-finite numbers, non-increasing sites or polylines, data outside
 /// the bounds, an empty strip) and an interval without a feasible candidate give an [`Error`]
-/// naming the field or interval; numbers too badly scaled for double precision give
-/// [`Error::Overflow`]; running out of iterations gives [`Error::NotConverged`].
+/// naming the field and index; numbers too badly scaled for double precision give
+/// [`Error::InvalidValue`]; running out of iterations gives [`Error::NotConverged`].
 pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     validate(problem)?;
     let frame = Frame::of(problem)?;
     let normalized = frame.forward(problem)?;
     let sol = solve_normalized(problem, &normalized, &frame, opts).map_err(|e| match e {
-        Error::DataOutsideBounds {
+        // distances and places in the caller's units
+        Error::Infeasible {
+            field,
             index,
-            interval,
-            side,
-            by,
-        } => Error::DataOutsideBounds {
+            reason,
+        } => Error::Infeasible {
+            field,
             index,
-            interval,
-            side,
-            by: by * frame.c,
-        },
-        Error::EmptyStrip { interval, t } => Error::EmptyStrip {
-            interval,
-            t: frame.time(t),
+            reason: match reason {
+                Infeasibility::OutsideBound { side, by } => Infeasibility::OutsideBound {
+                    side,
+                    by: by * frame.c,
+                },
+                Infeasibility::Closed { at } => Infeasibility::Closed { at: frame.time(at) },
+                other => other,
+            },
         },
         other => other,
     })?;
@@ -53,7 +55,7 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
         && sol.coefficients.iter().flatten().all(|c| c.is_finite())
         && sol.breaks.iter().all(|b| b.is_finite());
     if !finite {
-        return Err(Error::Overflow);
+        return Err(scaled("y", 0));
     }
     let mut sol = sol;
     let tolerance = RESULT_FEASIBILITY_TOL * frame.scale + ROUNDING_TOL * frame.magnitude;
@@ -148,7 +150,11 @@ fn solve_normalized(
         Method::Newton => outer::newton(&outer, x, opts, &mut hints, &mut stats, &mut solves)?,
         Method::Bfgs => {
             if outer.sv.iter().any(Option::is_some) {
-                return Err(Error::BadOption { name: "method" });
+                return Err(Error::InvalidValue {
+                    field: "options.method",
+                    index: 0,
+                    reason: "BFGS has no box constraints: it cannot take polyline bounds",
+                });
             }
             outer::bfgs(&outer, x, opts, &mut stats, &mut solves)?
         }
@@ -216,17 +222,17 @@ mod tests {
         let st = setup(problem, &Options::default(), vscale)?;
         let x = x.map_or_else(|| st.x0.clone(), <[f64]>::to_vec);
         if x.len() != st.outer.nvar {
-            return Err(Error::LengthMismatch {
+            return Err(Error::WrongLength {
                 field: "x",
                 expected: st.outer.nvar,
-                found: x.len(),
+                got: x.len(),
             });
         }
         let mut hints: Hints = vec![None; st.grid.len() - 1];
         let e = st
             .outer
             .eval(&x, &mut hints, None, &mut CellStats::default(), &mut 0)
-            .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+            .map_err(|j| st.outer.no_candidate(j))?;
         Ok((e.phi, e.grad, st.x0))
     }
 

@@ -1,6 +1,6 @@
 //! The vocabulary of `strip`: the problem, its bounds and options, and the solution.
 
-use crate::piece::{cubic3, shift};
+use crate::piece::shift;
 
 /// Which bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -255,7 +255,16 @@ fn span_ratios_and_nearly_coincident_sites() {
             Err(e) => {
                 eprintln!("| {h:e} | error: {e} | |");
                 assert!(h == 0.0, "h {h:e}: {e}");
-                assert!(matches!(e, Error::NonIncreasingSites { index: 3 }), "{e}");
+                assert!(
+                    matches!(
+                        e,
+                        Error::NonIncreasing {
+                            field: "t",
+                            index: 3
+                        }
+                    ),
+                    "{e}"
+                );
             }
         }
     }
@@ -303,11 +312,20 @@ fn strip_widths_from_zero_to_huge() {
             }
             Err(e) => {
                 if w == 0.0 {
-                    assert!(matches!(e, Error::EmptyStrip { .. }), "{e}");
+                    assert!(
+                        matches!(
+                            e,
+                            Error::Infeasible {
+                                reason: strip::Infeasibility::Closed { .. },
+                                ..
+                            }
+                        ),
+                        "{e}"
+                    );
                 } else {
                     // A hair-thin strip: a typed refusal (measured at w = 1e-12).
                     assert!(w <= THIN_STRIP, "w {w:e}: {e}");
-                    assert!(matches!(e, Error::NoFeasibleCandidate { .. }), "{e}");
+                    assert!(matches!(e, Error::Unsupported { .. }), "{e}");
                 }
             }
         }
@@ -348,7 +366,8 @@ fn iteration_limit_is_respected_and_reported() {
                 }
                 Err(Error::NotConverged {
                     iterations,
-                    gradient_norm,
+                    residual: gradient_norm,
+                    ..
                 }) => {
                     eprintln!(
                         "| {method:?} | {limit} | NotConverged: {iterations} iterations, gradient norm {gradient_norm:.1e} |"
@@ -418,11 +437,20 @@ proptest::proptest! {
                 // a refusal for the numbers, never one that blames well-formed input or options
                 let wrong = matches!(
                     e,
-                    Error::LengthMismatch { .. }
+                    Error::WrongLength { .. }
                         | Error::NonFinite { .. }
-                        | Error::BadOption { .. }
-                        | Error::NonIncreasingPolyline { .. }
-                        | Error::EmptyStrip { .. }
+                        | Error::InvalidValue {
+                            field: "options.boundary_margin" | "options.gradient_tol",
+                            ..
+                        }
+                        | Error::NonIncreasing {
+                            field: "lower.polyline" | "upper.polyline",
+                            ..
+                        }
+                        | Error::Infeasible {
+                            reason: strip::Infeasibility::Closed { .. },
+                            ..
+                        }
                 );
                 proptest::prop_assert!(!wrong, "{}", e);
             }

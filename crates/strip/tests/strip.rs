@@ -6,7 +6,9 @@ mod common;
 
 use proptest::prelude::*;
 use strip::interval::solve_interval;
-use strip::{solve, Bound, Error, KnotKind, Method, Options, Problem, Pruning, Shape, Side};
+use strip::{
+    solve, Bound, Error, Infeasibility, KnotKind, Method, Options, Problem, Pruning, Shape, Side,
+};
 use strip_testkit::examples::{polygon_strip, Y16};
 
 /// Natural cubic spline by the independent moment (second-derivative) formulation:
@@ -505,10 +507,13 @@ fn bad_input_is_a_typed_error() {
     p.y[4] += 0.5;
     assert!(matches!(
         solve(&p, &Options::default()),
-        Err(Error::DataOutsideBounds {
+        Err(Error::Infeasible {
+            field: "y",
             index: 4,
-            side: Side::Upper,
-            ..
+            reason: Infeasibility::OutsideBound {
+                side: Side::Upper,
+                ..
+            }
         })
     ));
     let mut p = good.clone();
@@ -517,13 +522,20 @@ fn bad_input_is_a_typed_error() {
     }
     assert!(matches!(
         solve(&p, &Options::default()),
-        Err(Error::EmptyStrip { interval: 6, .. })
+        Err(Error::Infeasible {
+            field: "lower.pieces",
+            index: 6,
+            reason: Infeasibility::Closed { .. }
+        })
     ));
     let mut p = good.clone();
     p.t[3] = p.t[2];
     assert_eq!(
         solve(&p, &Options::default()),
-        Err(Error::NonIncreasingSites { index: 3 })
+        Err(Error::NonIncreasing {
+            field: "t",
+            index: 3
+        })
     );
     let mut p = good.clone();
     p.y[7] = f64::NAN;
@@ -551,7 +563,7 @@ fn bad_input_is_a_typed_error() {
     }
     assert!(matches!(
         solve(&p, &Options::default()),
-        Err(Error::LengthMismatch {
+        Err(Error::WrongLength {
             field: "lower.pieces",
             ..
         })
@@ -563,13 +575,21 @@ fn bad_input_is_a_typed_error() {
     };
     assert_eq!(
         solve(&p, &Options::default()),
-        Err(Error::TooFewPoints { len: 1 })
+        Err(Error::TooFew {
+            field: "t",
+            minimum: 2,
+            got: 1
+        })
     );
     let mut p = good;
     p.lower = Bound::Polyline(vec![[1.0, -5.0], [15.0, -5.0]]);
     assert!(matches!(
         solve(&p, &Options::default()),
-        Err(Error::PolylineDoesNotCover { side: Side::Lower })
+        Err(Error::InvalidValue {
+            field: "lower.polyline",
+            index: 0,
+            ..
+        })
     ));
 }
 

@@ -368,8 +368,21 @@ pub fn cases() -> Vec<Case> {
                 up[6] = [-5.0, 0.0, 0.0, 0.0];
             }
             let e2 = solve(&p, &Options::default()).err();
-            let ok = matches!(e1, Some(strip::Error::DataOutsideBounds { index: 4, .. }))
-                && matches!(e2, Some(strip::Error::EmptyStrip { interval: 6, .. }));
+            let ok = matches!(
+                e1,
+                Some(strip::Error::Infeasible {
+                    field: "y",
+                    index: 4,
+                    ..
+                })
+            ) && matches!(
+                e2,
+                Some(strip::Error::Infeasible {
+                    field: "upper.pieces" | "lower.pieces",
+                    index: 6,
+                    ..
+                })
+            );
             Ok(Outcome::flag(ok, format!("{e1:?}; {e2:?}")))
         }),
     ]

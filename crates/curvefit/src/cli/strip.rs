@@ -105,48 +105,18 @@ fn kind_name(k: strip::KnotKind) -> String {
     }
 }
 
-/// Maps the library's typed error to a field path.
-fn input_error(p: &Problem, e: &strip::Error) -> InputError {
+/// Maps the library's typed error to a field path (the library names the user's field and
+/// index in every input error).
+fn input_error(e: &strip::Error) -> InputError {
     use strip::Error as E;
-    let bound_field = |s: strip::Side| {
-        let b = if s == strip::Side::Lower {
-            &p.lower
-        } else {
-            &p.upper
-        };
-        match b {
-            Some(BoundSpec::Polyline(_)) => format!("{}.polyline", side_name(s)),
-            _ => format!("{}.pieces", side_name(s)),
-        }
-    };
     match e {
-        E::TooFewPoints { .. } => InputError::new("t", e),
-        E::LengthMismatch { field, .. } => InputError::new(*field, e),
-        E::NonFinite { field, index } | E::TooLarge { field, index, .. } => {
-            InputError::new(format!("{field}[{index}]"), e)
-        }
-        E::NonIncreasingSites { index } => InputError::new(format!("t[{index}]"), e),
-        E::NonIncreasingPolyline { side, index } => {
-            InputError::new(format!("{}.polyline[{index}]", side_name(*side)), e)
-        }
-        E::PolylineDoesNotCover { side } => {
-            InputError::new(format!("{}.polyline", side_name(*side)), e)
-        }
-        E::DataOutsideBounds { index, .. } => InputError::new(format!("y[{index}]"), e),
-        E::EmptyStrip { interval, .. } => {
-            let f = bound_field(strip::Side::Lower);
-            if f.ends_with("pieces") {
-                InputError::new(format!("{f}[{interval}]"), e)
-            } else {
-                InputError::new(f, e)
-            }
-        }
-        E::NoFeasibleCandidate { interval } => InputError::new(
-            format!("lower.pieces[{interval}]"),
-            format!(
-                "{e} (cubic bounds with more than two contacts per interval are not supported)"
-            ),
-        ),
+        E::TooFew { field, .. } | E::WrongLength { field, .. } => InputError::new(*field, e),
+        E::NonFinite { field, index }
+        | E::TooLarge { field, index, .. }
+        | E::NonIncreasing { field, index }
+        | E::InvalidValue { field, index, .. }
+        | E::Infeasible { field, index, .. }
+        | E::Unsupported { field, index, .. } => InputError::new(format!("{field}[{index}]"), e),
         E::StripViolated { side, .. } => InputError::new(side_name(*side), e),
         E::Discontinuous { .. } => InputError::new("t", e),
         _ => InputError::new("", e),
@@ -171,8 +141,7 @@ impl Command for Strip {
             upper: bound(&p.upper),
             end_slopes: p.end_slopes.unwrap_or([None, None]),
         };
-        let s =
-            strip::solve(&problem, &strip::Options::default()).map_err(|e| input_error(p, &e))?;
+        let s = strip::solve(&problem, &strip::Options::default()).map_err(|e| input_error(&e))?;
         Ok(Solution {
             breaks: s.breaks,
             coefficients: s.coefficients,

@@ -68,6 +68,16 @@ impl Gradient for Phi<'_> {
     }
 }
 
+/// argmin stopped with an error (its evaluation budget, [`EVALUATIONS_PER_ITERATION`] per
+/// permitted iteration, is the only one it can report here): out of iterations.
+fn not_converged(iterations: usize) -> Error {
+    Error::NotConverged {
+        solver: "argmin BFGS",
+        iterations,
+        residual: f64::INFINITY,
+    }
+}
+
 /// Outside Φ's domain BFGS sees the cost `OUTSIDE_FACTOR`·(1 + |Φ(x₀)|).
 const OUTSIDE_FACTOR: f64 = 1e6;
 
@@ -91,15 +101,15 @@ pub(crate) fn bfgs(
         outside: f64::INFINITY,
         evaluations: &evaluations,
     };
-    let (f0, g0) = phi.vg(&x0).map_err(|e| Error::Bfgs {
-        message: e.to_string(),
-    })?;
+    let (f0, g0) = phi
+        .vg(&x0)
+        .map_err(|_| not_converged(opts.max_iterations))?;
     if !f0.is_finite() {
         // the start is outside Φ's domain
         let mut h = hints.borrow().clone();
         return match outer.eval(&x0, &mut h, None, stats, solves) {
-            Err(interval) => Err(Error::NoFeasibleCandidate { interval }),
-            Ok(_) => Err(Error::Overflow),
+            Err(j) => Err(outer.no_candidate(j)),
+            Ok(_) => Err(crate::frame::scaled("y", 0)),
         };
     }
     phi.outside = OUTSIDE_FACTOR * (1.0 + f0.abs());
@@ -114,9 +124,7 @@ pub(crate) fn bfgs(
             // stop when an iteration no longer changes Φ beyond rounding (the gradient can stall
             // above its tolerance along stiff directions; the line search would then loop)
             .and_then(|s| s.with_tolerance_cost(DECREMENT_TOL * (1.0 + f0.abs())))
-            .map_err(|e| Error::Bfgs {
-                message: e.to_string(),
-            })?;
+            .map_err(|_| not_converged(opts.max_iterations))?;
         let mut h0 = vec![vec![0.0; nv]; nv];
         for (i, row) in h0.iter_mut().enumerate() {
             row[i] = 1.0;
@@ -128,9 +136,7 @@ pub(crate) fn bfgs(
                     .max_iters(opts.max_iterations as u64)
             })
             .run()
-            .map_err(|e| Error::Bfgs {
-                message: e.to_string(),
-            })?;
+            .map_err(|_| not_converged(opts.max_iterations))?;
         if let Some(p) = res.state().get_best_param() {
             best = p.clone();
         }
@@ -146,15 +152,16 @@ pub(crate) fn bfgs(
     *solves += n;
     let ev = outer
         .eval(&best, &mut h, None, stats, solves)
-        .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+        .map_err(|j| outer.no_candidate(j))?;
     let (g, sols) = (ev.grad, ev.sols);
     // out of iterations with neither the gradient (argmin's 2-norm test) nor Φ converged: an
     // error with the gradient norm in the caller's units (as for Newton), never a silent answer
     let g2 = g.iter().map(|v| v * v).sum::<f64>().sqrt();
     if out_of_iterations && g2 > opts.gradient_tol * (1.0 + g0n) {
         return Err(Error::NotConverged {
+            solver: "argmin BFGS",
             iterations: iters,
-            gradient_norm: outer.caller_gradient_norm(&g),
+            residual: outer.caller_gradient_norm(&g),
         });
     }
     Ok((f64::NAN, iters, (sols, best, g)))

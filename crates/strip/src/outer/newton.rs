@@ -34,7 +34,7 @@ pub(crate) fn newton(
     let mut band = Band::zeros(nv);
     let mut ev = o
         .eval(&x, hints, Some(&mut band), stats, solves)
-        .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+        .map_err(|j| o.no_candidate(j))?;
     let g0 = inf_norm(&projected_grad(o, &x, &ev.grad));
     let tol = opts.gradient_tol * (1.0 + g0);
     let mut it = 0;
@@ -162,7 +162,7 @@ pub(crate) fn newton(
         band = Band::zeros(nv);
         ev = o
             .eval(&x, hints, Some(&mut band), stats, solves)
-            .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
+            .map_err(|j| o.no_candidate(j))?;
     }
     // the decrement at the final point (on the free, non-active unknowns)
     let pg = projected_grad(o, &x, &ev.grad);
@@ -188,8 +188,9 @@ pub(crate) fn newton(
     let decrement_ok = newton_decrement <= ACCEPT_DECREMENT * (1.0 + ev.phi.abs());
     if it >= opts.max_iterations && gradient_norm > tol && !decrement_ok {
         return Err(Error::NotConverged {
+            solver: "Newton on Φ",
             iterations: it,
-            gradient_norm: pg
+            residual: pg
                 .iter()
                 .zip(&o.unit)
                 .fold(0.0f64, |m, (g, u)| m.max((g * u).abs())),

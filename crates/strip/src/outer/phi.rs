@@ -2,6 +2,7 @@
 //! sites) with their boxes, and the evaluation of Φ, ∇Φ and the banded Hessian.
 
 use crate::cell::{hessian, solve_cell, Cell, CellSolution, CellStats, CellTol};
+use crate::error::Error;
 use crate::linalg::Band;
 use crate::types::{Pruning, Shape};
 
@@ -33,6 +34,8 @@ pub(crate) struct Outer {
     /// Factor from each unknown's gradient component to the caller's frame (see `frame.rs`):
     /// c/λ² for slopes, c/λ³ for grid values (ones when solving in the caller's frame).
     pub(crate) unit: Vec<f64>,
+    /// The user's field names of the lower and upper bound (for errors).
+    pub(crate) fields: [&'static str; 2],
 }
 
 pub(crate) struct Eval {
@@ -195,6 +198,21 @@ pub(crate) fn inf_norm(v: &[f64]) -> f64 {
 /// What both outer methods return: the decrement (NaN for BFGS), the iterations, and the cells'
 /// solutions, the unknowns and the gradient at the final point.
 impl Outer {
+    /// The error for grid cell `j` without a feasible candidate (a cubic bound whose solution
+    /// needs more than Theorem 2.1's two extra knots there).
+    pub(crate) fn no_candidate(&self, j: usize) -> Error {
+        let c = &self.cells[j];
+        Error::Unsupported {
+            field: if c.lower.is_some() {
+                self.fields[0]
+            } else {
+                self.fields[1]
+            },
+            index: c.interval,
+            reason: "no feasible candidate in this interval: a cubic bound whose solution needs more than two extra knots here (Theorem 2.1 enumerates at most two; Remark 3.2)",
+        }
+    }
+
     /// ‖g‖∞ in the caller's frame.
     pub(crate) fn caller_gradient_norm(&self, g: &[f64]) -> f64 {
         g.iter()

@@ -3,7 +3,7 @@
 
 use super::phi::{clamp_safe, Outer, RealCell};
 use crate::cell::{Cell, CellTol};
-use crate::error::Error;
+use crate::error::{bound_field, Error, Infeasibility};
 use crate::linalg::solve_tridiagonal;
 use crate::piece::cubic3;
 use crate::types::{cell_bound, Bound, Options, Problem, Side, CONTACT_TOL, FEASIBILITY_TOL};
@@ -142,13 +142,17 @@ pub(crate) struct Setup {
 pub(crate) fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Setup, Error> {
     validate(problem)?;
     if !(0.0..0.5).contains(&opts.boundary_margin) {
-        return Err(Error::BadOption {
-            name: "boundary_margin",
+        return Err(Error::InvalidValue {
+            field: "options.boundary_margin",
+            index: 0,
+            reason: "the margin must lie in [0, 0.5)",
         });
     }
     if opts.gradient_tol.is_nan() || opts.gradient_tol <= 0.0 {
-        return Err(Error::BadOption {
-            name: "gradient_tol",
+        return Err(Error::InvalidValue {
+            field: "options.gradient_tol",
+            index: 0,
+            reason: "the tolerance must be positive",
         });
     }
     let t = &problem.t;
@@ -211,10 +215,7 @@ pub(crate) fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Se
             );
             for s in cand {
                 if cubic3(&d, s).0 <= 0.0 {
-                    return Err(Error::EmptyStrip {
-                        interval: c.interval,
-                        t: c.a + s,
-                    });
+                    return Err(closed(problem, c.interval, c.a + s));
                 }
             }
         }
@@ -230,10 +231,8 @@ pub(crate) fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Se
         let mut lo = f64::NEG_INFINITY;
         let mut hi = f64::INFINITY;
         let mut width = f64::INFINITY;
-        let mut interval = 0;
         for (cj, at_end) in [(j.wrapping_sub(1), true), (j, false)] {
             if let Some(c) = cells.get(cj) {
-                interval = c.interval;
                 let s = if at_end { c.h } else { 0.0 };
                 let l = c.lower.map(|g| cubic3(&g, s).0);
                 let u = c.upper.map(|g| cubic3(&g, s).0);
@@ -257,19 +256,23 @@ pub(crate) fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Se
             Some(i) => {
                 let mut v = y[i];
                 if v < lo - on_bound_tol {
-                    return Err(Error::DataOutsideBounds {
+                    return Err(Error::Infeasible {
+                        field: "y",
                         index: i,
-                        interval,
-                        side: Side::Lower,
-                        by: lo - v,
+                        reason: Infeasibility::OutsideBound {
+                            side: Side::Lower,
+                            by: lo - v,
+                        },
                     });
                 }
                 if v > hi + on_bound_tol {
-                    return Err(Error::DataOutsideBounds {
+                    return Err(Error::Infeasible {
+                        field: "y",
                         index: i,
-                        interval,
-                        side: Side::Upper,
-                        by: v - hi,
+                        reason: Infeasibility::OutsideBound {
+                            side: Side::Upper,
+                            by: v - hi,
+                        },
                     });
                 }
                 if v < lo + on_bound_tol {
@@ -342,6 +345,10 @@ pub(crate) fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Se
         },
         pruning: opts.pruning,
         unit: vec![1.0; nvar],
+        fields: [
+            bound_field(&problem.lower, Side::Lower),
+            bound_field(&problem.upper, Side::Upper),
+        ],
     };
     // initial point: the natural (or clamped) spline through the data
     let z0 = spline_slopes(t, &y, problem.end_slopes);
@@ -369,6 +376,20 @@ pub(crate) fn setup(problem: &Problem, opts: &Options, vscale: f64) -> Result<Se
         x0: x,
         shifted,
     })
+}
+
+/// The error for a strip that closes at `at` (in data interval `interval`): named after the
+/// lower bound's piece, or the polyline vertex at or before `at`.
+fn closed(p: &Problem, interval: usize, at: f64) -> Error {
+    let index = match &p.lower {
+        Bound::Polyline(v) => v.partition_point(|q| q[0] <= at).clamp(1, v.len()) - 1,
+        _ => interval,
+    };
+    Error::Infeasible {
+        field: bound_field(&p.lower, Side::Lower),
+        index,
+        reason: Infeasibility::Closed { at },
+    }
 }
 
 /// Free grid values start at least this fraction of the strip width inside the strip.

@@ -11,6 +11,9 @@
 //!   strip on every sub-interval between consecutive breaks and bound vertices (roots of the
 //!   derivative of the cubic minus the bound), interpolation and C² continuity.
 
+// Index loops mirror the formulas (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 pub mod channel;
 pub mod exact;
 pub mod examples;
