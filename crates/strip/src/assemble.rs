@@ -1,56 +1,24 @@
 //! The solution in the caller's frame: pieces, extra knots and certificates assembled from the
 //! cells of the normalized problem and mapped back.
 
-use crate::cell::CellSolution;
 use crate::cell::CellStats;
-use crate::error::Error;
 use crate::frame::Frame;
-use crate::outer::Outer;
+use crate::outer::{Outer, OuterOut};
 use crate::piece::shift;
-use crate::types::{Bound, ExtraKnot, KnotKind, Problem, Shape, Side, Solution};
-
-/// The grid in the caller's frame: data sites and polyline vertices exactly as given, other
-/// points t₀ + λu.
-pub(crate) fn caller_grid(
-    p: &Problem,
-    q: &Problem,
-    fr: &Frame,
-    grid: &[(f64, Option<usize>)],
-) -> Vec<f64> {
-    let vertex = |u: f64| -> Option<f64> {
-        for (bq, bp) in [(&q.lower, &p.lower), (&q.upper, &p.upper)] {
-            if let (Bound::Polyline(vq), Bound::Polyline(vp)) = (bq, bp) {
-                if let Some(k) = vq.iter().position(|v| v[0].to_bits() == u.to_bits()) {
-                    return Some(vp[k][0]);
-                }
-            }
-        }
-        None
-    };
-    grid.iter()
-        .map(|(u, i)| match i {
-            Some(i) => p.t[*i],
-            None => vertex(*u).unwrap_or_else(|| fr.time(*u)),
-        })
-        .collect()
-}
+use crate::types::{Bound, ExtraKnot, KnotKind, Problem, Shape, Solution};
 
 /// Maps the values of a solution of the normalized problem (abscissae already placed in the
 /// caller's frame by `assemble`) back: values ℓ(t) + c·v (unshifted data values exactly),
 /// slopes ℓ' + c·z/λ (prescribed end slopes exactly), cubic coefficients c_k·c/λ^k (plus ℓ in
 /// the first two), energies ·c²/λ³.
-pub(crate) fn to_caller(
-    p: &Problem,
-    fr: &Frame,
-    grid: &[(f64, Option<usize>)],
-    s: Solution,
-) -> Solution {
-    // the exact data value at grid point j when it is a data site not moved by Remark 4.2
+pub(crate) fn to_caller(p: &Problem, fr: &Frame, s: Solution) -> Solution {
+    // the exact data value at data site j unless Remark 4.2 moved it (the solution's grid is the
+    // data sites)
     let mut shifted = vec![false; p.y.len()];
     for &i in &s.shifted_data {
         shifted[i] = true;
     }
-    let data_at = |j: usize| grid[j].1.filter(|i| !shifted[*i]).map(|i| p.y[i]);
+    let data_at = |j: usize| (!shifted[j]).then(|| p.y[j]);
     let at_grid = |t: f64| {
         s.grid
             .binary_search_by(|g| g.total_cmp(&t))
@@ -98,29 +66,28 @@ pub(crate) fn to_caller(
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The solution of the cells of the Φ-problem, in the normalized frame with its breaks placed in
+/// the caller's by `place(site, offset)`; `error(site, offset)` is how far (normalized units) a
+/// placed abscissa lies from the exact one, so that each piece is re-expanded about the
+/// abscissa actually returned. [`to_caller`] maps the values.
 pub(crate) fn assemble(
     place: &dyn Fn(usize, f64) -> f64,
     error: &dyn Fn(usize, f64) -> f64,
     o: &Outer,
-    grid: &[(f64, Option<usize>)],
-    sols: &[CellSolution],
-    x: Vec<f64>,
-    pg: Vec<f64>,
-    iterations: usize,
+    out: &OuterOut,
     solves: usize,
     stats: CellStats,
     shifted: Vec<usize>,
-) -> Result<Solution, Error> {
-    let (s, z) = o.unpack(&x);
+) -> Solution {
+    let sols = &out.sols;
+    let z = o.slopes(&out.x);
     let mut breaks = Vec::new();
     let mut coefficients = Vec::new();
     let mut extra = Vec::new();
     let mut energy = 0.0;
     let mut uncertified = Vec::new();
     for (j, sol) in sols.iter().enumerate() {
-        let c = &o.cells[j];
-        let h = c.h;
+        let h = o.cells[j].h;
         energy += sol.energy / (h * h * h);
         if !sol.certified {
             uncertified.push(j);
@@ -132,92 +99,136 @@ pub(crate) fn assemble(
             let piece = [cn[0], cn[1] / h, cn[2] / (h * h), cn[3] / (h * h * h)];
             coefficients.push(shift(&piece, error(j, h * pw.x[k])));
         }
-        let at = |k: usize| place(j, h * sol.tau[k]);
+        let mut knot = |k: usize, kind: KnotKind| {
+            extra.push(ExtraKnot {
+                t: place(j, h * sol.tau[k]),
+                kind,
+                interval: j,
+            })
+        };
         match sol.shape {
             Shape::Free => {}
-            Shape::Touch(sd) => extra.push(ExtraKnot {
-                t: at(0),
-                kind: KnotKind::Touch(sd),
-                interval: j,
-            }),
+            Shape::Touch(sd) => knot(0, KnotKind::Touch(sd)),
             Shape::Subarc(sd) => {
-                extra.push(ExtraKnot {
-                    t: at(0),
-                    kind: KnotKind::SubarcStart(sd),
-                    interval: j,
-                });
-                extra.push(ExtraKnot {
-                    t: at(1),
-                    kind: KnotKind::SubarcEnd(sd),
-                    interval: j,
-                });
+                knot(0, KnotKind::SubarcStart(sd));
+                knot(1, KnotKind::SubarcEnd(sd));
             }
             Shape::Pair(sd) => {
-                let other = if sd == Side::Lower {
-                    Side::Upper
-                } else {
-                    Side::Lower
-                };
-                extra.push(ExtraKnot {
-                    t: at(0),
-                    kind: KnotKind::Touch(sd),
-                    interval: j,
-                });
-                extra.push(ExtraKnot {
-                    t: at(1),
-                    kind: KnotKind::Touch(other),
-                    interval: j,
-                });
+                knot(0, KnotKind::Touch(sd));
+                knot(1, KnotKind::Touch(sd.other()));
             }
         }
     }
-    breaks.push(place(grid.len() - 1, 0.0));
-    // contacts at grid vertices (§4): a free grid value held on its (ε-shrunk) box bound
-    for (j, v) in o.sv.iter().enumerate() {
-        if let Some(k) = *v {
-            let (lo, hi) = o.boxes[j];
-            let tol = 1e-12 * (1.0 + x[k].abs());
-            let side = if x[k] <= lo + tol {
-                Some(Side::Lower)
-            } else if x[k] >= hi - tol {
-                Some(Side::Upper)
-            } else {
-                None
-            };
-            if let Some(side) = side {
-                extra.push(ExtraKnot {
-                    t: place(j, 0.0),
-                    kind: KnotKind::Touch(side),
-                    interval: j.min(sols.len() - 1),
-                });
-            }
-        }
-    }
-    extra.sort_by(|a, b| a.t.total_cmp(&b.t));
-    let slopes: Vec<f64> = grid
-        .iter()
-        .enumerate()
-        .filter(|(_, g)| g.1.is_some())
-        .map(|(j, _)| z[j])
-        .collect();
-    let gn = pg.iter().map(|v| v * v).sum::<f64>().sqrt();
-    Ok(Solution {
+    breaks.push(place(sols.len(), 0.0));
+    Solution {
         breaks,
         coefficients,
-        slopes,
-        grid: (0..grid.len()).map(|j| place(j, 0.0)).collect(),
-        grid_values: s,
+        slopes: z,
+        grid: (0..=sols.len()).map(|j| place(j, 0.0)).collect(),
+        grid_values: o.y.clone(),
         shapes: sols.iter().map(|s| s.shape).collect(),
         extra_knots: extra,
         energy,
         norm: energy.sqrt(),
-        gradient_norm: gn,
+        gradient_norm: 0.0,
         newton_decrement: f64::NAN,
-        iterations,
+        gap: f64::NAN,
+        rounds: 1,
+        iterations: out.iterations,
         cell_solves: solves,
         candidates: stats.candidates,
         shifted_data: shifted,
         uncertified,
         violation: 0.0,
-    })
+    }
+}
+
+/// The solution of the exchange (polyline bounds): the spline through the data and the active
+/// points, in the normalized frame with its breaks placed in the caller's (data sites and
+/// polyline vertices exactly as given); [`to_caller`] maps the values.
+pub(crate) fn assemble_spline(
+    p: &Problem,
+    q: &Problem,
+    fr: &Frame,
+    ex: &crate::exchange::Exchanged,
+    shifted: Vec<usize>,
+) -> Solution {
+    let s = &ex.spline;
+    let curve = s.to_curve();
+    let n = q.t.len();
+    // the caller's abscissa of a knot: a data site, a polyline vertex, or t₀ + λu
+    let vertex = |u: f64| -> Option<f64> {
+        for (bq, bp) in [(&q.lower, &p.lower), (&q.upper, &p.upper)] {
+            if let (Bound::Polyline(vq), Bound::Polyline(vp)) = (bq, bp) {
+                let k = vq.partition_point(|v| v[0] < u);
+                if k < vq.len() && vq[k][0].to_bits() == u.to_bits() {
+                    return Some(vp[k][0]);
+                }
+            }
+        }
+        None
+    };
+    let mut site = 0;
+    let caller: Vec<f64> =
+        s.x.iter()
+            .map(|&u| {
+                while site < n && q.t[site] < u {
+                    site += 1;
+                }
+                if site < n && q.t[site].to_bits() == u.to_bits() {
+                    p.t[site]
+                } else {
+                    vertex(u).unwrap_or_else(|| fr.time(u))
+                }
+            })
+            .collect();
+    let coefficients: Vec<[f64; 4]> = curve
+        .coeffs
+        .iter()
+        .zip(&s.x)
+        .zip(&caller)
+        .map(|((c, u), b)| shift(c, (b - fr.t0) / fr.lam - u))
+        .collect();
+    let mut extra = Vec::with_capacity(ex.active.len());
+    let mut shapes = vec![Shape::Free; n - 1];
+    let mut a = 0;
+    for (k, &u) in s.x.iter().enumerate() {
+        if a < ex.active.len() && ex.active[a].x.to_bits() == u.to_bits() {
+            let c = ex.active[a];
+            let interval = q.t.partition_point(|v| *v <= u).clamp(1, n - 1) - 1;
+            if shapes[interval] == Shape::Free {
+                shapes[interval] = Shape::Touch(c.side);
+            }
+            extra.push(ExtraKnot {
+                t: caller[k],
+                kind: KnotKind::Touch(c.side),
+                interval,
+            });
+            a += 1;
+        }
+    }
+    let slopes: Vec<f64> = q.t.iter().map(|&u| curve.eval(u).1).collect();
+    let energy = s.energy();
+    let decrement = ex.gap * energy;
+    Solution {
+        breaks: caller,
+        coefficients,
+        slopes,
+        grid: p.t.clone(),
+        grid_values: q.y.clone(),
+        shapes,
+        extra_knots: extra,
+        energy,
+        norm: energy.sqrt(),
+        gradient_norm: 0.0,
+        newton_decrement: decrement,
+        gap: ex.gap,
+        rounds: ex.sweeps,
+        iterations: ex.steps,
+        cell_solves: ex.solves,
+        candidates: ex.steps,
+        shifted_data: shifted,
+        uncertified: Vec::new(),
+        violation: 0.0,
+    }
 }

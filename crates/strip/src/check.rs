@@ -1,47 +1,105 @@
-//! Exact checks of the returned pieces in the caller's frame: the strip (extrema of the cubic
-//! minus the bound on every sub-interval between consecutive breaks and bound vertices).
+//! Exact strip checks of a piecewise cubic: on every sub-interval between consecutive breaks of
+//! the cubic and breakpoints of the bound (polyline vertices; the data sites for cubic pieces),
+//! f − e (or d − f) is one cubic, whose minimum is taken at an end or at a real root of its
+//! derivative. Breaks and bound breakpoints are merged in one pass: O(pieces + M).
+//!
+//! Used twice: by stage 2 of [`crate::solve`] to find the polyline segments its relaxation left
+//! out and the curve violates (normalized frame), and on the returned pieces in the caller's
+//! frame (a violation beyond the documented tolerance is refused).
 
-use crate::piece::{cubic_min, shift};
-use crate::types::{polyline_at, Bound, Problem, Side, Solution};
+use crate::piece::{cubic_argmin, shift};
+use crate::types::{Bound, Problem, Side, Solution};
 
-/// The largest violation of the strip by the pieces of `s` (exact extrema of the cubic
-/// difference on every piece, split at polyline vertices), with its data interval and side;
-/// `None` without bounds.
-pub(crate) fn worst_violation(p: &Problem, s: &Solution) -> Option<(f64, usize, Side)> {
-    let n = p.t.len();
-    let mut worst: Option<(f64, usize, Side)> = None;
-    for j in 0..s.coefficients.len() {
-        let (x0, x1) = (s.breaks[j], s.breaks[j + 1]);
+/// Calls `visit(segment, a, excursion, at)` for every sub-interval \[a, b\] of the piecewise
+/// cubic (`breaks`, `coeffs`) and the bound `b` of `side`, where `excursion` is the largest
+/// amount by which f leaves the bound there (≤ 0 inside; NaN propagates), `at` where, and
+/// `segment` the polyline segment (or the data interval, for cubic pieces) holding \[a, b\].
+pub(crate) fn excursions(
+    b: &Bound,
+    t: &[f64],
+    side: Side,
+    breaks: &[f64],
+    coeffs: &[[f64; 4]],
+    visit: &mut dyn FnMut(usize, f64, f64, f64),
+) {
+    let cuts: &[[f64; 2]] = match b {
+        Bound::None => return,
+        Bound::Polyline(v) => v,
+        Bound::Pieces(_) => &[],
+    };
+    let n = t.len();
+    // the bound's breakpoint index (polyline vertex or data site) at or before the current a
+    let mut k = 0;
+    let count = match b {
+        Bound::Polyline(v) => v.len(),
+        _ => n,
+    };
+    let at = |k: usize| match b {
+        Bound::Polyline(_) => cuts[k][0],
+        _ => t[k],
+    };
+    for j in 0..coeffs.len() {
+        let (x0, x1) = (breaks[j], breaks[j + 1]);
         if x1 <= x0 {
             continue;
         }
-        let i = p.t.partition_point(|t| *t <= x0).clamp(1, n - 1) - 1;
-        for (side, b) in [(Side::Lower, &p.lower), (Side::Upper, &p.upper)] {
-            let mut cuts = vec![x0];
-            if let Bound::Polyline(v) = b {
-                cuts.extend(v.iter().map(|q| q[0]).filter(|x| *x > x0 && *x < x1));
+        let mut a = x0;
+        loop {
+            // the segment holding [a, b): last breakpoint ≤ a (clamped to a valid segment)
+            while k + 1 < count && at(k + 1) <= a {
+                k += 1;
             }
-            cuts.push(x1);
-            for w in cuts.windows(2) {
-                let g = match b {
-                    Bound::None => continue,
-                    Bound::Pieces(pc) => shift(&pc[i], w[0] - p.t[i]),
-                    Bound::Polyline(v) => {
-                        let (ga, gb) = (polyline_at(v, w[0]), polyline_at(v, w[1]));
-                        [ga, (gb - ga) / (w[1] - w[0]), 0.0, 0.0]
-                    }
-                };
-                let f = shift(&s.coefficients[j], w[0] - x0);
-                let d: [f64; 4] = std::array::from_fn(|k| match side {
-                    Side::Lower => f[k] - g[k],
-                    Side::Upper => g[k] - f[k],
-                });
-                let by = -cubic_min(&d, w[1] - w[0]);
-                if worst.is_none_or(|(m, _, _)| by > m || by.is_nan()) {
-                    worst = Some((by, i, side));
+            let seg = k.min(count - 2);
+            let next = at(seg + 1);
+            let end = if next > a && next < x1 { next } else { x1 };
+            let g = match b {
+                Bound::Polyline(v) => {
+                    let (p, q) = (v[seg], v[seg + 1]);
+                    let slope = (q[1] - p[1]) / (q[0] - p[0]);
+                    [p[1] + slope * (a - p[0]), slope, 0.0, 0.0]
                 }
+                Bound::Pieces(pc) => shift(&pc[seg], a - t[seg]),
+                Bound::None => unreachable!("returned above"),
+            };
+            let f = shift(&coeffs[j], a - x0);
+            let d: [f64; 4] = std::array::from_fn(|i| match side {
+                Side::Lower => f[i] - g[i],
+                Side::Upper => g[i] - f[i],
+            });
+            let (min, u) = cubic_argmin(&d, end - a);
+            visit(seg, a, -min, a + u);
+            if end >= x1 {
+                break;
             }
+            a = end;
         }
     }
-    worst
+}
+
+/// The largest violation of the strip by the pieces of `s`, with its data interval and side;
+/// `None` without bounds.
+pub(crate) fn worst_violation(p: &Problem, s: &Solution) -> Option<(f64, usize, Side)> {
+    let mut worst: Option<(f64, f64, Side)> = None;
+    for (side, b) in [(Side::Lower, &p.lower), (Side::Upper, &p.upper)] {
+        excursions(
+            b,
+            &p.t,
+            side,
+            &s.breaks,
+            &s.coefficients,
+            &mut |_, a, by, _| {
+                if worst.is_none_or(|(m, _, _)| by > m || by.is_nan()) {
+                    worst = Some((by, a, side));
+                }
+            },
+        );
+    }
+    let n = p.t.len();
+    worst.map(|(by, a, side)| {
+        (
+            by,
+            p.t.partition_point(|x| *x <= a).clamp(1, n - 1) - 1,
+            side,
+        )
+    })
 }

@@ -82,13 +82,17 @@ mod assemble;
 mod cell;
 mod check;
 mod error;
+mod exchange;
 mod frame;
 pub mod interval;
 mod linalg;
 mod outer;
 mod piece;
 mod poly;
+mod prepare;
 mod solve;
+mod spline;
+mod strategy;
 mod types;
 mod validate;
 

@@ -27,3 +27,35 @@ pub(crate) fn cubic_min(c: &[f64; 4], l: f64) -> f64 {
     }
     m
 }
+
+/// min over \[0, l\] of the cubic c and where it is taken (ends, and the real roots of the
+/// derivative 3c3 s² + 2c2 s + c1 by the cancellation-free quadratic formula).
+pub(crate) fn cubic_argmin(c: &[f64; 4], l: f64) -> (f64, f64) {
+    let at = |s: f64| c[0] + s * (c[1] + s * (c[2] + s * c[3]));
+    let mut best = (c[0], 0.0);
+    let mut consider = |s: f64| {
+        if s > 0.0 && s <= l {
+            let v = at(s);
+            if v < best.0 || v.is_nan() {
+                best = (v, s);
+            }
+        }
+    };
+    consider(l);
+    let (a, b, k) = (3.0 * c[3], 2.0 * c[2], c[1]);
+    if a == 0.0 {
+        if b != 0.0 {
+            consider(-k / b);
+        }
+    } else {
+        let disc = b * b - 4.0 * a * k;
+        if disc >= 0.0 {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            if q != 0.0 {
+                consider(q / a);
+                consider(k / q);
+            }
+        }
+    }
+    best
+}

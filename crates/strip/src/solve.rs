@@ -1,13 +1,13 @@
 //! The entry point: validate, normalize, solve the outer problem, map back, check.
 
-use crate::assemble::{assemble, caller_grid, to_caller};
-use crate::cell::CellStats;
+use crate::assemble::{assemble, assemble_spline, to_caller};
 use crate::check::worst_violation;
 use crate::error::{Error, Infeasibility};
 use crate::frame::{scaled, Frame};
-use crate::outer::{self, projected_grad, setup, Hints, Setup};
+use crate::outer;
 use crate::piece::cubic3;
-use crate::types::{Method, Options, Problem, Solution, RESULT_FEASIBILITY_TOL, ROUNDING_TOL};
+use crate::strategy::{self, CellsOut, Staged};
+use crate::types::{Options, Problem, Solution, RESULT_FEASIBILITY_TOL, ROUNDING_TOL};
 use crate::validate::validate;
 
 /// Solves the strip problem.
@@ -111,82 +111,60 @@ fn solve_normalized(
     frame: &Frame,
     opts: &Options,
 ) -> Result<Solution, Error> {
-    let Setup {
-        mut outer,
-        grid,
-        x0: x,
-        shifted,
-    } = setup(q, opts, frame.scale / frame.c)?;
     let ef = frame.energy_factor();
-    for j in 0..grid.len() {
-        if let Some(k) = outer.sv[j] {
-            outer.unit[k] = ef / frame.c;
+    let (staged, shifted) =
+        strategy::run(q, opts, frame.scale / frame.c, ef * frame.lam / frame.c)?;
+    let sol = match staged {
+        Staged::Spline { q: qs, ex } => assemble_spline(problem, &qs, frame, &ex, shifted),
+        Staged::Cells(CellsOut {
+            setup: st,
+            out,
+            stats,
+            cell_solves,
+        }) => {
+            let outer = &st.outer;
+            // the decrement ½gᵀH⁻¹g estimates Φ − min Φ (BFGS does not compute it: one Hessian
+            // here)
+            let decrement = if out.decrement.is_nan() {
+                outer::decrement_at(outer, &out.x, &out.grad)
+            } else {
+                out.decrement
+            };
+            // abscissae in the caller's frame, placed from their data site (a break or knot
+            // inside a short interval keeps its offset exactly; t₀ + λu would round it to
+            // ulp(u))
+            let place = |j: usize, offset: f64| problem.t[j] + frame.lam * offset;
+            // how far the rounded abscissa lies from the exact one, in normalized units: pieces
+            // are re-expanded about the abscissa actually returned (a bound of slope 1e12 moves
+            // by 2.6e-4 over the 2e-16 rounding of a break near t = 2.5)
+            let error = |j: usize, offset: f64| {
+                ((place(j, offset) - problem.t[j]) - frame.lam * offset) / frame.lam
+            };
+            let mut sol = assemble(&place, &error, outer, &out, cell_solves, stats, shifted);
+            sol.newton_decrement = decrement;
+            sol.gap = if out.phi > 0.0 {
+                (decrement / out.phi).max(0.0)
+            } else {
+                0.0
+            };
+            sol.gradient_norm = out
+                .grad
+                .iter()
+                .zip(&outer.unit)
+                .map(|(g, u)| (g * u) * (g * u))
+                .sum::<f64>()
+                .sqrt();
+            sol
         }
-        if let Some(k) = outer.zv[j] {
-            outer.unit[k] = ef * frame.lam / frame.c;
-        }
-    }
-    let m = grid.len();
-    let mut stats = CellStats::default();
-    let mut solves = 0usize;
-    let mut hints: Hints = vec![None; m - 1];
-    // the natural spline's slopes may lie outside Φ's domain (hair-thin strips, very short
-    // spans): then the first alternative start inside it
-    let mut x = x;
-    let inside = |x: &[f64], stats: &mut CellStats, solves: &mut usize| {
-        outer
-            .eval(x, &mut vec![None; m - 1], None, stats, solves)
-            .is_ok()
     };
-    if !inside(&x, &mut stats, &mut solves) {
-        if let Some(alt) = outer::alternative_starts(&outer, &grid, &x)
-            .into_iter()
-            .find(|alt| inside(alt, &mut stats, &mut solves))
-        {
-            x = alt;
-        }
-    }
-    let (decrement, iterations, ev) = match opts.method {
-        Method::Newton => outer::newton(&outer, x, opts, &mut hints, &mut stats, &mut solves)?,
-        Method::Bfgs => {
-            if outer.sv.iter().any(Option::is_some) {
-                return Err(Error::InvalidValue {
-                    field: "options.method",
-                    index: 0,
-                    reason: "BFGS has no box constraints: it cannot take polyline bounds",
-                });
-            }
-            outer::bfgs(&outer, x, opts, &mut stats, &mut solves)?
-        }
-    };
-    let pg = projected_grad(&outer, &ev.1, &ev.2);
-    let gradient_norm = pg
-        .iter()
-        .zip(&outer.unit)
-        .map(|(g, u)| (g * u) * (g * u))
-        .sum::<f64>()
-        .sqrt();
-    // abscissae in the caller's frame, placed from their grid point (a break or knot inside a
-    // short interval keeps its offset exactly; t₀ + λu would round it to ulp(u))
-    let gt = caller_grid(problem, q, frame, &grid);
-    let place = |j: usize, offset: f64| gt[j] + frame.lam * offset;
-    // how far the rounded abscissa lies from the exact one, in normalized units: pieces are
-    // re-expanded about the abscissa actually returned (a bound of slope 1e12 moves by 2.6e-4
-    // over the 2e-16 rounding of a break near t = 2.5)
-    let error =
-        |j: usize, offset: f64| ((place(j, offset) - gt[j]) - frame.lam * offset) / frame.lam;
-    let mut sol = assemble(
-        &place, &error, &outer, &grid, &ev.0, ev.1, pg, iterations, solves, stats, shifted,
-    )?;
-    sol.newton_decrement = decrement;
-    let mut sol = to_caller(problem, frame, &grid, sol);
-    sol.gradient_norm = gradient_norm;
-    Ok(sol)
+    Ok(to_caller(problem, frame, sol))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cell::CellStats;
+    use crate::outer::{setup, Hints};
     use crate::types::Bound;
 
     /// Sixteen oscillating data values in a strip of half-width w about their polygon.
@@ -212,11 +190,8 @@ mod tests {
     }
 
     /// Φ and ∇Φ at the unknowns `x` (slopes at the data sites without prescribed end slopes, in
-    /// order; for polyline bounds also the free grid values, interleaved as (s_j, z_j)), and the
-    /// starting point (natural/clamped spline). For tests of the analytic gradient.
-    ///
-    /// # Errors
-    /// As [`solve`]; `NoFeasibleCandidate` when x is outside Φ's domain.
+    /// order), and the starting point (natural/clamped spline). For tests of the analytic
+    /// gradient.
     fn objective(problem: &Problem, x: Option<&[f64]>) -> Result<(f64, Vec<f64>, Vec<f64>), Error> {
         let vscale = 1.0 + problem.y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let st = setup(problem, &Options::default(), vscale)?;
@@ -228,7 +203,7 @@ mod tests {
                 got: x.len(),
             });
         }
-        let mut hints: Hints = vec![None; st.grid.len() - 1];
+        let mut hints: Hints = vec![None; problem.t.len() - 1];
         let e = st
             .outer
             .eval(&x, &mut hints, None, &mut CellStats::default(), &mut 0)
@@ -238,19 +213,12 @@ mod tests {
 
     #[test]
     fn outer_gradient_matches_finite_differences() {
-        // ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)) (and 2 jump f''' for free grid values) against central
-        // differences of Φ, at the starting point and at a perturbed point, for a strip with every
-        // contact kind and for a polyline problem (values and slopes as unknowns).
-        let cases = [
-            polygon_strip(0.1),
-            Problem {
-                t: vec![0.0, 1.0, 2.0, 3.0, 4.0],
-                y: vec![0.0, 0.2, -0.3, 0.3, 0.0],
-                lower: Bound::from_fn(|x| -0.6 + 0.3 * (2.0 * x).sin(), 0.0, 4.0, 8),
-                upper: Bound::from_fn(|x| 0.6 + 0.25 * (3.0 * x).cos(), 0.0, 4.0, 8),
-                end_slopes: [Some(3.0), None],
-            },
-        ];
+        // ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)) against central differences of Φ, at the starting
+        // point and at a perturbed point, for strips with every contact kind, natural and
+        // clamped ends.
+        let mut clamped = polygon_strip(0.15);
+        clamped.end_slopes = [Some(3.0), None];
+        let cases = [polygon_strip(0.1), clamped];
         for p in &cases {
             let (_, _, x0) = objective(p, None).unwrap();
             let xs = [

@@ -1,7 +1,5 @@
 //! The vocabulary of `strip`: the problem, its bounds and options, and the solution.
 
-use crate::piece::shift;
-
 /// Which bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Side {
@@ -238,9 +236,15 @@ pub struct Solution {
     /// Final (projected) gradient norm ‖∇Φ‖₂ in the caller's units (∂Φ/∂z_i for slopes,
     /// ∂Φ/∂s_j for free grid values).
     pub gradient_norm: f64,
-    /// Newton decrement ½ gᵀH⁻¹g at the solution (≈ Φ − min Φ, in the units of ∫f''²; NaN for
-    /// BFGS).
+    /// Newton decrement ½ gᵀH⁻¹g at the solution (≈ Φ − min Φ, in the units of ∫f''²).
     pub newton_decrement: f64,
+    /// The optimality gap: an estimate of (∫f''² − min)/∫f''², the Newton decrement relative to
+    /// Φ. Converged solves report rounding-level gaps (≤ 1e-12 on the test channels); an
+    /// iteration limit reached with a feasible iterate is reported through a larger gap, never
+    /// silently (see [`crate::solve`]).
+    pub gap: f64,
+    /// Rounds of the exact stage (1 without polyline bounds; see the crate documentation).
+    pub rounds: usize,
     /// Outer iterations.
     pub iterations: usize,
     /// Per-interval solves (all outer iterations and line-search trials).
@@ -297,17 +301,4 @@ pub(crate) fn polyline_at(p: &[[f64; 2]], t: f64) -> f64 {
     let k = p.partition_point(|v| v[0] <= t).clamp(1, p.len() - 1);
     let (a, b) = (p[k - 1], p[k]);
     a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
-}
-
-/// The bound on the grid cell \[a, a + h\] of data interval `interval` (starting at `ti`) as a
-/// cubic in s = t − a.
-pub(crate) fn cell_bound(b: &Bound, interval: usize, ti: f64, a: f64, h: f64) -> Option<[f64; 4]> {
-    match b {
-        Bound::None => None,
-        Bound::Pieces(p) => Some(shift(&p[interval], a - ti)),
-        Bound::Polyline(p) => {
-            let (va, vb) = (polyline_at(p, a), polyline_at(p, a + h));
-            Some([va, (vb - va) / h, 0.0, 0.0])
-        }
-    }
 }

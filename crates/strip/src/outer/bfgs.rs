@@ -153,7 +153,7 @@ pub(crate) fn bfgs(
     let ev = outer
         .eval(&best, &mut h, None, stats, solves)
         .map_err(|j| outer.no_candidate(j))?;
-    let (g, sols) = (ev.grad, ev.sols);
+    let (g, sols, phi) = (ev.grad, ev.sols, ev.phi);
     // out of iterations with neither the gradient (argmin's 2-norm test) nor Φ converged: an
     // error with the gradient norm in the caller's units (as for Newton), never a silent answer
     let g2 = g.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -164,5 +164,13 @@ pub(crate) fn bfgs(
             residual: outer.caller_gradient_norm(&g),
         });
     }
-    Ok((f64::NAN, iters, (sols, best, g)))
+    Ok(OuterOut {
+        decrement: f64::NAN,
+        iterations: iters,
+        converged: true,
+        sols,
+        x: best,
+        grad: g,
+        phi,
+    })
 }

@@ -1,6 +1,6 @@
-//! The outer problem (5) — and (10) on a §4 grid: Φ(s, z) = Σ_j φ_j(s_j, z_j, s_{j+1}, z_{j+1})
-//! over the slopes z at the grid points and the values s at grid points that are not data
-//! sites, each φ_j the value of the per-interval problem on grid cell j.
+//! The outer problem (5) of the seed on the data sites — Φ(z) = Σ φ_i(z_i, z_{i+1}) over the
+//! slopes — for bounds given as cubic pieces per data interval: Newton's method on its
+//! tridiagonal Hessian (default) or argmin's BFGS (the seed's method).
 
 mod bfgs;
 mod newton;
@@ -8,6 +8,6 @@ mod phi;
 mod setup;
 
 pub(crate) use bfgs::bfgs;
-pub(crate) use newton::newton;
-pub(crate) use phi::{projected_grad, Hints, Outer};
+pub(crate) use newton::{decrement_at, newton};
+pub(crate) use phi::{Hints, Outer, OuterOut};
 pub(crate) use setup::{alternative_starts, setup, Setup};

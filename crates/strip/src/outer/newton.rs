@@ -1,6 +1,6 @@
-//! Projected Newton on the banded Hessian of Φ, with a backtracking line search.
+//! Newton's method on the tridiagonal Hessian of Φ, with a backtracking line search.
 
-use super::phi::{inf_norm, projected_grad, Hints, Outer, OuterOut};
+use super::phi::{inf_norm, Hints, Outer, OuterOut};
 use crate::cell::CellStats;
 use crate::error::Error;
 use crate::linalg::Band;
@@ -35,37 +35,18 @@ pub(crate) fn newton(
     let mut ev = o
         .eval(&x, hints, Some(&mut band), stats, solves)
         .map_err(|j| o.no_candidate(j))?;
-    let g0 = inf_norm(&projected_grad(o, &x, &ev.grad));
+    let g0 = inf_norm(&ev.grad);
     let tol = opts.gradient_tol * (1.0 + g0);
     let mut it = 0;
     let mut polished = 0;
     let mut newton_decrement = 0.0;
     while it < opts.max_iterations {
-        let pg = projected_grad(o, &x, &ev.grad);
-        if inf_norm(&pg) <= tol || nv == 0 {
+        if inf_norm(&ev.grad) <= tol || nv == 0 {
             break;
         }
         it += 1;
-        // active set: boxed variables at a bound with the gradient pushing outward
-        let boxed = o.var_boxes(&x);
-        let active: Vec<bool> = (0..nv)
-            .map(|k| boxed[k].is_some() && pg[k] == 0.0 && ev.grad[k] != 0.0)
-            .collect();
-        let mut hb = band.clone();
-        for k in 0..nv {
-            if active[k] {
-                hb.a[k] = [0.0; 4];
-                hb.a[k][0] = 1.0;
-                for d in 1..=3 {
-                    if k + d < nv {
-                        hb.a[k + d][d] = 0.0;
-                    }
-                }
-            }
-        }
-        let rhs: Vec<f64> = (0..nv)
-            .map(|k| if active[k] { 0.0 } else { -ev.grad[k] })
-            .collect();
+        let hb = band.clone();
+        let rhs: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
         newton_decrement = f64::INFINITY;
         let mut lambda = 0.0;
         let maxdiag =
@@ -104,8 +85,7 @@ pub(crate) fn newton(
                     break;
                 }
                 polished += 1;
-                let mut xn: Vec<f64> = (0..nv).map(|k| x[k] + dir[k]).collect();
-                o.project(&mut xn);
+                let xn: Vec<f64> = (0..nv).map(|k| x[k] + dir[k]).collect();
                 let mut h2 = hints.clone();
                 match o.eval(&xn, &mut h2, None, stats, solves) {
                     Ok(e) if e.phi <= ev.phi + PHI_ROUNDING * (1.0 + ev.phi.abs()) => {
@@ -115,22 +95,16 @@ pub(crate) fn newton(
                 }
             }
         }
-        // projected backtracking line search along the Newton direction; if it cannot decrease
+        // backtracking line search along the Newton direction; if it cannot decrease
         // Φ (a Hessian that jumps across candidate regions), along the diagonally scaled and
         // then the plain negative gradient
         let diag_dir: Vec<f64> = (0..nv)
             .map(|k| {
                 let d = band.a[k][0];
-                if active[k] {
-                    0.0
-                } else {
-                    -ev.grad[k] / if d > 0.0 { d } else { 1.0 }
-                }
+                -ev.grad[k] / if d > 0.0 { d } else { 1.0 }
             })
             .collect();
-        let grad_dir: Vec<f64> = (0..nv)
-            .map(|k| if active[k] { 0.0 } else { -ev.grad[k] })
-            .collect();
+        let grad_dir: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
         let mut accepted = polish;
         for dir in [&dir, &diag_dir, &grad_dir] {
             if accepted.is_some() {
@@ -138,8 +112,7 @@ pub(crate) fn newton(
             }
             let mut alpha = 1.0;
             for _ in 0..LINE_SEARCH_STEPS {
-                let mut xn: Vec<f64> = (0..nv).map(|k| x[k] + alpha * dir[k]).collect();
-                o.project(&mut xn);
+                let xn: Vec<f64> = (0..nv).map(|k| x[k] + alpha * dir[k]).collect();
                 let mut h2 = hints.clone();
                 if let Ok(e) = o.eval(&xn, &mut h2, None, stats, solves) {
                     let dec: f64 = (0..nv).map(|k| ev.grad[k] * (xn[k] - x[k])).sum();
@@ -164,40 +137,46 @@ pub(crate) fn newton(
             .eval(&x, hints, Some(&mut band), stats, solves)
             .map_err(|j| o.no_candidate(j))?;
     }
-    // the decrement at the final point (on the free, non-active unknowns)
-    let pg = projected_grad(o, &x, &ev.grad);
-    let mut hb = band;
-    for k in 0..nv {
-        if pg[k] == 0.0 {
-            hb.a[k] = [0.0; 4];
-            hb.a[k][0] = 1.0;
-            for d in 1..=3 {
-                if k + d < nv {
-                    hb.a[k + d][d] = 0.0;
-                }
-            }
-        }
-    }
-    newton_decrement = match hb.solve(&pg) {
-        Some(d) => 0.5 * pg.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
+    // the decrement at the final point
+    newton_decrement = match band.solve(&ev.grad) {
+        Some(d) => 0.5 * ev.grad.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
         None => newton_decrement,
     };
-    // Out of iterations with neither the gradient nor the decrement (the estimate of Φ − min Φ)
-    // converged: an error carrying the best iterate's gradient norm, never a silent answer.
-    let gradient_norm = inf_norm(&pg);
+    // out of iterations with neither the gradient nor the decrement (the estimate of Φ − min Φ)
+    // converged: the caller decides (see `crate::strategy`)
     let decrement_ok = newton_decrement <= ACCEPT_DECREMENT * (1.0 + ev.phi.abs());
-    if it >= opts.max_iterations && gradient_norm > tol && !decrement_ok {
-        return Err(Error::NotConverged {
-            solver: "Newton on Φ",
-            iterations: it,
-            residual: pg
-                .iter()
-                .zip(&o.unit)
-                .fold(0.0f64, |m, (g, u)| m.max((g * u).abs())),
-        });
+    let converged = it < opts.max_iterations || inf_norm(&ev.grad) <= tol || decrement_ok;
+    Ok(OuterOut {
+        decrement: newton_decrement,
+        iterations: it,
+        converged,
+        sols: ev.sols,
+        x,
+        grad: ev.grad,
+        phi: ev.phi,
+    })
+}
+
+/// The Newton decrement ½ gᵀH⁻¹g at `x` (the estimate of Φ − min Φ), from one evaluation of
+/// the Hessian; NaN when that fails.
+pub(crate) fn decrement_at(o: &Outer, x: &[f64], grad: &[f64]) -> f64 {
+    let mut band = Band::zeros(o.nvar);
+    let m = o.cells.len();
+    if o.eval(
+        x,
+        &mut vec![None; m],
+        Some(&mut band),
+        &mut CellStats::default(),
+        &mut 0,
+    )
+    .is_err()
+    {
+        return f64::NAN;
     }
-    let g = ev.grad.clone();
-    Ok((newton_decrement, it, (ev.sols, x, g)))
+    match band.solve(grad) {
+        Some(d) => 0.5 * grad.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
+        None => f64::NAN,
+    }
 }
 
 /// Relative Newton decrement below which a solve that ran out of iterations is still accepted

@@ -11,6 +11,10 @@
 //! problem is always feasible: every data point lies strictly inside, and an open channel always
 //! holds a C² function.
 //!
+//! With independent vertex abscissae (`shared_vertices = false`) the two polylines can cross
+//! where M is coarse against a front, and [`strip::solve`] then refuses the problem (the strip
+//! closes); with shared abscissae d − e is linear between vertices where it is 2w > 0.
+//!
 //! Everything is determined by `seed` (SplitMix64), so a failing case is reproduced from its
 //! parameters.
 
@@ -50,6 +54,9 @@ pub struct Channel {
     pub jitter: f64,
     /// How the bounds are given.
     pub bounds: BoundKind,
+    /// Whether the two polylines share their vertex abscissae (then the strip is open by
+    /// construction; independent vertices can cross where M is coarse against a front).
+    pub shared_vertices: bool,
 }
 
 impl Default for Channel {
@@ -68,6 +75,7 @@ impl Default for Channel {
             w_max: 0.04,
             jitter: 0.2,
             bounds: BoundKind::Polyline,
+            shared_vertices: true,
         }
     }
 }
@@ -175,14 +183,19 @@ impl Channel {
         match self.bounds {
             BoundKind::Polyline => {
                 assert!(self.breakpoints >= 2);
-                let side = |rng: &mut Rng, sign: f64| -> Vec<[f64; 2]> {
-                    jittered(rng, self.breakpoints, self.jitter)
-                        .into_iter()
-                        .map(|x| [x, shape.centre(x).0 + sign * shape.half_width(x).0])
+                let xs_lower = jittered(&mut rng, self.breakpoints, self.jitter);
+                let xs_upper = if self.shared_vertices {
+                    xs_lower.clone()
+                } else {
+                    jittered(&mut rng, self.breakpoints, self.jitter)
+                };
+                let side = |xs: &[f64], sign: f64| -> Vec<[f64; 2]> {
+                    xs.iter()
+                        .map(|&x| [x, shape.centre(x).0 + sign * shape.half_width(x).0])
                         .collect()
                 };
-                let lower = side(&mut rng, -1.0);
-                let upper = side(&mut rng, 1.0);
+                let lower = side(&xs_lower, -1.0);
+                let upper = side(&xs_upper, 1.0);
                 let at = |p: &[[f64; 2]], x: f64| {
                     let k = p.partition_point(|q| q[0] <= x).clamp(1, p.len() - 1);
                     let (a, b) = (p[k - 1], p[k]);
