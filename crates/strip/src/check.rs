@@ -12,8 +12,11 @@ use crate::types::{Bound, Problem, Side, Solution};
 
 /// Calls `visit(segment, a, excursion, at)` for every sub-interval \[a, b\] of the piecewise
 /// cubic (`breaks`, `coeffs`) and the bound `b` of `side`, where `excursion` is the largest
-/// amount by which f leaves the bound there (≤ 0 inside; NaN propagates), `at` where, and
-/// `segment` the polyline segment (or the data interval, for cubic pieces) holding \[a, b\].
+/// amount by which f leaves the bound there (NaN propagates), `at` where, and `segment` the
+/// polyline segment (or the data interval, for cubic pieces) holding \[a, b\]. Where f is clearly
+/// inside (its distance to the bound at the ends exceeds its largest possible bend,
+/// |d''|·(b − a)²/8), a negative upper bound of the excursion is reported instead of the exact
+/// value, which spares the roots on most sub-intervals.
 pub(crate) fn excursions(
     b: &Bound,
     t: &[f64],
@@ -28,8 +31,6 @@ pub(crate) fn excursions(
         Bound::Pieces(_) => &[],
     };
     let n = t.len();
-    // the bound's breakpoint index (polyline vertex or data site) at or before the current a
-    let mut k = 0;
     let count = match b {
         Bound::Polyline(v) => v.len(),
         _ => n,
@@ -38,6 +39,21 @@ pub(crate) fn excursions(
         Bound::Polyline(_) => cuts[k][0],
         _ => t[k],
     };
+    // the bound's breakpoint index (polyline vertex or data site) at or before the current a,
+    // found by bisection so that a stretch of the curve costs its own length only
+    let Some(&first) = breaks.first() else {
+        return;
+    };
+    let (mut lo, mut hi) = (0, count);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if at(mid) <= first {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let mut k = lo;
     for j in 0..coeffs.len() {
         let (x0, x1) = (breaks[j], breaks[j + 1]);
         if x1 <= x0 {
@@ -66,8 +82,18 @@ pub(crate) fn excursions(
                 Side::Lower => f[i] - g[i],
                 Side::Upper => g[i] - f[i],
             });
-            let (min, u) = cubic_argmin(&d, end - a);
-            visit(seg, a, -min, a + u);
+            let l = end - a;
+            // clearly inside: min(d(0), d(l)) less the largest bend of d over [0, l] (|d''| l²/8)
+            // is positive; that bound (negated) is reported instead of the exact excursion
+            let dl = d[0] + l * (d[1] + l * (d[2] + l * d[3]));
+            let bend = (2.0 * d[2].abs() + 6.0 * d[3].abs() * l) * l * l / 8.0;
+            let lower = d[0].min(dl) - bend;
+            if lower > 0.0 {
+                visit(seg, a, -lower, a);
+            } else {
+                let (min, u) = cubic_argmin(&d, l);
+                visit(seg, a, -min, a + u);
+            }
             if end >= x1 {
                 break;
             }

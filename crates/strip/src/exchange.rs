@@ -40,7 +40,7 @@
 //! stopped at a vertex contact with f'' jumping (see [`crate::stages`]).
 
 use crate::check::excursions;
-use crate::spline::{Curve, Spline};
+use crate::spline::{moments, Curve, Spline, Work};
 use crate::types::{Bound, Problem, Side};
 
 /// The sweeps stop when f leaves the strip nowhere by more than this fraction of the value scale
@@ -111,130 +111,177 @@ fn bound_at(q: &Problem, side: Side, x: f64) -> f64 {
     }
 }
 
-/// The spline through the data and `active` (sorted), with `extra` (abscissa, value) inserted;
-/// and for every active point its index among the knots.
-fn spline_through(
-    q: &Problem,
-    active: &[Contact],
-    extra: Option<(f64, f64)>,
-) -> (Spline, Vec<usize>) {
-    let t = &q.t;
-    let k = t.len() + active.len() + usize::from(extra.is_some());
-    let mut x = Vec::with_capacity(k);
-    let mut v = Vec::with_capacity(k);
-    let mut at = Vec::with_capacity(active.len());
-    let (mut i, mut a) = (0, 0);
-    let mut e = extra;
-    loop {
-        let next_t = t.get(i).copied().unwrap_or(f64::INFINITY);
-        let next_a = active.get(a).map_or(f64::INFINITY, |c| c.x);
-        let next_e = e.map_or(f64::INFINITY, |e| e.0);
-        if next_t.is_infinite() && next_a.is_infinite() && next_e.is_infinite() {
-            break;
-        }
-        if next_t <= next_a && next_t <= next_e {
-            x.push(next_t);
-            v.push(q.y[i]);
-            i += 1;
-        } else if next_a <= next_e {
-            at.push(x.len());
-            x.push(next_a);
-            v.push(active[a].value);
-            a += 1;
-        } else {
-            let (ex, ev) = e.take().expect("checked above");
-            x.push(ex);
-            v.push(ev);
-        }
-    }
-    (Spline::through(x, v, q.end_slopes), at)
+/// What a knot of the current spline is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Knot {
+    /// A data site.
+    Data,
+    /// An active point on the bound of this side.
+    Active(Side),
+    /// The point being added (its value on the way to its bound).
+    Adding,
 }
 
-/// The multipliers of the active points (f''' jump, positive when of the right sign).
-fn multipliers(s: &Spline, active: &[Contact], at: &[usize]) -> Vec<f64> {
-    active
-        .iter()
-        .zip(at)
-        .map(|(c, &k)| {
-            let j = s.jump(k).0;
-            if c.side == Side::Lower {
-                j
-            } else {
-                -j
-            }
-        })
-        .collect()
-}
-
-/// Value of the spline at x.
-fn value_at(s: &Spline, x: f64) -> f64 {
-    let mut out = Vec::with_capacity(1);
-    s.eval_sorted(&[x], &mut out);
-    out[0]
-}
-
-/// The state of the method.
+/// The state of the method: the current spline on its knots, and what each knot is.
 struct State<'a> {
     q: &'a Problem,
-    active: Vec<Contact>,
+    cur: Spline,
+    kind: Vec<Knot>,
+    work: Work,
+    unit: Vec<f64>,
+    response: Vec<f64>,
+    /// Abscissae of the knots added and removed since the last sweep.
+    touched: Vec<f64>,
     steps: usize,
     solves: usize,
 }
 
-impl State<'_> {
-    /// Adds the point x on `side` (violated by the current spline): the dual step.
+impl<'a> State<'a> {
+    /// The natural (or clamped) spline through the data.
+    fn new(q: &'a Problem) -> Self {
+        let mut st = State {
+            q,
+            cur: Spline {
+                x: q.t.clone(),
+                v: q.y.clone(),
+                m: Vec::new(),
+            },
+            kind: vec![Knot::Data; q.t.len()],
+            work: Work::default(),
+            unit: Vec::new(),
+            response: Vec::new(),
+            touched: Vec::new(),
+            steps: 0,
+            solves: 0,
+        };
+        st.resolve();
+        st
+    }
+
+    /// Solves for the moments afresh (the updates of `add` accumulate rounding).
+    fn resolve(&mut self) {
+        moments(
+            &self.cur.x,
+            &self.cur.v,
+            self.q.end_slopes,
+            &mut self.cur.m,
+            &mut self.work,
+        );
+        self.solves += 1;
+    }
+
+    /// The active points.
+    fn active(&self) -> Vec<Contact> {
+        self.cur
+            .x
+            .iter()
+            .zip(&self.cur.v)
+            .zip(&self.kind)
+            .filter_map(|((&x, &value), k)| match k {
+                Knot::Active(side) => Some(Contact {
+                    x,
+                    side: *side,
+                    value,
+                }),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Adds the point x on `side` (violated by the current spline): the dual step. The value at
+    /// x moves from f(x) to the bound; the spline is linear in its values, so the multipliers
+    /// move linearly too, along the response g to a unit value at x (every other value and the
+    /// end conditions homogeneous): one solve per step.
     fn add(&mut self, x: f64, side: Side) {
         let target = bound_at(self.q, side, x);
-        let (s0, _) = spline_through(self.q, &self.active, None);
-        self.solves += 1;
-        let mut value = value_at(&s0, x);
+        // x becomes a knot with the spline's own value and second derivative (same function)
+        let (value, second) = self.cur.at(x);
+        let mut p = self.cur.x.partition_point(|u| *u < x);
+        self.cur.x.insert(p, x);
+        self.cur.v.insert(p, value);
+        self.cur.m.insert(p, second);
+        self.kind.insert(p, Knot::Adding);
+        self.touched.push(x);
+        let homogeneous = self.q.end_slopes.map(|s| s.map(|_| 0.0));
         loop {
             self.steps += 1;
-            let (f0, at0) = spline_through(self.q, &self.active, Some((x, value)));
-            let (f1, at1) = spline_through(self.q, &self.active, Some((x, target)));
-            self.solves += 2;
-            let (m0, m1) = (
-                multipliers(&f0, &self.active, &at0),
-                multipliers(&f1, &self.active, &at1),
+            self.unit.clear();
+            self.unit.resize(self.cur.x.len(), 0.0);
+            self.unit[p] = 1.0;
+            moments(
+                &self.cur.x,
+                &self.unit,
+                homogeneous,
+                &mut self.response,
+                &mut self.work,
             );
-            // the first active multiplier to reach zero along value → target
+            self.solves += 1;
+            let delta = target - self.cur.v[p];
+            // the first active multiplier to reach zero along the move
             let mut block: Option<(f64, usize)> = None;
-            for (i, (&a, &b)) in m0.iter().zip(&m1).enumerate() {
-                if b < 0.0 && b < a {
-                    let theta = if a > 0.0 { a / (a - b) } else { 0.0 };
+            for (i, k) in self.kind.iter().enumerate() {
+                let Knot::Active(s) = k else {
+                    continue;
+                };
+                let sign = if *s == Side::Lower { 1.0 } else { -1.0 };
+                let m0 = sign * jump(&self.cur.x, &self.cur.m, i);
+                let m1 = m0 + delta * sign * jump(&self.cur.x, &self.response, i);
+                if m1 < 0.0 && m1 < m0 {
+                    let theta = if m0 > 0.0 { m0 / (m0 - m1) } else { 0.0 };
                     if theta < 1.0 && block.is_none_or(|(t, _)| theta < t) {
                         block = Some((theta, i));
                     }
                 }
             }
+            let theta = block.map_or(1.0, |b| b.0);
+            self.cur.v[p] += theta * delta;
+            for (m, r) in self.cur.m.iter_mut().zip(&self.response) {
+                *m += theta * delta * r;
+            }
             match block {
                 None => {
-                    let at = self.active.partition_point(|c| c.x < x);
-                    self.active.insert(
-                        at,
-                        Contact {
-                            x,
-                            side,
-                            value: target,
-                        },
-                    );
+                    self.cur.v[p] = target;
+                    self.kind[p] = Knot::Active(side);
                     return;
                 }
-                Some((theta, i)) => {
-                    value += theta * (target - value);
-                    self.active.remove(i);
+                Some((_, i)) => {
+                    // its jump is zero now: removing the knot leaves the function unchanged
+                    self.touched.push(self.cur.x[i]);
+                    self.cur.x.remove(i);
+                    self.cur.v.remove(i);
+                    self.cur.m.remove(i);
+                    self.kind.remove(i);
+                    if i < p {
+                        p -= 1;
+                    }
                 }
             }
             if self.steps >= MAX_STEPS {
+                // the point stays short of its bound: the next sweep sees the excursion, and
+                // the caller stops at the step limit
+                self.kind[p] = Knot::Active(side);
                 return;
             }
         }
     }
 }
 
-/// The largest excursion of `curve` outside the strip of `q`, and one candidate (where, side,
-/// excursion) per run of sub-intervals where it exceeds `tol`.
-fn sweep(q: &Problem, curve: &Curve, tol: f64) -> (f64, Vec<(f64, Side, f64)>) {
+/// The jump of f''' at interior knot k of the spline on `x` with moments `m` (0 at the ends).
+fn jump(x: &[f64], m: &[f64], k: usize) -> f64 {
+    if k == 0 || k + 1 >= x.len() {
+        return 0.0;
+    }
+    (m[k + 1] - m[k]) / (x[k + 1] - x[k]) - (m[k] - m[k - 1]) / (x[k] - x[k - 1])
+}
+
+/// The largest excursion of `curve` (or of its pieces `range`) outside the strip of `q`, and one
+/// candidate (where, side, excursion) per run of sub-intervals where it exceeds `tol`.
+fn sweep(
+    q: &Problem,
+    curve: &Curve,
+    range: std::ops::Range<usize>,
+    tol: f64,
+) -> (f64, Vec<(f64, Side, f64)>) {
     // per side, the excursions in order of the sub-intervals; runs are merged across sides by
     // position (a run on the lower bound and one on the upper bound are separate candidates)
     let mut worst = f64::NEG_INFINITY;
@@ -250,8 +297,8 @@ fn sweep(q: &Problem, curve: &Curve, tol: f64) -> (f64, Vec<(f64, Side, f64)>) {
             b,
             &q.t,
             side,
-            &curve.breaks,
-            &curve.coeffs,
+            &curve.breaks[range.start..=range.end],
+            &curve.coeffs[range.clone()],
             &mut |_, _, by, at| {
                 if by > worst || by.is_nan() {
                     worst = by;
@@ -269,9 +316,15 @@ fn sweep(q: &Problem, curve: &Curve, tol: f64) -> (f64, Vec<(f64, Side, f64)>) {
             out.push((at, side, w));
         }
     }
-    out.sort_by(|a, b| b.2.total_cmp(&a.2));
     (worst, out)
 }
+
+/// Knots on each side of a changed knot whose pieces a local sweep checks. A change of the
+/// spline at one knot decays by about 2 − √3 ≈ 0.27 per knot, so new excursions appear next to
+/// the changes; anything farther is found by the full sweep that follows every local sweep
+/// without candidates, and only a full sweep without candidates ends the method. Measured at
+/// M = 10⁴, 16 sites: 12 knots 22 ms, 4 knots 18 ms, 2 knots 20 ms (more sweeps), same answer.
+const LOCAL: usize = 4;
 
 /// The first-order gap estimate of a spline with its active points and excursion.
 fn gap_of(s: &Spline, active: &[Contact], violation: f64) -> f64 {
@@ -295,29 +348,50 @@ fn gap_of(s: &Spline, active: &[Contact], violation: f64) -> f64 {
 /// `tol` (`vscale` the value scale), tightened while the gap estimate exceeds [`GAP_TARGET`].
 pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
     let mut tol = tol;
-    let t = &q.t;
-    let n = t.len();
-    let range = t[n - 1] - t[0];
-    let mut st = State {
-        q,
-        active: Vec::new(),
-        steps: 0,
-        solves: 0,
-    };
+    let range = q.t[q.t.len() - 1] - q.t[0];
+    let mut st = State::new(q);
     let mut sweeps = 0;
     let mut violation;
     let mut converged = false;
     loop {
-        let (spline, _) = spline_through(q, &st.active, None);
-        st.solves += 1;
-        let (worst, candidates) = sweep(q, &spline.to_curve(), tol);
+        // abscissae where the last sweep's additions changed the knots (none: a full sweep)
+        let mut changed = std::mem::take(&mut st.touched);
+        let local = !changed.is_empty();
+        st.resolve();
+        let curve = st.cur.to_curve();
+        let pieces = curve.coeffs.len();
+        let (mut worst, mut candidates) = (f64::NEG_INFINITY, Vec::new());
+        if !local {
+            (worst, candidates) = sweep(q, &curve, 0..pieces, tol);
+        } else {
+            // local: the pieces within LOCAL knots of every change, merged into stretches
+            changed.sort_by(f64::total_cmp);
+            let mut stretches: Vec<(usize, usize)> = Vec::new();
+            for x in &changed {
+                let k = curve.breaks.partition_point(|b| b < x);
+                let (a, b) = (k.saturating_sub(LOCAL), (k + LOCAL).min(pieces));
+                match stretches.last_mut() {
+                    Some(last) if a <= last.1 => last.1 = last.1.max(b),
+                    _ => stretches.push((a, b)),
+                }
+            }
+            for (a, b) in stretches {
+                let (w, c) = sweep(q, &curve, a..b, tol);
+                worst = worst.max(w);
+                candidates.extend(c);
+            }
+            if candidates.is_empty() {
+                // nothing near the changes: the full sweep decides
+                continue;
+            }
+        }
+        candidates.sort_by(|a, b| b.2.total_cmp(&a.2));
         sweeps += 1;
         violation = worst.max(0.0);
         if candidates.is_empty() {
             converged = !worst.is_nan();
-            let (s, _) = spline_through(q, &st.active, None);
             if converged
-                && gap_of(&s, &st.active, violation) > GAP_TARGET
+                && gap_of(&st.cur, &st.active(), violation) > GAP_TARGET
                 && tol > TOL_FLOOR * vscale
             {
                 tol = (tol * 1e-2).max(TOL_FLOOR * vscale);
@@ -330,20 +404,13 @@ pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
         }
         let mut added = false;
         for (x, side, _) in candidates {
-            // not on a data site or an active point (there the excursion is rounding)
-            let near = |u: f64| (u - x).abs() <= 1e-12 * range;
-            let k = t.partition_point(|v| *v < x);
-            if (k < n && near(t[k])) || (k > 0 && near(t[k - 1])) {
+            // not on a knot (a data site or an active point: there the excursion is rounding)
+            let k = st.cur.x.partition_point(|u| *u < x);
+            let near = |k: usize| k < st.cur.x.len() && (st.cur.x[k] - x).abs() <= 1e-12 * range;
+            if near(k) || (k > 0 && near(k - 1)) {
                 continue;
             }
-            let a = st.active.partition_point(|c| c.x < x);
-            if (a < st.active.len() && near(st.active[a].x)) || (a > 0 && near(st.active[a - 1].x))
-            {
-                continue;
-            }
-            let (s, _) = spline_through(q, &st.active, None);
-            st.solves += 1;
-            let f = value_at(&s, x);
+            let f = st.cur.at(x).0;
             let by = match side {
                 Side::Lower => bound_at(q, side, x) - f,
                 Side::Upper => f - bound_at(q, side, x),
@@ -354,21 +421,26 @@ pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
             }
         }
         if !added {
+            if local {
+                // the full sweep decides
+                continue;
+            }
             // every candidate sits on a knot, or no longer leaves the strip by more than the
             // tolerance when its turn comes: the excursions are rounding
             converged = violation <= 1e2 * tol;
             break;
         }
     }
-    let (spline, _) = spline_through(q, &st.active, None);
+    st.resolve();
+    let active = st.active();
     Exchanged {
-        gap: gap_of(&spline, &st.active, violation),
-        spline,
-        active: st.active,
+        gap: gap_of(&st.cur, &active, violation),
+        active,
         violation,
         converged,
         sweeps,
         steps: st.steps,
-        solves: st.solves + 1,
+        solves: st.solves,
+        spline: st.cur,
     }
 }

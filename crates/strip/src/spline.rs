@@ -33,6 +33,57 @@ impl Curve {
     }
 }
 
+/// Scratch space of [`moments`].
+#[derive(Default)]
+pub(crate) struct Work {
+    a: Vec<f64>,
+    b: Vec<f64>,
+    c: Vec<f64>,
+}
+
+/// The moments m of the spline through (x, v) with natural ends or the given end slopes, into
+/// `m` (the tridiagonal system of the module docs).
+pub(crate) fn moments(
+    x: &[f64],
+    v: &[f64],
+    ends: [Option<f64>; 2],
+    m: &mut Vec<f64>,
+    w: &mut Work,
+) {
+    let k = x.len();
+    for buf in [&mut w.a, &mut w.c, &mut *m] {
+        buf.clear();
+        buf.resize(k, 0.0);
+    }
+    w.b.clear();
+    w.b.resize(k, 1.0);
+    let (a, b, c, r) = (&mut w.a, &mut w.b, &mut w.c, m);
+    let mut d_prev = 0.0;
+    let mut h_prev = 0.0;
+    for i in 0..k - 1 {
+        let h = x[i + 1] - x[i];
+        let d = (v[i + 1] - v[i]) / h;
+        if i > 0 {
+            a[i] = h_prev / 6.0;
+            b[i] = (h_prev + h) / 3.0;
+            c[i] = h / 6.0;
+            r[i] = d - d_prev;
+        } else if let Some(s) = ends[0] {
+            b[0] = h / 3.0;
+            c[0] = h / 6.0;
+            r[0] = d - s;
+        }
+        d_prev = d;
+        h_prev = h;
+    }
+    if let Some(s) = ends[1] {
+        a[k - 1] = h_prev / 6.0;
+        b[k - 1] = h_prev / 3.0;
+        r[k - 1] = s - d_prev;
+    }
+    solve_tridiagonal(a, b, c, r);
+}
+
 /// A cubic spline through (x_k, v_k) with moments m_k.
 #[derive(Clone, Debug)]
 pub(crate) struct Spline {
@@ -44,31 +95,9 @@ pub(crate) struct Spline {
 impl Spline {
     /// The spline through the points with natural ends, or the given end slopes.
     pub fn through(x: Vec<f64>, v: Vec<f64>, ends: [Option<f64>; 2]) -> Spline {
-        let k = x.len();
-        let h: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
-        let d: Vec<f64> = (0..k - 1).map(|i| (v[i + 1] - v[i]) / h[i]).collect();
-        let mut a = vec![0.0; k];
-        let mut b = vec![1.0; k];
-        let mut c = vec![0.0; k];
-        let mut r = vec![0.0; k];
-        for i in 1..k - 1 {
-            a[i] = h[i - 1] / 6.0;
-            b[i] = (h[i - 1] + h[i]) / 3.0;
-            c[i] = h[i] / 6.0;
-            r[i] = d[i] - d[i - 1];
-        }
-        if let Some(s) = ends[0] {
-            b[0] = h[0] / 3.0;
-            c[0] = h[0] / 6.0;
-            r[0] = d[0] - s;
-        }
-        if let Some(s) = ends[1] {
-            a[k - 1] = h[k - 2] / 6.0;
-            b[k - 1] = h[k - 2] / 3.0;
-            r[k - 1] = s - d[k - 2];
-        }
-        solve_tridiagonal(&a, &mut b, &c, &mut r);
-        Spline { x, v, m: r }
+        let mut m = Vec::new();
+        moments(&x, &v, ends, &mut m, &mut Work::default());
+        Spline { x, v, m }
     }
 
     /// f''' on piece k.
@@ -93,23 +122,18 @@ impl Spline {
             .sum()
     }
 
-    /// Values at the increasing abscissae `q` (all within \[x_0, x_K\]), by one merged pass.
-    pub fn eval_sorted(&self, q: &[f64], out: &mut Vec<f64>) {
-        out.clear();
-        let mut k = 0;
-        let last = self.x.len() - 2;
-        for &t in q {
-            while k < last && self.x[k + 1] <= t {
-                k += 1;
-            }
-            let h = self.x[k + 1] - self.x[k];
-            let (a, b) = ((self.x[k + 1] - t) / h, (t - self.x[k]) / h);
-            out.push(
-                a * self.v[k]
-                    + b * self.v[k + 1]
-                    + ((a * a * a - a) * self.m[k] + (b * b * b - b) * self.m[k + 1]) * h * h / 6.0,
-            );
-        }
+    /// The value and the second derivative at x (x within \[x_0, x_K\]).
+    pub fn at(&self, x: f64) -> (f64, f64) {
+        let n = self.x.len();
+        let k = self.x.partition_point(|u| *u <= x).clamp(1, n - 1) - 1;
+        let h = self.x[k + 1] - self.x[k];
+        let (a, b) = ((self.x[k + 1] - x) / h, (x - self.x[k]) / h);
+        (
+            a * self.v[k]
+                + b * self.v[k + 1]
+                + ((a * a * a - a) * self.m[k] + (b * b * b - b) * self.m[k + 1]) * h * h / 6.0,
+            a * self.m[k] + b * self.m[k + 1],
+        )
     }
 
     /// The same function as a [`Curve`].
@@ -157,10 +181,8 @@ mod tests {
         let line: Vec<f64> = x.iter().map(|t| 2.0 - 0.5 * t).collect();
         let s = Spline::through(x.clone(), line, [None, None]);
         assert!(s.m.iter().all(|m| m.abs() < 1e-14) && s.energy() < 1e-26);
-        let mut out = Vec::new();
-        s.eval_sorted(&[0.0, 0.5, 2.9, 3.0], &mut out);
-        for (t, v) in [0.0, 0.5, 2.9, 3.0].iter().zip(&out) {
-            assert!((v - (2.0 - 0.5 * t)).abs() < 1e-14);
+        for t in [0.0, 0.5, 2.9, 3.0] {
+            assert!((s.at(t).0 - (2.0 - 0.5 * t)).abs() < 1e-14);
         }
     }
 }
