@@ -15,13 +15,29 @@
 //! * **Outer problem** (5): Φ(z) = Σ φ_i(z_i, z_{i+1}) is convex with
 //!   ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)). [`Method::Newton`] (default) uses the banded Hessian
 //!   (per-interval Hessians by implicit differentiation of the contact equations) with a
-//!   backtracking line search: O(n) per iteration. [`Method::Bfgs`] is the seed's argmin BFGS.
-//!   Starting point: the natural (or clamped, with [`Problem::end_slopes`]) cubic spline.
-//! * **§4**: a [`Bound::Polyline`] (or [`Bound::from_fn`], the piecewise-linear approximation of
-//!   a continuous function) adds its vertices as grid points whose values s_j are unknowns
-//!   (problem (10)), kept ε inside the strip; the Newton step is then projected on those boxes.
-//! * **Remark 4.2**: data on a bound are moved inside by ε (reported in
-//!   [`Solution::shifted_data`]); the solution converges as ε → 0.
+//!   backtracking line search: O(n) per iteration. [`Method::Bfgs`] is the seed's argmin BFGS
+//!   (dense n×n inverse Hessian, for small n; it is what the seed ran). Starting point: the
+//!   natural (or clamped, with [`Problem::end_slopes`]) cubic spline. This is the method for
+//!   bounds given as cubic pieces.
+//! * **§4, polyline bounds** ([`Bound::Polyline`], or [`Bound::from_fn`], the piecewise-linear
+//!   approximation of a continuous function, any number M of vertices): solved exactly by a
+//!   dual active-set (Goldfarb–Idnani) exchange on point constraints — the spline through the data
+//!   and the points held on a bound, its multipliers the f''' jumps, each step a tridiagonal
+//!   solve — driven by exact O(M) sweeps of the strip. Its answer is a C² spline that interpolates,
+//!   leaves the strip nowhere by more than 10⁻¹² of the value scale, and is optimal for the points
+//!   it holds (so its energy is a lower bound on the optimum, within [`Solution::gap`] of it).
+//!   The seed's problem (10) — Newton on Φ over every vertex value and slope — is not used: its
+//!   Hessian has condition ~M⁴ and it stalls at vertex contacts (the measurements are in the
+//!   docs of the `strategy` module).
+//! * **Feasibility** is decided before any solve, in O(M + n): a strip that closes anywhere
+//!   (checked exactly between every pair of breakpoints), data outside the bounds, or data on a
+//!   kink no smooth curve can pass are refused with [`Error::Infeasible`] naming the field and
+//!   index. When Newton on Φ stops at its iteration limit, the exchange solves the problem, so a
+//!   feasible problem always ends in an answer; an answer whose gap estimate exceeds 1e-9 (seen
+//!   only on hair-thin strips, 1e-12 of the data) is refused with [`Error::NotConverged`] and its
+//!   gap.
+//! * **Remark 4.2**: data on a bound are moved inside by ε ([`Options::boundary_margin`] of the
+//!   strip width; reported in [`Solution::shifted_data`]); the solution converges as ε → 0.
 //!
 //! **Touching pairs.** With w = f − e (p, q its value and slope at t_i) and G = d − e, the pair
 //! (τ₁ on e, τ₂ on d) solves two polynomial equations: f'' continuous at τ₁ is a cubic in
@@ -52,11 +68,10 @@
 //! checked; [`Solution::uncertified`] lists those where no candidate carried it.
 //!
 //! **Limitations.** For cubic bounds (Remark 3.2) only Theorem 2.1's shapes are enumerated; a
-//! solution needing more than two extra knots in an interval shows up as
-//! [`Error::Unsupported`] or in [`Solution::uncertified`]. Polyline vertices where f
-//! touches a bound are held ε·width inside (problem (10)); the result is the ε-problem's optimum
-//! (the verification suite measures the gap to Clarabel's lower bound: ~1e-7 relative for
-//! ε = 1e-7).
+//! cell needing more than two extra knots sends the problem to the exchange, whose answer lists
+//! its contacts as touching points ([`Solution::extra_knots`]; [`Solution::shapes`] then only
+//! says which intervals touch). Subarcs on a polyline bound likewise appear as runs of touching
+//! points, as many as the exchange needed to hold f on the segment to the tolerance.
 //!
 //! ```
 //! use strip::{solve, Bound, Options, Problem};

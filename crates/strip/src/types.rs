@@ -126,22 +126,23 @@ pub struct Problem {
 /// The outer minimization method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Method {
-    /// Newton's method on the banded Hessian of Φ (implicitly differentiated per cell), with a
-    /// projected backtracking line search. Default; O(n) per iteration.
+    /// Newton's method on the tridiagonal Hessian of Φ (implicitly differentiated per cell), with
+    /// a backtracking line search; O(n) per iteration. Default. Polyline bounds are solved by the
+    /// exchange whatever the method (see the crate documentation).
     #[default]
     Newton,
     /// argmin's BFGS with a Moré–Thuente line search, as in the seed (dense n×n inverse Hessian:
-    /// for small n; not available with polyline bounds, whose grid values are box-constrained).
+    /// for small n; cubic pieces only — polyline bounds with BFGS are refused).
     Bfgs,
 }
 
-/// Default iteration limit of the outer solver.
+/// Default iteration limit of Newton's method (then the exchange takes over) or BFGS.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
-/// Default gradient tolerance: stop when ‖∇Φ‖∞ ≤ tol · (1 + ‖∇Φ(z₀)‖∞) (projected for boxes),
-/// in the normalized frame of [`solve`] (where Φ and its gradient are of unit order).
+/// Default gradient tolerance: stop when ‖∇Φ‖∞ ≤ tol · (1 + ‖∇Φ(z₀)‖∞), in the normalized frame
+/// of [`solve`] (where Φ and its gradient are of unit order).
 pub const DEFAULT_GRADIENT_TOL: f64 = 1e-11;
-/// Default margin ε of Remark 4.2 and problem (10), relative to the local strip width: data on a
-/// bound are moved inside by ε·width, and free grid values stay ε·width inside the strip.
+/// Default margin ε of Remark 4.2, relative to the local strip width: data on a bound are moved
+/// inside by ε·width.
 pub const DEFAULT_BOUNDARY_MARGIN: f64 = 1e-7;
 /// Feasibility tolerance of a candidate in an interval, relative to the value scale V (the
 /// largest deviation of the data, the end slopes or the bounds from the line through the first
@@ -168,7 +169,7 @@ pub struct Options {
     pub method: Method,
     /// Candidate pruning in each interval (all choices give the same answer).
     pub pruning: Pruning,
-    /// Maximum outer iterations.
+    /// Maximum iterations of Newton's method or BFGS (see [`DEFAULT_MAX_ITERATIONS`]).
     pub max_iterations: usize,
     /// Gradient tolerance (see [`DEFAULT_GRADIENT_TOL`]).
     pub gradient_tol: f64,
@@ -206,55 +207,62 @@ pub struct ExtraKnot {
     pub t: f64,
     /// What.
     pub kind: KnotKind,
-    /// The grid interval it lies in (0-based).
+    /// The data interval \[t_i, t_{i+1}\] it lies in (i, 0-based).
     pub interval: usize,
 }
 
 /// The solution: an exact C² piecewise cubic.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solution {
-    /// Breakpoints (data sites, grid points and extra knots), increasing.
+    /// Breakpoints (data sites and extra knots), increasing.
     pub breaks: Vec<f64>,
     /// `coefficients[j]` = \[c0, c1, c2, c3\] of the cubic on \[breaks\[j\], breaks\[j+1\]\] in
     /// s = t − breaks\[j\].
     pub coefficients: Vec<[f64; 4]>,
     /// Slopes z_i = f'(t_i) at the data sites.
     pub slopes: Vec<f64>,
-    /// The solver's grid: data sites plus interior polyline vertices (= `t` without polylines).
+    /// The data sites (the grid of problem (5)).
     pub grid: Vec<f64>,
-    /// f at the grid points.
+    /// f at the data sites (the data, except where Remark 4.2 moved a value inside).
     pub grid_values: Vec<f64>,
-    /// The shape of the solution in each grid interval.
+    /// The shape of the solution in each data interval (Theorem 2.1). For answers of the
+    /// exchange (polyline bounds) only `Free` or `Touch` (the side of the first contact in the
+    /// interval): the contacts are in [`Solution::extra_knots`].
     pub shapes: Vec<Shape>,
-    /// The extra knots with their kinds, sorted by t. With polyline bounds this includes grid
-    /// vertices where f touches a bound (its value held ε·width inside, problem (10)).
+    /// The extra knots with their kinds, sorted by t. Answers of the exchange list every
+    /// contact as a touching point (at a polyline vertex, inside a segment, or one of a run that
+    /// holds f on a segment).
     pub extra_knots: Vec<ExtraKnot>,
     /// ∫ f''².
     pub energy: f64,
     /// ‖f''‖_{L²} = √energy.
     pub norm: f64,
-    /// Final (projected) gradient norm ‖∇Φ‖₂ in the caller's units (∂Φ/∂z_i for slopes,
-    /// ∂Φ/∂s_j for free grid values).
+    /// Final gradient norm ‖∇Φ‖₂ in the caller's units (∂Φ/∂z_i); 0 for answers of the
+    /// exchange, whose multipliers all have the right sign.
     pub gradient_norm: f64,
-    /// Newton decrement ½ gᵀH⁻¹g at the solution (≈ Φ − min Φ, in the units of ∫f''²).
+    /// The estimated distance to the optimum in the units of ∫f''²: Newton's decrement
+    /// ½ gᵀH⁻¹g (≈ Φ − min Φ, from above), or for the exchange, whose energy lies below the
+    /// optimum, what holding every contact up by its remaining excursion would cost
+    /// (2 Σ |f''' jump| × excursion, to first order).
     pub newton_decrement: f64,
-    /// The optimality gap: an estimate of (∫f''² − min)/∫f''², the Newton decrement relative to
-    /// Φ. Converged solves report rounding-level gaps (≤ 1e-12 on the test channels); an
-    /// iteration limit reached with a feasible iterate is reported through a larger gap, never
-    /// silently (see [`crate::solve`]).
+    /// The optimality gap: `newton_decrement` over ∫f''². At most 1e-9 for every answer (a larger
+    /// gap is refused with [`Error::NotConverged`] carrying it); measured ≤ 5·10⁻¹¹ on the
+    /// generator's channels.
     pub gap: f64,
-    /// Rounds of the exact stage (1 without polyline bounds; see the crate documentation).
+    /// Sweeps of the exchange (1 for Newton or BFGS).
     pub rounds: usize,
-    /// Outer iterations.
+    /// Newton or BFGS iterations, or dual steps of the exchange.
     pub iterations: usize,
-    /// Per-interval solves (all outer iterations and line-search trials).
+    /// Per-interval solves (all iterations and line-search trials), or spline solves of the
+    /// exchange.
     pub cell_solves: usize,
-    /// Candidates examined in those solves.
+    /// Candidates examined in those solves (per-interval candidates, or points the exchange
+    /// added).
     pub candidates: usize,
     /// Data points moved inside by the margin because they lay on a bound (Remark 4.2).
     pub shifted_data: Vec<usize>,
-    /// Grid intervals whose chosen candidate lacks the optimality certificate (empty for linear
-    /// bounds; see [`Pruning::Certificate`]).
+    /// Data intervals whose chosen candidate lacks the optimality certificate (empty for linear
+    /// bounds and for answers of the exchange; see [`Pruning::Certificate`]).
     pub uncertified: Vec<usize>,
     /// The largest violation of the strip by the returned pieces in the caller's units (exact
     /// extrema of every cubic piece; ≤ 0 when the pieces are inside, 0 without bounds). At most
