@@ -12,7 +12,9 @@
 //!
 //! A data value on a bound otherwise (Remark 4.2) is moved inside by the margin ε of
 //! [`crate::Options::boundary_margin`] times the strip width there, and reported in
-//! [`crate::Solution::shifted_data`].
+//! [`crate::Solution::shifted_data`] — for Newton on Φ, whose cells need their ends inside the
+//! strip. The exchange needs no margin (a data value on the bound is a knot like any other; the
+//! strip next to it is held by points), so polyline problems keep such data exactly.
 
 use crate::error::{bound_field, Error, Infeasibility};
 use crate::piece::{cubic3, cubic_min, shift};
@@ -163,13 +165,14 @@ fn at_site(b: &Bound, t: &[f64], i: usize) -> [Option<(f64, f64)>; 2] {
     }
 }
 
-/// Checks that the problem has a solution and applies Remark 4.2: returns the problem with data
-/// values on a bound moved inside, and their indices. `vscale` is the value scale (normalized
-/// frame: tolerances relative to it).
+/// Checks that the problem has a solution and, when `shift`, applies Remark 4.2: returns the
+/// problem with data values on a bound moved inside, and their indices. `vscale` is the value
+/// scale (normalized frame: tolerances relative to it).
 pub(crate) fn prepare(
     q: &Problem,
     opts: &Options,
     vscale: f64,
+    shift: bool,
 ) -> Result<(Problem, Vec<usize>), Error> {
     strip_open(q)?;
     // a value within this distance of a bound counts as on it (Remark 4.2); it is exactly on it
@@ -243,7 +246,7 @@ pub(crate) fn prepare(
                 opts.boundary_margin * vscale
             };
             let moved = bound + sign * margin;
-            if sign * (moved - y) > 0.0 {
+            if shift && sign * (moved - y) > 0.0 {
                 out.y[i] = moved;
                 shifted.push(i);
             }

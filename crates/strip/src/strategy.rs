@@ -2,7 +2,8 @@
 //!
 //! 1. **Feasibility and Remark 4.2** ([`crate::prepare`]): a problem without solution (the strip
 //!    closes, a data value outside its bounds or on a kink no smooth curve can pass) is refused
-//!    before any solve, in O(M + n); data values on a bound are moved inside by the margin ε.
+//!    before any solve, in O(M + n); for bounds given as cubic pieces, data values on a bound are
+//!    moved inside by the margin ε (polyline problems keep them: the exchange needs no margin).
 //! 2. **Bounds given as cubic pieces per data interval** (the seed's §3): Newton's method (or the
 //!    seed's BFGS) on Φ over the slopes at the data sites, every cell solved exactly among
 //!    Theorem 2.1's shapes — the answer carries the structure of the theorem (touching points,
@@ -90,8 +91,9 @@ pub(crate) fn run(
             reason: "the margin must lie in [0, 0.5)",
         });
     }
-    let (q, shifted) = prepare(q0, opts, vscale)?;
-    let polyline = matches!(q.lower, Bound::Polyline(_)) || matches!(q.upper, Bound::Polyline(_));
+    let polyline = matches!(q0.lower, Bound::Polyline(_)) || matches!(q0.upper, Bound::Polyline(_));
+    // Remark 4.2's margin only for the cells of Φ (the exchange takes data on a bound as is)
+    let (q, shifted) = prepare(q0, opts, vscale, !polyline)?;
     if polyline {
         if opts.method == Method::Bfgs {
             return Err(Error::InvalidValue {

@@ -259,7 +259,8 @@ pub struct Solution {
     /// Candidates examined in those solves (per-interval candidates, or points the exchange
     /// added).
     pub candidates: usize,
-    /// Data points moved inside by the margin because they lay on a bound (Remark 4.2).
+    /// Data points moved inside by the margin because they lay on a bound (Remark 4.2; cubic
+    /// pieces only: polyline problems keep them on the bound).
     pub shifted_data: Vec<usize>,
     /// Data intervals whose chosen candidate lacks the optimality certificate (empty for linear
     /// bounds and for answers of the exchange; see [`Pruning::Certificate`]).

@@ -200,3 +200,83 @@ pub fn c2_jump(s: &Solution) -> [f64; 3] {
     }
     std::array::from_fn(|d| jump[d] / scale[d].max(f64::MIN_POSITIVE))
 }
+
+/// The necessary conditions of Lemma 1.1 of the seed, evaluated on the returned pieces (with
+/// Theorem 2.1 they are also sufficient): f'' continuous, f''(t_1) = f''(t_n) = 0 at natural
+/// ends, and f''' = l_i + ∫d(μ₁ − μ₂) with μ₁, μ₂ ≥ 0 supported on the contacts — so between data
+/// sites f''' jumps only where f touches a bound, up at the lower and down at the upper one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lemma11 {
+    /// Largest jump of f'' at a break, relative to max |f''|.
+    pub f2_jump: f64,
+    /// Largest |f''| at a natural end, relative to max |f''|.
+    pub end_f2: f64,
+    /// Largest |jump of f'''| at a break that is neither a data site nor a contact, relative to
+    /// max |f'''|.
+    pub stray_jump: f64,
+    /// Largest jump of f''' with the wrong sign at a contact, relative to max |f'''|.
+    pub wrong_sign: f64,
+    /// Contacts found.
+    pub contacts: usize,
+}
+
+/// Lemma 1.1 on `s`; a break is a contact when f is within `contact_tol` of a bound there.
+pub fn lemma_1_1(p: &Problem, s: &Solution, contact_tol: f64) -> Lemma11 {
+    let k = s.coefficients.len();
+    let (mut f2max, mut f3max) = (0.0f64, 0.0f64);
+    for (j, c) in s.coefficients.iter().enumerate() {
+        let h = s.breaks[j + 1] - s.breaks[j];
+        f2max = f2max
+            .max((2.0 * c[2]).abs())
+            .max((2.0 * c[2] + 6.0 * c[3] * h).abs());
+        f3max = f3max.max((6.0 * c[3]).abs());
+    }
+    let f2max = f2max.max(f64::MIN_POSITIVE);
+    let f3max = f3max.max(f64::MIN_POSITIVE);
+    let mut out = Lemma11 {
+        f2_jump: 0.0,
+        end_f2: 0.0,
+        stray_jump: 0.0,
+        wrong_sign: 0.0,
+        contacts: 0,
+    };
+    let nan_max = |a: f64, b: f64| {
+        if b.is_nan() || a.is_nan() {
+            f64::NAN
+        } else {
+            a.max(b)
+        }
+    };
+    for j in 1..k {
+        let (c0, c1) = (&s.coefficients[j - 1], &s.coefficients[j]);
+        let h = s.breaks[j] - s.breaks[j - 1];
+        let b = s.breaks[j];
+        out.f2_jump = nan_max(
+            out.f2_jump,
+            ((2.0 * c0[2] + 6.0 * c0[3] * h) - 2.0 * c1[2]).abs() / f2max,
+        );
+        let jump = 6.0 * (c1[3] - c0[3]);
+        if p.t.iter().any(|t| t.total_cmp(&b).is_eq()) {
+            continue;
+        }
+        let f = c1[0];
+        let lower = crate::bound_at(&p.lower, &p.t, b).is_some_and(|e| f - e <= contact_tol);
+        let upper = crate::bound_at(&p.upper, &p.t, b).is_some_and(|d| d - f <= contact_tol);
+        if lower || upper {
+            out.contacts += 1;
+            let wrong = if lower { -jump } else { jump };
+            out.wrong_sign = nan_max(out.wrong_sign, wrong.max(0.0) / f3max);
+        } else {
+            out.stray_jump = nan_max(out.stray_jump, jump.abs() / f3max);
+        }
+    }
+    if p.end_slopes[0].is_none() {
+        out.end_f2 = (2.0 * s.coefficients[0][2]).abs() / f2max;
+    }
+    if p.end_slopes[1].is_none() {
+        let c = &s.coefficients[k - 1];
+        let h = s.breaks[k] - s.breaks[k - 1];
+        out.end_f2 = out.end_f2.max((2.0 * c[2] + 6.0 * c[3] * h).abs() / f2max);
+    }
+    out
+}
