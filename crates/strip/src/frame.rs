@@ -122,10 +122,12 @@ impl Frame {
             magnitude: 0.0,
         };
         let l = |t: f64| frame.line(t);
-        let data =
-            p.t.iter()
-                .zip(&p.y)
-                .fold(0.0f64, |m, (t, y)| m.max((y - l(*t)).abs()));
+        // deviations within the rounding of y − ℓ(t) are none: data on a line (two points, say)
+        // must not get a value scale of 1e-16 (its bounds then normalize to 1e16)
+        let data = p.t.iter().zip(&p.y).fold(0.0f64, |m, (t, y)| {
+            let rounding = 8.0 * f64::EPSILON * (y.abs() + a.abs() + (b * (t - t0)).abs());
+            m.max((y - l(*t)).abs() - rounding)
+        });
         let slopes = p
             .end_slopes
             .iter()

@@ -66,11 +66,7 @@ fn example_5_2_and_5_3_solve() {
     assert!(common::max_violation(&p, &s, 10_000) <= 1e-9);
     let lb = common::qp_lower_bound(&p, &common::qp_grid(&p, 400, Some(&s)));
     let gap = (s.energy - lb) / s.energy;
-    assert!(
-        gap.abs() <= 1e-9,
-        "energy {} lower bound {lb}",
-        s.energy
-    );
+    assert!(gap.abs() <= 1e-9, "energy {} lower bound {lb}", s.energy);
 }
 
 #[test]

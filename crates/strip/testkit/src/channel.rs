@@ -5,8 +5,8 @@
 //! front of order `front_slope`) plus `bumps` narrow Gaussian bumps of width `bump_width`. The
 //! half-width w(t) varies smoothly in \[w_min, w_max\]. Bounds are c ∓ w either as polylines with
 //! `breakpoints` vertices (nearly equispaced, jittered) or as one cubic per data interval (the
-//! Hermite cubics of c ∓ w at the sites: their difference is the Hermite cubic of 2w > 0, so the
-//! strip never closes). Data are `sites` nearly equispaced (jittered) sites, the first at 0 and
+//! Hermite cubic of c at the sites ∓ the chord of w: their difference is twice the chord of
+//! w > 0, so the strip never closes). Data are `sites` nearly equispaced (jittered) sites, the first at 0 and
 //! the last at 1, with values on the centre line of the bounds as given — (e + d)/2 — so the
 //! problem is always feasible: every data point lies strictly inside, and an open channel always
 //! holds a C² function.
@@ -214,20 +214,19 @@ impl Channel {
                 }
             }
             BoundKind::Pieces => {
+                // the Hermite cubic of the centre line ∓ the chord of the half-width: their
+                // difference is twice the chord of w > 0, so the strip never closes (a Hermite
+                // cubic of w itself can dip below zero between the sites)
                 let hermite = |sign: f64| -> Vec<[f64; 4]> {
                     t.windows(2)
                         .map(|w| {
                             let h = w[1] - w[0];
-                            let g = |x: f64| {
-                                let (c, dc) = shape.centre(x);
-                                let (r, dr) = shape.half_width(x);
-                                (c + sign * r, dc + sign * dr)
-                            };
-                            let ((v0, d0), (v1, d1)) = (g(w[0]), g(w[1]));
+                            let ((v0, d0), (v1, d1)) = (shape.centre(w[0]), shape.centre(w[1]));
                             let s = (v1 - v0) / h;
+                            let (r0, r1) = (shape.half_width(w[0]).0, shape.half_width(w[1]).0);
                             [
-                                v0,
-                                d0,
+                                v0 + sign * r0,
+                                d0 + sign * (r1 - r0) / h,
                                 (3.0 * s - 2.0 * d0 - d1) / h,
                                 (d0 + d1 - 2.0 * s) / (h * h),
                             ]

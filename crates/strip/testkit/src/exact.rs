@@ -264,7 +264,13 @@ pub fn lemma_1_1(p: &Problem, s: &Solution, contact_tol: f64) -> Lemma11 {
         let upper = crate::bound_at(&p.upper, &p.t, b).is_some_and(|d| d - f <= contact_tol);
         if lower || upper {
             out.contacts += 1;
-            let wrong = if lower { -jump } else { jump };
+            // where the strip is narrower than the tolerance both bounds touch, and the
+            // multiplier may take either sign
+            let wrong = match (lower, upper) {
+                (true, false) => -jump,
+                (false, true) => jump,
+                _ => 0.0,
+            };
             out.wrong_sign = nan_max(out.wrong_sign, wrong.max(0.0) / f3max);
         } else {
             out.stray_jump = nan_max(out.stray_jump, jump.abs() / f3max);
