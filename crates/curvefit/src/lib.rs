@@ -10,10 +10,19 @@
 //! |---|---|
 //! | [`divdiff`] | knots, divided differences, discrete derivatives, parametrizations (Kersey §2) |
 //! | [`energy`] | the discrete energy E = ½pᵀHp, its identities and gradients, O(N) banded solves (Kersey §2) |
-//! | [`refine`] | Kersey's variational refinement (§3–4), Khan et al.'s n-ary schemes, Warren–Weimer's natural cubic subdivision |
+//! | [`refine`] | Kersey's variational refinement (§3–4) |
+//! | [`subdivision`] | Khan et al.'s (2m+2)-point n-ary schemes for curves and tensor-product surfaces, Warren–Weimer's natural cubic subdivision (§6.2–6.3) |
 //! | [`strip`] | best interpolation in a strip (Dontchev–Kolmanovsky) |
 //!
-//! plus [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line, callable in-process).
+//! plus [`spec`], the JSON contract of every subcommand as a library (problem and result types,
+//! validation naming the user's field and index, one entry point per subcommand), and — with the
+//! default feature `cli` — [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line,
+//! callable in-process).
+//!
+//! # Features
+//! - `cli` (default): the command line (clap) and the pictures (svg); the `curvefit` binary needs
+//!   it. As a library dependency, turn it off to build without clap and svg:
+//!   `curvefit = { path = "…/crates/curvefit", default-features = false }`.
 //!
 //! ```
 //! use curvefit::prelude::*;
@@ -22,13 +31,17 @@
 //! assert_eq!(h.len(), 4);
 //! ```
 
+#[cfg(feature = "cli")]
 pub mod cli;
+#[cfg(feature = "cli")]
 pub mod plot;
+pub mod spec;
 
 pub use divdiff;
 pub use energy;
 pub use refine;
 pub use strip;
+pub use subdivision;
 
 /// The vocabulary most programs need: `use curvefit::prelude::*;`.
 pub mod prelude {
