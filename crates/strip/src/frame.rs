@@ -123,10 +123,13 @@ impl Frame {
         };
         let l = |t: f64| frame.line(t);
         // deviations within the rounding of y − ℓ(t) are none: data on a line (two points, say)
-        // must not get a value scale of 1e-16 (its bounds then normalize to 1e16)
+        // must not get a value scale of 1e-16 (its bounds then normalize to 1e16); others count
+        // in full (subtracting the rounding from every deviation moved V = 1 to just below it,
+        // halved c, and Newton on a hair-thin cell then stalled where it had converged)
         let data = p.t.iter().zip(&p.y).fold(0.0f64, |m, (t, y)| {
             let rounding = 8.0 * f64::EPSILON * (y.abs() + a.abs() + (b * (t - t0)).abs());
-            m.max((y - l(*t)).abs() - rounding)
+            let d = (y - l(*t)).abs();
+            m.max(if d <= rounding { 0.0 } else { d })
         });
         let slopes = p
             .end_slopes

@@ -132,8 +132,26 @@ pub(crate) fn run(
         }
         Method::Bfgs => outer::bfgs(&st.outer, x, opts, &mut stats, &mut cell_solves),
     };
+    // the relative gap ½gᵀH⁻¹g / Φ of a stopped Newton or BFGS run: a line search that can no
+    // longer decrease Φ ends the iteration early, and on hair-thin cells (a short span among
+    // long ones: Φ ~ 1e27 in the normalized frame, gradient ~1e19) that happened with the gap
+    // still at 0.34 — returned as an answer until the gap was checked here
+    let gap = |out: &OuterOut| {
+        let d = if out.decrement.is_nan() {
+            outer::decrement_at(&st.outer, &out.x, &out.grad)
+        } else {
+            out.decrement
+        };
+        if out.phi > 0.0 {
+            (d / out.phi).max(0.0)
+        } else if d <= 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    };
     match out {
-        Ok(out) if out.converged => Ok((
+        Ok(out) if out.converged && gap(&out) <= ACCEPT_GAP => Ok((
             Staged::Cells(CellsOut {
                 setup: st,
                 out,
@@ -142,15 +160,15 @@ pub(crate) fn run(
             }),
             shifted,
         )),
-        // the iteration limit with Φ not converged, or a cell outside Theorem 2.1's shapes (no
-        // feasible candidate): the exchange, which needs neither
+        // the iteration limit with Φ not converged, a stop with the gap open, or a cell outside
+        // Theorem 2.1's shapes (no feasible candidate): the exchange, which needs neither
         Ok(_) | Err(Error::Unsupported { .. }) if opts.method == Method::Newton => {
             Ok((by_exchange(q, vscale)?, shifted))
         }
         Ok(out) => Err(Error::NotConverged {
             solver: "argmin BFGS",
             iterations: out.iterations,
-            residual: st.outer.caller_gradient_norm(&out.grad),
+            residual: gap(&out),
         }),
         Err(e) => Err(e),
     }

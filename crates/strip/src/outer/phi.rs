@@ -121,13 +121,6 @@ impl Outer {
             reason: "no feasible candidate in this interval: a cubic bound whose solution needs more than two extra knots here (Theorem 2.1 enumerates at most two; Remark 3.2)",
         }
     }
-
-    /// ‖g‖∞ in the caller's frame.
-    pub(crate) fn caller_gradient_norm(&self, g: &[f64]) -> f64 {
-        g.iter()
-            .zip(&self.unit)
-            .fold(0.0f64, |m, (g, u)| m.max((g * u).abs()))
-    }
 }
 
 pub(crate) fn inf_norm(v: &[f64]) -> f64 {
