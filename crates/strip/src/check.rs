@@ -3,9 +3,9 @@
 //! f − e (or d − f) is one cubic, whose minimum is taken at an end or at a real root of its
 //! derivative. Breaks and bound breakpoints are merged in one pass: O(pieces + M).
 //!
-//! Used twice: by stage 2 of [`crate::solve`] to find the polyline segments its relaxation left
-//! out and the curve violates (normalized frame), and on the returned pieces in the caller's
-//! frame (a violation beyond the documented tolerance is refused).
+//! Used twice: by the sweeps of the exchange ([`crate::exchange`]) to find where the current
+//! spline leaves the strip (normalized frame), and by [`crate::solve()`] on the returned pieces in
+//! the caller's frame (a violation beyond the documented tolerance is refused).
 
 use crate::piece::{cubic_argmin, shift};
 use crate::types::{Bound, Problem, Side, Solution};

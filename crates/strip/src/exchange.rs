@@ -37,7 +37,7 @@
 //! Measured on the issue-15 channels (M = 10³ … 10⁴, 16 and 200 sites): 16–34 sweeps, 500–2600
 //! spline solves; the energies agree with the Φ-based exact stage where that one converged
 //! (6.5·10⁻⁹ relative, from below, as they must) and showed it 1.1·10⁻⁵ too high where it
-//! stopped at a vertex contact with f'' jumping (see [`crate::stages`]).
+//! stopped at a vertex contact with f'' jumping (see [`crate::strategy`]).
 
 use crate::check::excursions;
 use crate::spline::{moments, Curve, Spline, Work};

@@ -1,4 +1,4 @@
-//! The normalized frame in which [`crate::solve`] works (ROBUSTNESS.md, finding 7).
+//! The normalized frame in which [`crate::solve()`] works (ROBUSTNESS.md, finding 7).
 //!
 //! The strip problem is exactly equivariant: f solves (t, y, e, d) if and only if
 //! t ↦ ℓ(t) + c·f((t − t₀)/λ) solves the problem with sites t₀ + λt, values ℓ + c·y and bounds

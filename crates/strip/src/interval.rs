@@ -2,7 +2,7 @@
 //! one interval \[0, h\] with Hermite data f(0) = y0, f'(0) = z0, f(h) = y1, f'(h) = z1 and
 //! cubic (or linear) bounds. Its value φ(θ) is the summand of Φ in problem (5); its gradient is
 //! (2f'''(0+), −2f''(0+), −2f'''(h−), 2f''(h−)) and its Hessian comes from implicit
-//! differentiation of the contact equations. [`crate::solve`] assembles many of these; this
+//! differentiation of the contact equations. [`crate::solve()`] assembles many of these; this
 //! entry point serves users who drive their own outer method (as the seed does with BFGS), and
 //! the verification of the gradient formula against finite differences.
 

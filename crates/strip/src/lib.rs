@@ -51,7 +51,7 @@
 //!
 //! **Normalized frame.** The problem is exactly equivariant: adding a line ℓ to y, e and d,
 //! scaling values by c and mapping sites by t ↦ t₀ + λt map solutions to solutions (∫f''² scales
-//! by c²/λ³). [`solve`] therefore works on a normalized copy — sites from 0 over a unit-order
+//! by c²/λ³). [`solve()`] therefore works on a normalized copy — sites from 0 over a unit-order
 //! range, the line through the first and last data point subtracted, values divided by the value
 //! scale V (the largest deviation of the data, of the end slopes and of the bounds that push f
 //! off that line), all scalings powers of two — and maps the answer back exactly (data sites,

@@ -1,4 +1,4 @@
-//! The solver's strategy, as one ordered list (all in the normalized frame of [`crate::solve`]):
+//! The solver's strategy, as one ordered list (all in the normalized frame of [`crate::solve()`]):
 //!
 //! 1. **Feasibility and Remark 4.2** ([`crate::prepare`]): a problem without solution (the strip
 //!    closes, a data value outside its bounds or on a kink no smooth curve can pass) is refused
@@ -7,9 +7,11 @@
 //! 2. **Bounds given as cubic pieces per data interval** (the seed's §3): Newton's method (or the
 //!    seed's BFGS) on Φ over the slopes at the data sites, every cell solved exactly among
 //!    Theorem 2.1's shapes — the answer carries the structure of the theorem (touching points,
-//!    subarcs, touching pairs) and a per-cell optimality certificate. If Newton stops at its
-//!    iteration limit with neither the gradient nor the decrement converged, step 3 solves the
-//!    problem instead.
+//!    subarcs, touching pairs) and a per-cell optimality certificate. Its stop is an answer only
+//!    with the relative gap ½gᵀH⁻¹g / Φ ≤ [`ACCEPT_GAP`]; if Newton stops short of that (its
+//!    iteration limit, or a line search that can no longer decrease Φ) or meets a cell outside
+//!    Theorem 2.1's shapes, step 3 solves the problem instead (BFGS, the seed's method chosen
+//!    explicitly, is refused with the gap).
 //! 3. **Polyline bounds** (§4, any M), and the fallback of step 2: the dual active-set exchange
 //!    ([`crate::exchange`]) on point constraints, driven by exact sweeps of the strip; it
 //!    cannot cycle, and its answer is optimal for the points it holds (a lower bound on the

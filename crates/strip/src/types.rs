@@ -139,7 +139,7 @@ pub enum Method {
 /// Default iteration limit of Newton's method (then the exchange takes over) or BFGS.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
 /// Default gradient tolerance: stop when ‖∇Φ‖∞ ≤ tol · (1 + ‖∇Φ(z₀)‖∞), in the normalized frame
-/// of [`solve`] (where Φ and its gradient are of unit order).
+/// of [`solve()`](crate::solve()) (where Φ and its gradient are of unit order).
 pub const DEFAULT_GRADIENT_TOL: f64 = 1e-11;
 /// Default margin ε of Remark 4.2, relative to the local strip width: data on a bound are moved
 /// inside by ε·width.
@@ -150,7 +150,7 @@ pub const DEFAULT_BOUNDARY_MARGIN: f64 = 1e-7;
 pub const FEASIBILITY_TOL: f64 = 1e-10;
 /// The returned pieces satisfy the strip to this fraction of the value scale V, plus the
 /// rounding allowance [`ROUNDING_TOL`] (checked exactly on every cubic piece in the caller's
-/// frame; a larger violation is [`Error::StripViolated`]). Ten times [`FEASIBILITY_TOL`]: room
+/// frame; a larger violation is [`Error::StripViolated`](crate::Error::StripViolated)). Ten times [`FEASIBILITY_TOL`]: room
 /// for the rounding of the map back from the normalized frame.
 pub const RESULT_FEASIBILITY_TOL: f64 = 1e-9;
 /// Rounding allowance of the returned pieces relative to the magnitude of the values
@@ -246,7 +246,7 @@ pub struct Solution {
     /// (2 Σ |f''' jump| × excursion, to first order).
     pub newton_decrement: f64,
     /// The optimality gap: `newton_decrement` over ∫f''². At most 1e-9 for every answer (a larger
-    /// gap is refused with [`Error::NotConverged`] carrying it); measured ≤ 5·10⁻¹¹ on the
+    /// gap is refused with [`Error::NotConverged`](crate::Error::NotConverged) carrying it); measured ≤ 5·10⁻¹¹ on the
     /// generator's channels.
     pub gap: f64,
     /// Sweeps of the exchange (1 for Newton or BFGS).
@@ -267,8 +267,8 @@ pub struct Solution {
     pub uncertified: Vec<usize>,
     /// The largest violation of the strip by the returned pieces in the caller's units (exact
     /// extrema of every cubic piece; ≤ 0 when the pieces are inside, 0 without bounds). At most
-    /// [`RESULT_FEASIBILITY_TOL`]·V + [`ROUNDING_TOL`]·M, else [`solve`] returns
-    /// [`Error::StripViolated`].
+    /// [`RESULT_FEASIBILITY_TOL`]·V + [`ROUNDING_TOL`]·M, else [`solve()`](crate::solve()) returns
+    /// [`Error::StripViolated`](crate::Error::StripViolated).
     pub violation: f64,
 }
 

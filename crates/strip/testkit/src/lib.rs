@@ -5,7 +5,7 @@
 //! * [`channel`]: a generator of hard channels — a smooth wave with steep tanh fronts and
 //!   narrow bumps, half-width 0.01–0.04, bounds as polylines with M vertices or as one cubic per
 //!   data interval, n nearly equispaced sites on the centre line.
-//! * [`lower_bound`]: an independent lower bound on the optimum — the fine-grid QP (values and
+//! * [`mod@lower_bound`]: an independent lower bound on the optimum — the fine-grid QP (values and
 //!   second derivatives at grid points, bounds only at the grid points) solved by Clarabel.
 //! * [`exact`]: exact checks of a returned solution, written independently of the solver: the
 //!   strip on every sub-interval between consecutive breaks and bound vertices (roots of the
