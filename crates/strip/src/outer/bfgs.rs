@@ -7,16 +7,18 @@ use argmin::core::{CostFunction, Executor, Gradient, State, TerminationReason};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::BFGS;
 
-use crate::cell::{CellSolution, CellStats};
+use super::newton::DECREMENT_TOL;
+use super::phi::{Hints, Outer, OuterOut};
+use crate::cell::CellStats;
 use crate::error::Error;
-use crate::solve::{Hints, Options, OuterRef, DECREMENT_TOL};
+use crate::types::Options;
 
 /// Evaluations of Φ allowed per permitted iteration (argmin's Moré–Thuente line search has no
 /// iteration limit of its own; this bounds the whole solve).
 const EVALUATIONS_PER_ITERATION: usize = 100;
 
 struct Phi<'a> {
-    outer: &'a OuterRef<'a>,
+    outer: &'a Outer,
     hints: &'a RefCell<Hints>,
     stats: &'a RefCell<(CellStats, usize)>,
     /// The cost reported outside Φ's domain (no feasible candidate in some interval).
@@ -40,8 +42,8 @@ impl Phi<'_> {
         let mut h = self.hints.borrow_mut();
         let mut st = self.stats.borrow_mut();
         let (s, n) = &mut *st;
-        match self.outer.value_grad(x, &mut h, s, n) {
-            Ok((f, g, _)) => Ok((f, g)),
+        match self.outer.eval(x, &mut h, None, s, n) {
+            Ok(e) => Ok((e.phi, e.grad)),
             // outside the domain (no feasible candidate): a cost far above Φ(x₀) makes the line
             // search step back. It must be finite: an infinite cost turns the Moré–Thuente
             // cubic interpolation into NaN, and the search then never terminates.
@@ -66,20 +68,29 @@ impl Gradient for Phi<'_> {
     }
 }
 
+/// argmin stopped with an error (its evaluation budget, [`EVALUATIONS_PER_ITERATION`] per
+/// permitted iteration, is the only one it can report here): out of iterations.
+fn not_converged(iterations: usize) -> Error {
+    Error::NotConverged {
+        solver: "argmin BFGS",
+        iterations,
+        residual: f64::INFINITY,
+    }
+}
+
 /// Outside Φ's domain BFGS sees the cost `OUTSIDE_FACTOR`·(1 + |Φ(x₀)|).
 const OUTSIDE_FACTOR: f64 = 1e6;
 
-type Out = (f64, usize, (Vec<CellSolution>, Vec<f64>, Vec<f64>));
-
+/// argmin's BFGS on Φ from `x0` (data-site grids only: no box-constrained unknowns).
 pub(crate) fn bfgs(
-    outer: &OuterRef<'_>,
+    outer: &Outer,
     x0: Vec<f64>,
     opts: &Options,
     stats: &mut CellStats,
     solves: &mut usize,
-) -> Result<Out, Error> {
+) -> Result<OuterOut, Error> {
     let nv = x0.len();
-    let hints = RefCell::new(vec![None; outer.cells()]);
+    let hints = RefCell::new(vec![None; outer.cells.len()]);
     let counters = RefCell::new((CellStats::default(), 0));
     let budget = EVALUATIONS_PER_ITERATION * (opts.max_iterations + 1);
     let evaluations = RefCell::new((0, budget));
@@ -90,15 +101,15 @@ pub(crate) fn bfgs(
         outside: f64::INFINITY,
         evaluations: &evaluations,
     };
-    let (f0, g0) = phi.vg(&x0).map_err(|e| Error::Bfgs {
-        message: e.to_string(),
-    })?;
+    let (f0, g0) = phi
+        .vg(&x0)
+        .map_err(|_| not_converged(opts.max_iterations))?;
     if !f0.is_finite() {
         // the start is outside Φ's domain
         let mut h = hints.borrow().clone();
-        return match outer.value_grad(&x0, &mut h, stats, solves) {
-            Err(interval) => Err(Error::NoFeasibleCandidate { interval }),
-            Ok(_) => Err(Error::Overflow),
+        return match outer.eval(&x0, &mut h, None, stats, solves) {
+            Err(j) => Err(outer.no_candidate(j)),
+            Ok(_) => Err(crate::frame::scaled("y", 0)),
         };
     }
     phi.outside = OUTSIDE_FACTOR * (1.0 + f0.abs());
@@ -113,9 +124,7 @@ pub(crate) fn bfgs(
             // stop when an iteration no longer changes Φ beyond rounding (the gradient can stall
             // above its tolerance along stiff directions; the line search would then loop)
             .and_then(|s| s.with_tolerance_cost(DECREMENT_TOL * (1.0 + f0.abs())))
-            .map_err(|e| Error::Bfgs {
-                message: e.to_string(),
-            })?;
+            .map_err(|_| not_converged(opts.max_iterations))?;
         let mut h0 = vec![vec![0.0; nv]; nv];
         for (i, row) in h0.iter_mut().enumerate() {
             row[i] = 1.0;
@@ -127,9 +136,7 @@ pub(crate) fn bfgs(
                     .max_iters(opts.max_iterations as u64)
             })
             .run()
-            .map_err(|e| Error::Bfgs {
-                message: e.to_string(),
-            })?;
+            .map_err(|_| not_converged(opts.max_iterations))?;
         if let Some(p) = res.state().get_best_param() {
             best = p.clone();
         }
@@ -143,17 +150,21 @@ pub(crate) fn bfgs(
     let (st, n) = *counters.borrow();
     stats.candidates += st.candidates;
     *solves += n;
-    let (_, g, sols) = outer
-        .value_grad(&best, &mut h, stats, solves)
-        .map_err(|interval| Error::NoFeasibleCandidate { interval })?;
-    // out of iterations with neither the gradient (argmin's 2-norm test) nor Φ converged: an
-    // error with the gradient norm in the caller's units (as for Newton), never a silent answer
+    let ev = outer
+        .eval(&best, &mut h, None, stats, solves)
+        .map_err(|j| outer.no_candidate(j))?;
+    let (g, sols, phi) = (ev.grad, ev.sols, ev.phi);
+    // out of iterations with neither the gradient (argmin's 2-norm test) nor Φ converged: the
+    // strategy refuses it with the gap (never a silent answer)
     let g2 = g.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if out_of_iterations && g2 > opts.gradient_tol * (1.0 + g0n) {
-        return Err(Error::NotConverged {
-            iterations: iters,
-            gradient_norm: outer.caller_gradient_norm(&g),
-        });
-    }
-    Ok((f64::NAN, iters, (sols, best, g)))
+    let converged = !(out_of_iterations && g2 > opts.gradient_tol * (1.0 + g0n));
+    Ok(OuterOut {
+        decrement: f64::NAN,
+        iterations: iters,
+        converged,
+        sols,
+        x: best,
+        grad: g,
+        phi,
+    })
 }

@@ -1,8 +1,26 @@
-//! Symmetric banded LDLᵀ (Cholesky without square roots) for the outer Newton step.
+//! The banded linear algebra of `strip`, in one place: a tridiagonal solve (splines) and a
+//! symmetric banded LDLᵀ (Cholesky without square roots) for the outer Newton step. Every banded
+//! call of the crate goes through this module, so that a shared banded crate can replace it here.
 //!
 //! Φ is a sum of terms that each couple the unknowns of two neighbouring grid points, so its
 //! Hessian is banded: half-bandwidth 1 (tridiagonal) when only slopes are unknown, up to 3 when
 //! values at extra grid points are unknown too (§4). O(N w²) work.
+
+/// Solves the tridiagonal system a_i x_{i−1} + b_i x_i + c_i x_{i+1} = r_i (a_0 and c_{n−1}
+/// unused) by elimination without pivoting — for diagonally dominant matrices. `b` is
+/// overwritten by the elimination, `r` by the solution.
+pub(crate) fn solve_tridiagonal(a: &[f64], b: &mut [f64], c: &[f64], r: &mut [f64]) {
+    let n = b.len();
+    for i in 1..n {
+        let w = a[i] / b[i - 1];
+        b[i] -= w * c[i - 1];
+        r[i] -= w * r[i - 1];
+    }
+    r[n - 1] /= b[n - 1];
+    for i in (0..n - 1).rev() {
+        r[i] = (r[i] - c[i] * r[i + 1]) / b[i];
+    }
+}
 
 /// Maximum half-bandwidth.
 pub(crate) const MAX_BAND: usize = 3;

@@ -1,8 +1,9 @@
-//! Worked examples in the spirit of the seed's §5 (the paper does not print its data, so these
-//! are designed to show the same phenomena; they are used by the figures, the verification cases
-//! and the benchmarks).
+//! Worked examples in the spirit of the seed's §5. The paper does not print its data: these are
+//! invented to show the same phenomena (Example 5.1's data and strip were tuned until the
+//! solution had the contact structure of its Figure 2), used by the figures, the verification
+//! cases, the benchmarks and the tests.
 
-use crate::solve::{Bound, Problem};
+use strip::{Bound, Problem};
 
 /// The 16 data values of [`example_5_1`].
 pub const Y16: [f64; 16] = [

@@ -1,6 +1,5 @@
-//! A discretized QP whose optimal value is a *lower bound* on the strip problem's optimum, for
-//! independent verification with a conic solver (the tests and `cargo xtask verify` feed it to
-//! Clarabel).
+//! A discretized QP whose optimal value is a *lower bound* on the strip problem's optimum, solved
+//! by Clarabel for independent verification (tests, `cargo xtask verify`, `cargo xtask bench`).
 //!
 //! Unknowns: values v_k and second derivatives m_k at grid points x_0 < … < x_M (containing every
 //! data site). The objective Σ_k (h_k/3)(m_k² + m_k m_{k+1} + m_{k+1}²) subject to the cubic
@@ -12,7 +11,13 @@
 
 use std::collections::BTreeMap;
 
-use crate::solve::{bound_value, Problem};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use strip::{Bound, Problem, Solution};
+
+use crate::bound_at;
 
 /// The QP  min ½xᵀPx  s.t.  A x + s = b,  s ∈ {0}^{n_eq} × R₊^{n_ineq}, in triplet form.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,7 +40,8 @@ pub struct LowerBoundQp {
 
 /// Builds the lower-bound QP of `problem` on the data sites plus the interior points `extra`
 /// (which must lie strictly inside \[t_1, t_n\]; duplicates of data sites are dropped).
-/// The problem is assumed valid (see [`crate::solve`]).
+/// The problem is assumed valid (see `strip::solve`). The bounds are evaluated by
+/// [`crate::bound_at`], independently of the solver.
 pub fn lower_bound_qp(problem: &Problem, extra: &[f64]) -> LowerBoundQp {
     let t = &problem.t;
     let n = t.len();
@@ -117,13 +123,12 @@ pub fn lower_bound_qp(problem: &Problem, extra: &[f64]) -> LowerBoundQp {
         if g.1.is_some() {
             continue;
         }
-        let i = t.partition_point(|x| *x <= g.0).clamp(1, n - 1) - 1;
-        if let Some(u) = bound_value(&problem.upper, i, t[i], g.0) {
+        if let Some(u) = bound_at(&problem.upper, t, g.0) {
             a.push((row, vi(k), 1.0));
             b.push(u);
             row += 1;
         }
-        if let Some(lo) = bound_value(&problem.lower, i, t[i], g.0) {
+        if let Some(lo) = bound_at(&problem.lower, t, g.0) {
             a.push((row, vi(k), -1.0));
             b.push(-lo);
             row += 1;
@@ -138,4 +143,112 @@ pub fn lower_bound_qp(problem: &Problem, extra: &[f64]) -> LowerBoundQp {
         n_ineq: row - n_eq,
         grid: grid.iter().map(|g| g.0).collect(),
     }
+}
+
+/// Clarabel's answer to the lower-bound QP.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LowerBound {
+    /// min(primal, dual) objective: a lower bound on the strip optimum when `solved`.
+    pub value: f64,
+    /// The primal objective.
+    pub primal: f64,
+    /// The dual objective.
+    pub dual: f64,
+    /// Whether Clarabel reports `Solved` (an `AlmostSolved` answer is no bound: at M = 10⁴ it
+    /// was seen 2·10⁻⁴ below the true QP optimum).
+    pub solved: bool,
+    /// Clarabel's status, for messages.
+    pub status: String,
+    /// Interior-point iterations.
+    pub iterations: u32,
+    /// Grid points of the QP.
+    pub grid_points: usize,
+}
+
+/// Solves the lower-bound QP on the data sites plus `extra` with Clarabel; `tight` asks for
+/// 1e-12 gap and feasibility tolerances (verification), otherwise Clarabel's defaults (the
+/// benchmark's peer, as a user would run it).
+///
+/// # Errors
+/// Clarabel's setup errors, as text.
+pub fn lower_bound(problem: &Problem, extra: &[f64], tight: bool) -> Result<LowerBound, String> {
+    let qp = lower_bound_qp(problem, extra);
+    let n = qp.n_vars;
+    let rows = qp.b.len();
+    let trip = |v: &[(usize, usize, f64)], r: usize| {
+        CscMatrix::new_from_triplets(
+            r,
+            n,
+            v.iter().map(|x| x.0).collect(),
+            v.iter().map(|x| x.1).collect(),
+            v.iter().map(|x| x.2).collect(),
+        )
+    };
+    let cones = [
+        SupportedConeT::ZeroConeT(qp.n_eq),
+        SupportedConeT::NonnegativeConeT(qp.n_ineq),
+    ];
+    let mut settings = DefaultSettingsBuilder::default();
+    settings.verbose(false);
+    if tight {
+        settings
+            .tol_gap_abs(1e-12)
+            .tol_gap_rel(1e-12)
+            .tol_feas(1e-12)
+            .max_iter(400);
+    }
+    let settings = settings.build().map_err(|e| format!("{e:?}"))?;
+    let mut s = DefaultSolver::new(
+        &trip(&qp.p, n),
+        &vec![0.0; n],
+        &trip(&qp.a, rows),
+        &qp.b,
+        &cones,
+        settings,
+    )
+    .map_err(|e| format!("{e:?}"))?;
+    s.solve();
+    let (primal, dual) = (s.solution.obj_val, s.solution.obj_val_dual);
+    Ok(LowerBound {
+        value: primal.min(dual),
+        primal,
+        dual,
+        solved: matches!(s.solution.status, SolverStatus::Solved),
+        status: format!("{:?}", s.solution.status),
+        iterations: s.solution.iterations,
+        grid_points: qp.grid.len(),
+    })
+}
+
+/// A grid for the QP: every polyline vertex, `per_interval` uniform points in each data
+/// interval, and, when `near` is given, points clustered geometrically around its breaks and
+/// extra knots (any grid gives a valid lower bound; clustering only tightens it).
+pub fn fine_grid(problem: &Problem, per_interval: usize, near: Option<&Solution>) -> Vec<f64> {
+    let t = &problem.t;
+    let mut g = Vec::new();
+    for w in t.windows(2) {
+        for k in 1..per_interval {
+            g.push(w[0] + (w[1] - w[0]) * k as f64 / per_interval as f64);
+        }
+    }
+    for b in [&problem.lower, &problem.upper] {
+        if let Bound::Polyline(v) = b {
+            g.extend(v.iter().map(|q| q[0]));
+        }
+    }
+    if let Some(s) = near {
+        let span = t[t.len() - 1] - t[0];
+        for b in s.breaks.iter().chain(s.extra_knots.iter().map(|k| &k.t)) {
+            g.push(*b);
+            for e in 1..8 {
+                let d = span * 1e-2 * 0.5f64.powi(e);
+                g.push(b - d);
+                g.push(b + d);
+            }
+        }
+    }
+    g.retain(|x| *x > t[0] && *x < t[t.len() - 1]);
+    g.sort_by(f64::total_cmp);
+    g.dedup_by(|a, b| (*a - *b).abs() < 1e-13 * (1.0 + b.abs()));
+    g
 }
