@@ -14,12 +14,13 @@ use std::path::Path;
 const LAYERS: &[(&str, &[&str])] = &[
     ("divdiff", &[]),
     ("energy", &["divdiff"]),
-    ("refine", &["divdiff", "energy"]),
+    ("conic", &[]),
+    ("refine", &["divdiff", "energy", "conic"]),
     ("strip", &[]),
     ("curvefit", &["divdiff", "energy", "refine", "strip"]),
 ];
 
-const LIBRARIES: &[&str] = &["divdiff", "energy", "refine", "strip"];
+const LIBRARIES: &[&str] = &["divdiff", "energy", "conic", "refine", "strip"];
 const IO_PATTERNS: &[&str] = &[
     "std::fs",
     "std::io",
