@@ -366,16 +366,18 @@ pub(crate) struct Newton {
     pub delta: Vec<f64>,
     pub weights: Weights,
     pub shifted: bool,
+    ws: SolveWork,
 }
 
 impl Newton {
-    fn new(cones: &crate::Cones) -> Self {
+    fn new(cones: &crate::Cones, n: usize) -> Self {
         Newton {
             sc: vec![Vec::new(); cones.len()],
             lambda: vec![0.0; cones.rows()],
             delta: vec![0.0; cones.len()],
             weights: Weights::zero(cones),
             shifted: false,
+            ws: SolveWork::new(n, cones.rows()),
         }
     }
 
@@ -384,10 +386,10 @@ impl Newton {
     fn factor<K: KktSystem + ?Sized>(
         &mut self,
         kkt: &mut K,
+        cones: &crate::Cones,
         pt: &Point,
         opts: &Options,
     ) -> Result<(), Error> {
-        let cones = kkt.cones().clone();
         self.weights.clear();
         for (bi, cone) in cones.blocks().iter().enumerate() {
             let r = cones.range(bi);
@@ -441,8 +443,9 @@ impl Newton {
     /// side: V⁻¹ds + V dz = ξ), refining up to `steps` times to `rtol` × the right-hand side.
     #[allow(clippy::too_many_arguments)]
     fn solve<K: KktSystem + ?Sized>(
-        &self,
+        &mut self,
         kkt: &mut K,
+        cones: &crate::Cones,
         rx: &[f64],
         rs: &[f64],
         xi: &[f64],
@@ -450,86 +453,74 @@ impl Newton {
         rtol: f64,
         out: &mut Direction,
     ) {
-        let cones = kkt.cones().clone();
-        let (n, m) = (kkt.num_vars(), cones.rows());
+        let ws = &mut self.ws;
+        let has_eq = cones.has_equalities();
         // rhs1 = −r_x − A_iᵀ(V⁻¹ξ + V⁻² r_s) over inequality blocks; e2 = −r_s on zero blocks.
-        let mut t = vec![0.0; m];
-        let mut e2 = vec![0.0; m];
-        let mut tmp = Vec::new();
         for (bi, cone) in cones.blocks().iter().enumerate() {
             let r = cones.range(bi);
             if cone.kind() == Kind::Zero {
-                for k in r {
-                    e2[k] = -rs[k];
+                for k in r.clone() {
+                    ws.e2[k] = -rs[k];
+                    ws.t[k] = 0.0;
                 }
                 continue;
             }
-            let tb = &mut t[r.clone()];
+            let tb = &mut ws.t[r.clone()];
             tb.copy_from_slice(&xi[r.clone()]);
             apply_nt(cone.kind(), &self.sc[bi], tb, true);
-            tmp.clear();
-            tmp.extend_from_slice(&rs[r]);
-            apply_nt(cone.kind(), &self.sc[bi], &mut tmp, true);
-            apply_nt(cone.kind(), &self.sc[bi], &mut tmp, true);
-            for (a, c) in tb.iter_mut().zip(&tmp) {
+            let tmp = &mut ws.u[r.clone()];
+            tmp.copy_from_slice(&rs[r.clone()]);
+            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
+            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
+            for (a, c) in tb.iter_mut().zip(tmp.iter()) {
                 *a += c;
             }
+            ws.e2[r].fill(0.0);
         }
-        let mut rhs1 = vec![0.0; n];
-        kkt.apply_at(&t, &mut rhs1);
-        for (a, r) in rhs1.iter_mut().zip(rx) {
+        kkt.apply_at(&ws.t, &mut ws.rhs1);
+        for (a, r) in ws.rhs1.iter_mut().zip(rx) {
             *a = -*a - r;
         }
         // [K A_eᵀ; A_e 0][dx; dz_e] = [rhs1; e2], K = P + A_iᵀV⁻²A_i: regularized solves
         // dx = K_δ⁻¹(e1 + A_eᵀe2/δ), dz_e = (A_e dx − e2)/δ, refined against the exact system.
-        let has_eq = cones.has_equalities();
-        let dx = &mut out.dx;
-        dx.iter_mut().for_each(|v| *v = 0.0);
-        let dz = &mut out.dz;
-        dz.iter_mut().for_each(|v| *v = 0.0);
-        let mut e1 = rhs1.clone();
-        let mut res2 = e2.clone();
-        let bnorm = inf_norm(&rhs1).max(inf_norm(&e2)).max(f64::MIN_POSITIVE);
-        let mut ax = vec![0.0; m];
-        let mut u = vec![0.0; m];
-        let mut kdx = vec![0.0; n];
+        out.dx.fill(0.0);
+        out.dz.fill(0.0);
+        ws.e1.copy_from_slice(&ws.rhs1);
+        ws.res2.copy_from_slice(&ws.e2);
+        let bnorm = inf_norm(&ws.rhs1)
+            .max(inf_norm(&ws.e2))
+            .max(f64::MIN_POSITIVE);
         let mut last = f64::INFINITY;
-        let mut prev_dx = vec![0.0; n];
-        let mut prev_dz = vec![0.0; m];
         for step in 0..=steps {
             // Correction from the residuals (e1, res2).
-            let mut r = e1.clone();
+            ws.r.copy_from_slice(&ws.e1);
             if has_eq {
                 for (bi, cone) in cones.blocks().iter().enumerate() {
-                    if cone.kind() == Kind::Zero {
-                        let rr = cones.range(bi);
-                        for k in rr {
-                            u[k] = res2[k] / self.delta[bi];
-                        }
-                    } else {
-                        for k in cones.range(bi) {
-                            u[k] = 0.0;
-                        }
+                    for k in cones.range(bi) {
+                        ws.u[k] = if cone.kind() == Kind::Zero {
+                            ws.res2[k] / self.delta[bi]
+                        } else {
+                            0.0
+                        };
                     }
                 }
-                let mut atu = vec![0.0; n];
-                kkt.apply_at(&u, &mut atu);
-                for (a, c) in r.iter_mut().zip(&atu) {
+                kkt.apply_at(&ws.u, &mut ws.atu);
+                for (a, c) in ws.r.iter_mut().zip(&ws.atu) {
                     *a += c;
                 }
             }
-            kkt.solve(&mut r);
-            prev_dx.copy_from_slice(dx);
-            prev_dz.copy_from_slice(dz);
-            for (a, c) in dx.iter_mut().zip(&r) {
+            kkt.solve(&mut ws.r);
+            ws.prev_dx.copy_from_slice(&out.dx);
+            ws.prev_dz.copy_from_slice(&out.dz);
+            for (a, c) in out.dx.iter_mut().zip(&ws.r) {
                 *a += c;
             }
             if has_eq {
-                kkt.apply_a(&r, &mut ax);
+                kkt.apply_a(&ws.r, &mut ws.ax);
                 for (bi, cone) in cones.blocks().iter().enumerate() {
                     if cone.kind() == Kind::Zero {
                         for k in cones.range(bi) {
-                            dz[k] += (ax[k] - res2[k]) / self.delta[bi];
+                            out.dz[k] += (ws.ax[k] - ws.res2[k]) / self.delta[bi];
                         }
                     }
                 }
@@ -538,33 +529,37 @@ impl Newton {
                 break;
             }
             // Residuals of the exact system: e1 = rhs1 − K dx − A_eᵀ dz_e, res2 = e2 − A_e dx.
-            kkt.apply_p(dx, &mut kdx);
-            kkt.apply_a(dx, &mut ax);
+            kkt.apply_p(&out.dx, &mut ws.kdx);
+            kkt.apply_a(&out.dx, &mut ws.ax);
             for (bi, cone) in cones.blocks().iter().enumerate() {
                 let rr = cones.range(bi);
                 if cone.kind() == Kind::Zero {
                     for k in rr {
-                        u[k] = dz[k];
-                        res2[k] = e2[k] - ax[k];
+                        ws.u[k] = out.dz[k];
+                        ws.res2[k] = ws.e2[k] - ws.ax[k];
                     }
                 } else {
-                    let ub = &mut u[rr.clone()];
-                    ub.copy_from_slice(&ax[rr]);
+                    let ub = &mut ws.u[rr.clone()];
+                    ub.copy_from_slice(&ws.ax[rr]);
                     apply_nt(cone.kind(), &self.sc[bi], ub, true);
                     apply_nt(cone.kind(), &self.sc[bi], ub, true);
                 }
             }
-            let mut atu = vec![0.0; n];
-            kkt.apply_at(&u, &mut atu);
-            for ((e, a), (k, c)) in e1.iter_mut().zip(&rhs1).zip(kdx.iter().zip(&atu)) {
+            kkt.apply_at(&ws.u, &mut ws.atu);
+            for ((e, a), (k, c)) in ws
+                .e1
+                .iter_mut()
+                .zip(&ws.rhs1)
+                .zip(ws.kdx.iter().zip(&ws.atu))
+            {
                 *e = a - k - c;
             }
-            let rn = inf_norm(&e1).max(inf_norm(&res2));
+            let rn = inf_norm(&ws.e1).max(inf_norm(&ws.res2));
             if !rn.is_finite() || rn > last {
                 // Diverging (the regularized factor is too far from the exact matrix): undo
                 // the last correction.
-                dx.copy_from_slice(&prev_dx);
-                dz.copy_from_slice(&prev_dz);
+                out.dx.copy_from_slice(&ws.prev_dx);
+                out.dz.copy_from_slice(&ws.prev_dz);
                 break;
             }
             last = rn;
@@ -573,26 +568,61 @@ impl Newton {
             }
         }
         // Inequality blocks: dz = V⁻¹ξ + V⁻²(r_s + A dx), ds = −r_s − A dx; zero blocks ds = 0.
-        kkt.apply_a(dx, &mut ax);
+        kkt.apply_a(&out.dx, &mut ws.ax);
         for (bi, cone) in cones.blocks().iter().enumerate() {
             let r = cones.range(bi);
             if cone.kind() == Kind::Zero {
-                for k in r {
-                    out.ds[k] = 0.0;
-                }
+                out.ds[r].fill(0.0);
                 continue;
             }
-            tmp.clear();
-            tmp.extend(r.clone().map(|k| rs[k] + ax[k]));
-            apply_nt(cone.kind(), &self.sc[bi], &mut tmp, true);
+            let tmp = &mut ws.u[r.clone()];
+            for (j, k) in r.clone().enumerate() {
+                tmp[j] = rs[k] + ws.ax[k];
+            }
+            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
             for (j, k) in r.clone().enumerate() {
                 tmp[j] += xi[k];
             }
-            apply_nt(cone.kind(), &self.sc[bi], &mut tmp, true);
+            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
             for (j, k) in r.enumerate() {
-                dz[k] = tmp[j];
-                out.ds[k] = -rs[k] - ax[k];
+                out.dz[k] = tmp[j];
+                out.ds[k] = -rs[k] - ws.ax[k];
             }
+        }
+    }
+}
+
+/// Work vectors of the Newton solves (allocated once per run).
+pub(crate) struct SolveWork {
+    t: Vec<f64>,
+    e2: Vec<f64>,
+    u: Vec<f64>,
+    rhs1: Vec<f64>,
+    e1: Vec<f64>,
+    res2: Vec<f64>,
+    r: Vec<f64>,
+    atu: Vec<f64>,
+    ax: Vec<f64>,
+    kdx: Vec<f64>,
+    prev_dx: Vec<f64>,
+    prev_dz: Vec<f64>,
+}
+
+impl SolveWork {
+    fn new(n: usize, m: usize) -> Self {
+        SolveWork {
+            t: vec![0.0; m],
+            e2: vec![0.0; m],
+            u: vec![0.0; m],
+            rhs1: vec![0.0; n],
+            e1: vec![0.0; n],
+            res2: vec![0.0; m],
+            r: vec![0.0; n],
+            atu: vec![0.0; n],
+            ax: vec![0.0; m],
+            kdx: vec![0.0; n],
+            prev_dx: vec![0.0; n],
+            prev_dz: vec![0.0; m],
         }
     }
 }
@@ -667,7 +697,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
         rx: vec![0.0; n],
         rs: vec![0.0; m],
     };
-    let mut newton = Newton::new(&cones);
+    let mut newton = Newton::new(&cones, n);
     let mut aff = Direction::new(n, m);
     let mut dir = Direction::new(n, m);
     let mut xi = vec![0.0; m];
@@ -721,7 +751,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             break Status::MaxIterations;
         }
         iterations += 1;
-        if let Err(e) = newton.factor(kkt, &pt, opts) {
+        if let Err(e) = newton.factor(kkt, &cones, &pt, opts) {
             if iterations == 1 {
                 return Err(e);
             }
@@ -752,7 +782,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             0
         };
         let rtol = (opts.refinement.accuracy * res.total).max(opts.refinement.floor);
-        newton.solve(kkt, &w.rx, &w.rs, &xi, pred_steps, rtol, &mut aff);
+        newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, pred_steps, rtol, &mut aff);
         let alpha_a = max_step(&cones, &pt, &aff, 1.0);
         let mut sigma = 0.0;
         if gap > 0.0 {
@@ -793,15 +823,14 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             add_identity(kind, &mut t2, sigma * mu);
             jordan_divide(kind, l, &t2, &mut xi[r]);
         }
-        newton.solve(
-            kkt,
-            &w.rx,
-            &w.rs,
-            &xi,
-            opts.refinement.max_steps,
-            rtol,
-            &mut dir,
-        );
+        let steps = if cones.has_equalities() || newton.shifted || !kkt.factor_is_exact() {
+            opts.refinement.max_steps
+        } else if res.total <= opts.refinement.exact_from {
+            opts.refinement.exact_steps
+        } else {
+            0
+        };
+        newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, steps, rtol, &mut dir);
         let alpha =
             (opts.step_fraction * max_step(&cones, &pt, &dir, 1.0 / opts.step_fraction)).min(1.0);
         if !(alpha.is_finite() && alpha > 0.0)

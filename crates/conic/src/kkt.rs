@@ -77,4 +77,12 @@ pub trait KktSystem {
 
     /// rhs ← K(Θ, σ)⁻¹ rhs with the last factorization.
     fn solve(&mut self, rhs: &mut [f64]);
+
+    /// Whether the last factorization is of K(Θ, σ) itself, up to rounding (default false: a
+    /// backend that regularizes or eliminates inexactly inside `factor`). With an exact
+    /// factorization the method refines its directions only once the iterate is close
+    /// ([`crate::RefinementOptions::exact_from`]).
+    fn factor_is_exact(&self) -> bool {
+        false
+    }
 }

@@ -66,6 +66,12 @@ pub struct RefinementOptions {
     pub accuracy: f64,
     /// …but never asked for less than this relative residual (default 1e-12).
     pub floor: f64,
+    /// With an exact factorization ([`crate::KktSystem::factor_is_exact`]) and no equality
+    /// rows, the corrector is refined only once the iterate's residual is below this (default
+    /// 1e-6: early directions need no accuracy)…
+    pub exact_from: f64,
+    /// …and then by at most this many steps (default 1: rounding only).
+    pub exact_steps: usize,
 }
 
 impl Default for RefinementOptions {
@@ -74,6 +80,8 @@ impl Default for RefinementOptions {
             max_steps: 6,
             accuracy: 1e-3,
             floor: 1e-12,
+            exact_from: 1e-6,
+            exact_steps: 1,
         }
     }
 }

@@ -168,16 +168,21 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
         // Θ: curvature and penalties per block.
         weights.clear();
         let mut delta = vec![0.0; cons.len()];
-        let mut touched = vec![false; cones.len()];
+        // The constraints of each block, in order (cons is kept sorted by block).
+        let mut per_block: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
         for (ci, con) in cons.iter().enumerate() {
             delta[ci] = po.penalty / kkt.diagonal_scale(con.block).max(f64::MIN_POSITIVE);
-            touched[con.block] = true;
+            match per_block.last_mut() {
+                Some((b, r)) if *b == con.block => r.end = ci + 1,
+                _ => per_block.push((con.block, ci..ci + 1)),
+            }
         }
-        for bi in (0..cones.len()).filter(|&b| touched[b]) {
+        for (bi, members) in per_block {
             let mb = cones.blocks()[bi].dim();
             dense.clear();
             dense.resize(mb * mb, 0.0);
-            for (ci, con) in cons.iter().enumerate().filter(|(_, c)| c.block == bi) {
+            for ci in members {
+                let con = &cons[ci];
                 let (uj, _, js) = &normals[ci];
                 if con.row.is_none() {
                     // −(y/|Js|) J.
@@ -215,8 +220,6 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
         if dx.iter().chain(&dy).any(|v| !v.is_finite()) {
             return best;
         }
-        let x_prev = x.clone();
-        let y_prev: Vec<f64> = cons.iter().map(|c| c.y).collect();
         for (a, d) in x.iter_mut().zip(&dx) {
             *a += d;
         }
@@ -244,7 +247,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                     for k in r {
                         if !member[k] && s[k] < 0.0 {
                             inactive_violation = inactive_violation.max(-s[k] / length);
-                            if -s[k] > po.active_rtol * length {
+                            if -s[k] > opts.tolerance * length {
                                 add.push(Con {
                                     block: bi,
                                     row: Some(k),
@@ -258,7 +261,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                     if !member[r.start] {
                         let dist = distance_to_cone(Kind::SecondOrder, &s[r.clone()]) / length;
                         inactive_violation = inactive_violation.max(dist);
-                        if dist > po.active_rtol {
+                        if dist > opts.tolerance {
                             add.push(Con {
                                 block: bi,
                                 row: None,
@@ -268,45 +271,6 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                     }
                 }
             }
-        }
-        let want_change = drop.iter().any(|&d| d) || !add.is_empty();
-        if want_change && changes < po.active_changes {
-            changes += 1;
-            taken -= 1;
-            x = x_prev;
-            for (c, y) in cons.iter_mut().zip(&y_prev) {
-                c.y = *y;
-            }
-            let mut kept = Vec::with_capacity(cons.len());
-            for (ci, con) in cons.iter().enumerate() {
-                if drop[ci] {
-                    let r = cones.range(con.block);
-                    match con.row {
-                        Some(k) => member[k] = false,
-                        None => r.for_each(|k| member[k] = false),
-                    }
-                } else {
-                    kept.push(*con);
-                }
-            }
-            for con in add {
-                let r = cones.range(con.block);
-                if con.block < cones.len() && cones.blocks()[con.block].kind() == Kind::SecondOrder
-                {
-                    // A second-order block joining needs a normal: not at its apex.
-                    let sb = &s[r.clone()];
-                    if norm(sb) <= 1e-9 * length {
-                        continue;
-                    }
-                }
-                match con.row {
-                    Some(k) => member[k] = true,
-                    None => r.for_each(|k| member[k] = true),
-                }
-                kept.push(con);
-            }
-            cons = kept;
-            continue;
         }
         // Certificate of the new point: z from the multipliers at the new normals.
         let mut z = vec![0.0; m];
@@ -337,6 +301,44 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                 status: Status::Converged,
                 polished: true,
             });
+        }
+        let want_change = drop.iter().any(|&d| d) || !add.is_empty();
+        if want_change && changes < po.active_changes && !done {
+            // Continue from the new point with the corrected set (Newton pulls a joining
+            // constraint onto its boundary and lets a leaving one go); the step is not counted.
+            changes += 1;
+            taken -= 1;
+            let mut kept = Vec::with_capacity(cons.len());
+            for (ci, con) in cons.iter().enumerate() {
+                if drop[ci] {
+                    let r = cones.range(con.block);
+                    match con.row {
+                        Some(k) => member[k] = false,
+                        None => r.for_each(|k| member[k] = false),
+                    }
+                } else {
+                    kept.push(*con);
+                }
+            }
+            for con in add {
+                let r = cones.range(con.block);
+                if con.block < cones.len() && cones.blocks()[con.block].kind() == Kind::SecondOrder
+                {
+                    // A second-order block joining needs a normal: not at its apex.
+                    let sb = &s[r.clone()];
+                    if norm(sb) <= 1e-9 * length {
+                        continue;
+                    }
+                }
+                match con.row {
+                    Some(k) => member[k] = true,
+                    None => r.for_each(|k| member[k] = true),
+                }
+                kept.push(con);
+            }
+            kept.sort_by_key(|c| (c.block, c.row));
+            cons = kept;
+            continue;
         }
         if done || hopeless {
             break;
@@ -429,7 +431,8 @@ fn saddle_solve<K: KktSystem + ?Sized>(
             e2[ci] = c[ci] - g_apply(&av, ci);
         }
         let rn = inf_norm(&e1).max(inf_norm(&e2));
-        if !rn.is_finite() || rn > last || rn <= 1e-15 * bnorm {
+        // Stop at rounding level or when a step no longer halves the residual.
+        if !rn.is_finite() || rn > 0.5 * last || rn <= 1e-15 * bnorm {
             break;
         }
         last = rn;

@@ -8,6 +8,9 @@ pub enum Error {
     /// A linear-algebra failure (from `energy`).
     #[error(transparent)]
     Energy(#[from] energy::Error),
+    /// A failure of the cone solver (from `conic`) not mapped to a variant of this crate.
+    #[error(transparent)]
+    Conic(conic::Error),
     /// A subdivision-scheme parameter is out of its valid range (e.g. an odd number of stencil
     /// points, arity 1, a grid with one row).
     #[error("{field} = {value} is invalid: {reason}")]

@@ -7,7 +7,7 @@ mod degenerate;
 mod exact;
 mod fast;
 mod fixed;
-mod operator;
+pub(crate) mod operator;
 mod problem;
 mod slots;
 mod split;

@@ -79,13 +79,16 @@
 //! assert!(s.energy <= i.energy && s.kkt_residual <= 1e-9);
 //! ```
 
-mod conic;
+mod backend;
+mod conic_problem;
 mod error;
 mod freeknots;
 mod kersey;
 mod schemes;
 
-pub use conic::*;
+pub use conic_problem::{
+    ConicConstraint, ConicOptions, ConicProblem, ConicSolution, ConvexSet, ACTIVE_RTOL,
+};
 pub use error::Error;
 pub use freeknots::*;
 pub use kersey::*;

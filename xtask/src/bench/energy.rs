@@ -187,8 +187,7 @@ fn balls_data(n: usize) -> anyhow::Result<(Vec<[f64; 2]>, divdiff::Knots)> {
 fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
     let k = BALLS_K;
     let (q, knots) = balls_data(n)?;
-    let h = energy::Hessian::new(&knots);
-    let mut p = ConicProblem::new(&h, 2)?;
+    let mut p = ConicProblem::new(&knots, 2)?;
     let spacing = std::f64::consts::TAU / n as f64;
     for (i, c) in q.iter().enumerate() {
         let r = spacing * (0.05 + 0.5 * ((i * 31 % 101) as f64 / 101.0));

@@ -58,8 +58,11 @@ use divdiff::{Knots, Points};
 
 use super::fast::Condensation;
 use super::operator::Stencil;
-use crate::conic::{apply_v, jordan, jordan_div, max_step, scaling, Kind};
 use crate::Error;
+use conic::cone::{
+    apply_nt as apply_v, jordan_divide as jordan_div, jordan_product as jordan,
+    nt_scaling as scaling, step_to_boundary as max_step, Kind,
+};
 
 use super::fixed::dist;
 
@@ -449,7 +452,7 @@ impl NewtonSystem<'_> {
         }
         self.factor = Some(
             self.sys
-                .factor_with_tolerance(crate::conic::IPM_PIVOT_RTOL)?,
+                .factor_with_tolerance(crate::backend::full::NEWTON_PIVOT_RTOL)?,
         );
         Ok(())
     }
@@ -936,11 +939,11 @@ fn solve_balls_d<const D: usize>(
                     continue;
                 }
                 let zi = &z[cone(&z, i)];
-                scaling(Kind::Soc, &s[cone(&s, i)], zi, &mut scv);
+                scaling(Kind::SecondOrder, &s[cone(&s, i)], zi, &mut scv);
                 sc[i * (m + 1)..(i + 1) * (m + 1)].copy_from_slice(&scv);
                 let l = &mut lam[i * m..(i + 1) * m];
                 l.copy_from_slice(zi);
-                apply_v(Kind::Soc, &scv, l, false);
+                apply_v(Kind::SecondOrder, &scv, l, false);
                 // D = a I + b w̄₁w̄₁ᵀ, a = η⁻², b = 2η⁻²; D + ρI has the eigenvalue a + ρ + b|w̄₁|²
                 // along u = w̄₁/|w̄₁| and a + ρ across it, inverted per eigenspace (no cancellation
                 // when b|w̄₁|² ≫ a, on active cones).
@@ -1009,8 +1012,8 @@ fn solve_balls_d<const D: usize>(
         let mut alpha_a: f64 = 1.0;
         for i in (0..n).filter(|&i| ball[i]) {
             let r = cone(&s, i);
-            alpha_a = max_step(Kind::Soc, &s[r.clone()], &dsa[r.clone()], alpha_a);
-            alpha_a = max_step(Kind::Soc, &z[r.clone()], &dza[r], alpha_a);
+            alpha_a = max_step(Kind::SecondOrder, &s[r.clone()], &dsa[r.clone()], alpha_a);
+            alpha_a = max_step(Kind::SecondOrder, &z[r.clone()], &dza[r], alpha_a);
         }
         let mut gap_a = 0.0;
         for i in (0..n).filter(|&i| ball[i]) {
@@ -1028,17 +1031,17 @@ fn solve_balls_d<const D: usize>(
             let scv = &sc[i * (m + 1)..(i + 1) * (m + 1)];
             let r = cone(&s, i);
             ca.copy_from_slice(&dsa[r.clone()]);
-            apply_v(Kind::Soc, scv, &mut ca, true);
+            apply_v(Kind::SecondOrder, scv, &mut ca, true);
             cc.copy_from_slice(&dza[r.clone()]);
-            apply_v(Kind::Soc, scv, &mut cc, false);
-            jordan(Kind::Soc, &ca, &cc, &mut t1);
+            apply_v(Kind::SecondOrder, scv, &mut cc, false);
+            jordan(Kind::SecondOrder, &ca, &cc, &mut t1);
             let l = &lam[r.clone()];
-            jordan(Kind::Soc, l, l, &mut t2);
+            jordan(Kind::SecondOrder, l, l, &mut t2);
             for k in 0..m {
                 t2[k] = -t2[k] - t1[k];
             }
             t2[0] += sigma * mu;
-            jordan_div(Kind::Soc, l, &t2, &mut xi[r]);
+            jordan_div(Kind::SecondOrder, l, &t2, &mut xi[r]);
         }
         ctx.refine = CONDENSED_MAX_REFINEMENT_STEPS;
         ctx.solve(
@@ -1047,8 +1050,8 @@ fn solve_balls_d<const D: usize>(
         let mut alpha: f64 = 1.0 / CONDENSED_STEP_FRACTION;
         for i in (0..n).filter(|&i| ball[i]) {
             let r = cone(&s, i);
-            alpha = max_step(Kind::Soc, &s[r.clone()], &ds[r.clone()], alpha);
-            alpha = max_step(Kind::Soc, &z[r.clone()], &dz[r], alpha);
+            alpha = max_step(Kind::SecondOrder, &s[r.clone()], &ds[r.clone()], alpha);
+            alpha = max_step(Kind::SecondOrder, &z[r.clone()], &dz[r], alpha);
         }
         let alpha = (CONDENSED_STEP_FRACTION * alpha).min(1.0);
         if !(alpha.is_finite() && alpha > 0.0) || dy.iter().any(|v| !v.is_finite()) {
@@ -1426,11 +1429,11 @@ impl<const D: usize> NewtonCtx<'_, D> {
             }
             let scv = &self.sc[i * (m + 1)..(i + 1) * (m + 1)];
             nw.tm2.copy_from_slice(&self.rp[i * m..(i + 1) * m]);
-            apply_v(Kind::Soc, scv, &mut nw.tm2, true);
+            apply_v(Kind::SecondOrder, scv, &mut nw.tm2, true);
             for k in 0..m {
                 nw.tm[k] = xi[i * m + k] + nw.tm2[k];
             }
-            apply_v(Kind::Soc, scv, &mut nw.tm, true);
+            apply_v(Kind::SecondOrder, scv, &mut nw.tm, true);
             for c in 0..d {
                 nw.r[o + c] = -rd[o + c] - nw.tm[1 + c];
             }
@@ -1452,12 +1455,12 @@ impl<const D: usize> NewtonCtx<'_, D> {
             for k in 0..m {
                 nw.tm2[k] = -ds[i * m + k];
             }
-            apply_v(Kind::Soc, scv, &mut nw.tm2, true);
+            apply_v(Kind::SecondOrder, scv, &mut nw.tm2, true);
             let out = &mut dz[i * m..(i + 1) * m];
             for k in 0..m {
                 out[k] = xi[i * m + k] + nw.tm2[k];
             }
-            apply_v(Kind::Soc, scv, out, true);
+            apply_v(Kind::SecondOrder, scv, out, true);
         }
     }
 }
@@ -1582,7 +1585,7 @@ mod tests {
                 uniform_spans: false,
                 working_set: None,
             };
-            let (conic, _, _) = super::super::exact::solve(&fp, crate::CONIC_TOLERANCE).unwrap();
+            let (conic, _, _) = super::super::exact::solve(&fp, super::super::exact::CONIC_TOLERANCE).unwrap();
             let e_conic = energy::energy(&kn, &conic.points).unwrap();
             // The reference's own certificate: only a certified reference is an optimum to agree
             // with both ways; an uncertified one (the full-vertex method reaches 3e-8…6e-8 on some

@@ -8,7 +8,7 @@ use energy::Hessian;
 
 use super::algorithm::{FixedProblem, FixedSolution};
 use super::problem::{Boundary, Constraint, Tangent};
-use crate::conic::{ConicOptions, ConicProblem, ConvexSet};
+use crate::conic_problem::{ConicOptions, ConicProblem, ConvexSet};
 use crate::Error;
 
 /// The stricter target of the second conic solve. The conic solver measures complementarity
@@ -20,6 +20,8 @@ use crate::Error;
 /// exact path solves at the default first and again at this target only when the certificate
 /// is above [`EXACT_KKT_TARGET`], keeping the better of the two.
 pub const EXACT_CONIC_TOLERANCE: f64 = 1e-16;
+/// The target of the first conic solve.
+pub const CONIC_TOLERANCE: f64 = 1e-12;
 /// The certificate level below which the first conic solve is accepted.
 pub const EXACT_KKT_TARGET: f64 = 1e-10;
 
@@ -58,7 +60,7 @@ pub(crate) fn solve(
     let d = q.dim();
     let n = q.len();
     let hess = Hessian::new(fp.knots);
-    let mut cp = ConicProblem::new(&hess, d)?;
+    let mut cp = ConicProblem::new(fp.knots, d)?;
     let mut origin = Vec::new();
     let mut data_constraint = vec![None; n];
     for i in 0..n {
@@ -148,10 +150,7 @@ pub(crate) fn solve(
         origin.push(Origin::End(k));
         derivative.push((c, stencil));
     }
-    let opts = ConicOptions {
-        tolerance,
-        ..ConicOptions::default()
-    };
+    let opts = ConicOptions::default().with_tolerance(tolerance);
     let sol = cp.solve(&opts).map_err(|e| match e {
         Error::Infeasible { constraint } => match origin.get(constraint) {
             Some(Origin::Data(i)) => Error::InfeasibleConstraint {

@@ -140,7 +140,7 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         );
         Ok((sol, cert.kkt_residual.max(kkt)))
     };
-    let (first, k1) = certified(crate::CONIC_TOLERANCE)?;
+    let (first, k1) = certified(super::exact::CONIC_TOLERANCE)?;
     if k1 <= super::exact::EXACT_KKT_TARGET {
         return Ok(first);
     }
@@ -944,110 +944,4 @@ pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {
         .map(|(x, y)| (x - y) * (x - y))
         .sum::<f64>()
         .sqrt()
-}
-
-#[cfg(test)]
-mod tests {
-    use divdiff::{Knots, Points};
-
-    use super::super::algorithm::FixedProblem;
-    use super::super::certify::{certify, ACTIVE_REL_TOL};
-    use super::super::exact::EXACT_KKT_TARGET;
-    use super::super::operator::Stencil;
-    use super::super::problem::{Constraint, HalfSpace, Problem};
-    use super::polish_halfspaces;
-
-    /// The half-space polish turns a loose interior-point solution (tolerance 1e-5) of boxes
-    /// (normals of different lengths) about points on a wavy closed curve into a certified
-    /// optimum, not above the tight interior-point solution's energy and within 1e-7 of it.
-    #[test]
-    fn the_halfspace_polish_certifies_a_loose_interior_point_solution() {
-        let n = 48;
-        let k = 3;
-        let m = k + 1;
-        let mut c = Vec::new();
-        for i in 0..n {
-            let th = std::f64::consts::TAU * i as f64 / n as f64;
-            let r = 1.0 + 0.3 * (5.0 * th).sin() + 0.1 * (7.0 * th).cos();
-            c.extend([r * th.cos(), r * th.sin()]);
-        }
-        let q = Points::new(2, c).unwrap();
-        let half = 0.3 * std::f64::consts::TAU / n as f64;
-        let sets: Vec<Vec<HalfSpace>> = q
-            .iter()
-            .map(|p| {
-                vec![
-                    HalfSpace {
-                        normal: vec![1.0, 0.0],
-                        offset: p[0] + half,
-                    },
-                    HalfSpace {
-                        normal: vec![-2.0, 0.0],
-                        offset: -2.0 * p[0] + 2.0 * half,
-                    },
-                    HalfSpace {
-                        normal: vec![0.0, 1.0],
-                        offset: p[1] + half,
-                    },
-                    HalfSpace {
-                        normal: vec![0.0, -0.5],
-                        offset: -0.5 * p[1] + 0.5 * half,
-                    },
-                ]
-            })
-            .collect();
-        let t: Vec<f64> = (0..=n * m).map(|j| j as f64 / m as f64).collect();
-        let kn = Knots::closed(t).unwrap();
-        let constraint = Constraint::HalfSpaces(sets.clone());
-        let problem = Problem::new(q.clone()).with_constraint(constraint.clone());
-        let data_vertex: Vec<usize> = (0..n).map(|i| i * m).collect();
-        let fp = FixedProblem {
-            knots: &kn,
-            q: &q,
-            data_vertex: &data_vertex,
-            constraint: &constraint,
-            problem: &problem,
-            stride: m,
-            uniform_spans: false,
-            working_set: None,
-        };
-        let stencil = Stencil::new(&kn);
-        let judge = |p: &Points, w: &Option<Vec<Vec<f64>>>| {
-            certify(
-                &stencil,
-                p,
-                &q,
-                &data_vertex,
-                &constraint,
-                w.clone(),
-                ACTIVE_REL_TOL,
-                &[],
-            )
-            .0
-        };
-        let (loose, _, _) = super::super::exact::solve(&fp, 1e-5).unwrap();
-        let before = judge(&loose.points, &loose.multipliers);
-        assert!(
-            before.kkt_residual > EXACT_KKT_TARGET,
-            "start {:e}",
-            before.kkt_residual
-        );
-        let (polished, kp) = polish_halfspaces(&fp, &loose, &sets)
-            .unwrap()
-            .expect("settles");
-        assert!(kp <= EXACT_KKT_TARGET, "polished {kp:e}");
-        let (tight, _, _) = super::super::exact::solve(&fp, crate::CONIC_TOLERANCE).unwrap();
-        let after = judge(&polished.points, &polished.multipliers);
-        let reference = judge(&tight.points, &tight.multipliers);
-        // (The interior-point method itself stops at 5e-9 here: its energy is an upper bound
-        // on the optimum, which the certified polished energy must not exceed.)
-        assert!(
-            after.energy <= reference.energy * (1.0 + 1e-12)
-                && reference.energy - after.energy <= 1e-7 * reference.energy,
-            "{} vs {} (kkt {:e})",
-            after.energy,
-            reference.energy,
-            reference.kkt_residual
-        );
-    }
 }

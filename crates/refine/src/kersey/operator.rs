@@ -73,6 +73,28 @@ impl Stencil {
         out
     }
 
+    /// out = H x for flat vertex-major x (N·d entries, d columns), without temporaries: each
+    /// row residual (Ax)_i, in difference form, is scattered as soon as it is formed. Returns
+    /// ½|Ax|².
+    pub(crate) fn apply_h_flat(&self, x: &[f64], d: usize, out: &mut [f64]) -> f64 {
+        let n = x.len() / d;
+        out.fill(0.0);
+        let mut energy = 0.0;
+        for i in self.row_range(n) {
+            let a = self.rows[i];
+            let [l, m, r] = self.cols(i, n);
+            for c in 0..d {
+                let xm = x[m * d + c];
+                let v = a[0] * (x[l * d + c] - xm) + a[2] * (x[r * d + c] - xm);
+                energy += v * v;
+                out[l * d + c] += a[0] * v;
+                out[m * d + c] += a[1] * v;
+                out[r * d + c] += a[2] * v;
+            }
+        }
+        0.5 * energy
+    }
+
     /// (H p, ½|Ap|²) with H = AᵀA.
     pub(crate) fn apply_h(&self, p: &Points) -> (Vec<f64>, f64) {
         let n = p.len();
