@@ -77,7 +77,8 @@ pub enum Status {
 pub struct Solution {
     /// x.
     pub x: Vec<f64>,
-    /// s = b − Ax as returned (the iterate's slack, or b − Ax after a polish).
+    /// s: b − Ax, except after [`Status::Stopped`], where it is the iterate's own slack (with
+    /// x and z a valid [`Start`] to resume from).
     pub s: Vec<f64>,
     /// The dual z.
     pub z: Vec<f64>,
@@ -113,7 +114,7 @@ impl Solution {
 }
 
 /// Work vectors of one run.
-struct Work {
+pub(crate) struct Work {
     g: Vec<f64>,
     atz: Vec<f64>,
     ax: Vec<f64>,
@@ -143,7 +144,7 @@ pub(crate) fn floors<K: KktSystem + ?Sized>(kkt: &mut K) -> crate::Scales {
 }
 
 /// Evaluates g, Aᵀz, Ax, the residual vectors and the iterate's residuals.
-fn evaluate<K: KktSystem + ?Sized>(
+pub(crate) fn evaluate<K: KktSystem + ?Sized>(
     kkt: &mut K,
     pt: &Point,
     w: &mut Work,
@@ -358,8 +359,11 @@ fn given_start<K: KktSystem + ?Sized>(kkt: &K, start: Start) -> Result<Point, Er
 /// One factorization of the Newton matrix with its scalings, and solves with iterative
 /// refinement.
 pub(crate) struct Newton {
-    /// NT scaling per block (empty for zero blocks).
-    pub sc: Vec<Vec<f64>>,
+    /// NT scaling of every block, flat: block b at sc[sc_off[b]..sc_off[b + 1]] (empty for
+    /// zero blocks).
+    sc: Vec<f64>,
+    sc_off: Vec<usize>,
+    scratch: Vec<f64>,
     /// λ = V z.
     pub lambda: Vec<f64>,
     /// δ per zero block (0 elsewhere).
@@ -371,8 +375,19 @@ pub(crate) struct Newton {
 
 impl Newton {
     fn new(cones: &crate::Cones, n: usize) -> Self {
+        let mut sc_off = vec![0];
+        for b in cones.blocks() {
+            let len = match b {
+                crate::Cone::Zero(_) => 0,
+                crate::Cone::Nonnegative(m) => *m,
+                crate::Cone::SecondOrder(m) => m + 1,
+            };
+            sc_off.push(sc_off.last().copied().unwrap_or(0) + len);
+        }
         Newton {
-            sc: vec![Vec::new(); cones.len()],
+            sc: vec![0.0; sc_off.last().copied().unwrap_or(0)],
+            sc_off,
+            scratch: Vec::new(),
             lambda: vec![0.0; cones.rows()],
             delta: vec![0.0; cones.len()],
             weights: Weights::zero(cones),
@@ -400,12 +415,13 @@ impl Newton {
                 cone.kind(),
                 &pt.s[r.clone()],
                 &pt.z[r.clone()],
-                &mut self.sc[bi],
+                &mut self.scratch,
             );
             let l = &mut self.lambda[r.clone()];
             l.copy_from_slice(&pt.z[r]);
-            apply_nt(cone.kind(), &self.sc[bi], l, false);
-            self.weights.set_nt(bi, cone.kind(), &self.sc[bi]);
+            apply_nt(cone.kind(), &self.scratch, l, false);
+            self.weights.set_nt(bi, cone.kind(), &self.scratch);
+            self.sc[self.sc_off[bi]..self.sc_off[bi + 1]].copy_from_slice(&self.scratch);
         }
         let reg = &opts.regularization;
         let eq_attempts = if cones.has_equalities() {
@@ -452,8 +468,10 @@ impl Newton {
         steps: usize,
         rtol: f64,
         out: &mut Direction,
-    ) {
+    ) -> bool {
         let ws = &mut self.ws;
+        let (sc_all, sc_off) = (&self.sc, &self.sc_off);
+        let sc = |b: usize| &sc_all[sc_off[b]..sc_off[b + 1]];
         let has_eq = cones.has_equalities();
         // rhs1 = −r_x − A_iᵀ(V⁻¹ξ + V⁻² r_s) over inequality blocks; e2 = −r_s on zero blocks.
         for (bi, cone) in cones.blocks().iter().enumerate() {
@@ -465,16 +483,14 @@ impl Newton {
                 }
                 continue;
             }
+            // V⁻¹ξ + V⁻² r_s = V⁻¹(ξ + V⁻¹ r_s).
             let tb = &mut ws.t[r.clone()];
-            tb.copy_from_slice(&xi[r.clone()]);
-            apply_nt(cone.kind(), &self.sc[bi], tb, true);
-            let tmp = &mut ws.u[r.clone()];
-            tmp.copy_from_slice(&rs[r.clone()]);
-            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
-            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
-            for (a, c) in tb.iter_mut().zip(tmp.iter()) {
-                *a += c;
+            tb.copy_from_slice(&rs[r.clone()]);
+            apply_nt(cone.kind(), sc(bi), tb, true);
+            for (a, x) in tb.iter_mut().zip(&xi[r.clone()]) {
+                *a += x;
             }
+            apply_nt(cone.kind(), sc(bi), tb, true);
             ws.e2[r].fill(0.0);
         }
         kkt.apply_at(&ws.t, &mut ws.rhs1);
@@ -510,8 +526,11 @@ impl Newton {
                 }
             }
             kkt.solve(&mut ws.r);
-            ws.prev_dx.copy_from_slice(&out.dx);
-            ws.prev_dz.copy_from_slice(&out.dz);
+            if step > 0 {
+                // (Kept to undo a diverging correction; before the first, dx = dz = 0.)
+                ws.prev_dx.copy_from_slice(&out.dx);
+                ws.prev_dz.copy_from_slice(&out.dz);
+            }
             for (a, c) in out.dx.iter_mut().zip(&ws.r) {
                 *a += c;
             }
@@ -529,35 +548,41 @@ impl Newton {
                 break;
             }
             // Residuals of the exact system: e1 = rhs1 − K dx − A_eᵀ dz_e, res2 = e2 − A_e dx.
-            kkt.apply_p(&out.dx, &mut ws.kdx);
-            kkt.apply_a(&out.dx, &mut ws.ax);
-            for (bi, cone) in cones.blocks().iter().enumerate() {
-                let rr = cones.range(bi);
-                if cone.kind() == Kind::Zero {
-                    for k in rr {
-                        ws.u[k] = out.dz[k];
-                        ws.res2[k] = ws.e2[k] - ws.ax[k];
-                    }
-                } else {
-                    let ub = &mut ws.u[rr.clone()];
-                    ub.copy_from_slice(&ws.ax[rr]);
-                    apply_nt(cone.kind(), &self.sc[bi], ub, true);
-                    apply_nt(cone.kind(), &self.sc[bi], ub, true);
+            if !has_eq && kkt.apply_newton(&out.dx, &mut ws.kdx) {
+                for ((e, a), k) in ws.e1.iter_mut().zip(&ws.rhs1).zip(&ws.kdx) {
+                    *e = a - k;
                 }
-            }
-            kkt.apply_at(&ws.u, &mut ws.atu);
-            for ((e, a), (k, c)) in ws
-                .e1
-                .iter_mut()
-                .zip(&ws.rhs1)
-                .zip(ws.kdx.iter().zip(&ws.atu))
-            {
-                *e = a - k - c;
+            } else {
+                kkt.apply_p(&out.dx, &mut ws.kdx);
+                kkt.apply_a(&out.dx, &mut ws.ax);
+                for (bi, cone) in cones.blocks().iter().enumerate() {
+                    let rr = cones.range(bi);
+                    if cone.kind() == Kind::Zero {
+                        for k in rr {
+                            ws.u[k] = out.dz[k];
+                            ws.res2[k] = ws.e2[k] - ws.ax[k];
+                        }
+                    } else {
+                        let ub = &mut ws.u[rr.clone()];
+                        ub.copy_from_slice(&ws.ax[rr]);
+                        apply_nt(cone.kind(), sc(bi), ub, true);
+                        apply_nt(cone.kind(), sc(bi), ub, true);
+                    }
+                }
+                kkt.apply_at(&ws.u, &mut ws.atu);
+                for ((e, a), (k, c)) in ws
+                    .e1
+                    .iter_mut()
+                    .zip(&ws.rhs1)
+                    .zip(ws.kdx.iter().zip(&ws.atu))
+                {
+                    *e = a - k - c;
+                }
             }
             let rn = inf_norm(&ws.e1).max(inf_norm(&ws.res2));
             if !rn.is_finite() || rn > last {
                 // Diverging (the regularized factor is too far from the exact matrix): undo
-                // the last correction.
+                // the last correction (never the first: `last` starts at ∞).
                 out.dx.copy_from_slice(&ws.prev_dx);
                 out.dz.copy_from_slice(&ws.prev_dz);
                 break;
@@ -567,7 +592,9 @@ impl Newton {
                 break;
             }
         }
-        // Inequality blocks: dz = V⁻¹ξ + V⁻²(r_s + A dx), ds = −r_s − A dx; zero blocks ds = 0.
+        // Far from the target after the refinement: the factorization is too far from the exact
+        // matrix for this direction.
+        let accurate = steps == 0 || last <= 1e2 * rtol * bnorm;
         kkt.apply_a(&out.dx, &mut ws.ax);
         for (bi, cone) in cones.blocks().iter().enumerate() {
             let r = cones.range(bi);
@@ -579,16 +606,17 @@ impl Newton {
             for (j, k) in r.clone().enumerate() {
                 tmp[j] = rs[k] + ws.ax[k];
             }
-            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
+            apply_nt(cone.kind(), sc(bi), tmp, true);
             for (j, k) in r.clone().enumerate() {
                 tmp[j] += xi[k];
             }
-            apply_nt(cone.kind(), &self.sc[bi], tmp, true);
+            apply_nt(cone.kind(), sc(bi), tmp, true);
             for (j, k) in r.enumerate() {
                 out.dz[k] = tmp[j];
                 out.ds[k] = -rs[k] - ws.ax[k];
             }
         }
+        accurate
     }
 }
 
@@ -632,6 +660,18 @@ pub(crate) struct Direction {
     pub dx: Vec<f64>,
     pub ds: Vec<f64>,
     pub dz: Vec<f64>,
+}
+
+impl Work {
+    pub(crate) fn new(n: usize, m: usize) -> Self {
+        Work {
+            g: vec![0.0; n],
+            atz: vec![0.0; n],
+            ax: vec![0.0; m],
+            rx: vec![0.0; n],
+            rs: vec![0.0; m],
+        }
+    }
 }
 
 impl Direction {
@@ -702,14 +742,19 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
     let mut dir = Direction::new(n, m);
     let mut xi = vec![0.0; m];
     let (mut ca, mut cc, mut t1, mut t2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut best: Option<(f64, Point, Residuals)> = None;
+    // The best iterate so far (copied into buffers allocated once).
+    let mut best_total = f64::INFINITY;
+    let mut best = pt.clone();
     let mut polished_best: Option<Solution> = None;
     let mut polish_tried = false;
     let mut iterations = 0;
     let status = loop {
         let (res, _) = evaluate(kkt, &pt, &mut w, floors);
-        if best.as_ref().is_none_or(|b| res.total < b.0) {
-            best = Some((res.total, pt.clone(), res));
+        if iterations == 0 || res.total < best_total {
+            best_total = res.total;
+            best.x.copy_from_slice(&pt.x);
+            best.s.copy_from_slice(&pt.s);
+            best.z.copy_from_slice(&pt.z);
         }
         if !monitor.iterate(&Iterate {
             iteration: iterations,
@@ -718,10 +763,11 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             z: &pt.z,
             residuals: res,
         }) {
-            let (cert, s, objective) = certify(kkt, &pt.x, &pt.z, floors);
+            // The iterate itself (s included), so that the caller can resume from it.
+            let (cert, _, objective) = certify(kkt, &pt.x, &pt.z, floors);
             return Ok(Solution {
                 x: pt.x,
-                s,
+                s: pt.s,
                 z: pt.z,
                 residuals: cert,
                 objective,
@@ -782,7 +828,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             0
         };
         let rtol = (opts.refinement.accuracy * res.total).max(opts.refinement.floor);
-        newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, pred_steps, rtol, &mut aff);
+        let pred_ok = newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, pred_steps, rtol, &mut aff);
         let alpha_a = max_step(&cones, &pt, &aff, 1.0);
         let mut sigma = 0.0;
         if gap > 0.0 {
@@ -808,10 +854,20 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             let mb = r.len();
             ca.clear();
             ca.extend_from_slice(&aff.ds[r.clone()]);
-            apply_nt(kind, &newton.sc[bi], &mut ca, true);
+            apply_nt(
+                kind,
+                &newton.sc[newton.sc_off[bi]..newton.sc_off[bi + 1]],
+                &mut ca,
+                true,
+            );
             cc.clear();
             cc.extend_from_slice(&aff.dz[r.clone()]);
-            apply_nt(kind, &newton.sc[bi], &mut cc, false);
+            apply_nt(
+                kind,
+                &newton.sc[newton.sc_off[bi]..newton.sc_off[bi + 1]],
+                &mut cc,
+                false,
+            );
             t1.resize(mb, 0.0);
             jordan_product(kind, &ca, &cc, &mut t1);
             t2.resize(mb, 0.0);
@@ -830,7 +886,11 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
         } else {
             0
         };
-        newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, steps, rtol, &mut dir);
+        let corr_ok = newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, steps, rtol, &mut dir);
+        if !(pred_ok && corr_ok) && kkt.escalate() {
+            // The backend now factors more exactly: repeat the iteration from the same point.
+            continue;
+        }
         let alpha =
             (opts.step_fraction * max_step(&cones, &pt, &dir, 1.0 / opts.step_fraction)).min(1.0);
         if !(alpha.is_finite() && alpha > 0.0)
@@ -865,7 +925,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
     let from = if status == Status::Converged {
         pt
     } else {
-        best.map(|b| b.1).unwrap_or(pt)
+        best
     };
     let (cert, s, objective) = certify(kkt, &from.x, &from.z, floors);
     let mut out = Solution {

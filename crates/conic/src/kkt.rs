@@ -78,6 +78,23 @@ pub trait KktSystem {
     /// rhs ← K(Θ, σ)⁻¹ rhs with the last factorization.
     fn solve(&mut self, rhs: &mut [f64]);
 
+    /// out = (P + AᵀΘA) v for the Θ of the last factorization (without its σ), if the backend
+    /// has that operator at hand (e.g. the factored system itself); `false` (the default) lets
+    /// the method form it from [`KktSystem::apply_p`], [`KktSystem::apply_a`] and
+    /// [`KktSystem::apply_at`]. Used by iterative refinement when there are no zero cones.
+    fn apply_newton(&mut self, v: &[f64], out: &mut [f64]) -> bool {
+        let _ = (v, out);
+        false
+    }
+
+    /// Called when a direction's iterative refinement stalled far from its target: the last
+    /// factorization is too far from K(Θ, σ). A backend that can factor more exactly (at a
+    /// higher cost) switches to that for the rest of the solve and returns `true`; the method
+    /// then repeats the iteration. The default returns `false` (nothing better to offer).
+    fn escalate(&mut self) -> bool {
+        false
+    }
+
     /// Whether the last factorization is of K(Θ, σ) itself, up to rounding (default false: a
     /// backend that regularizes or eliminates inexactly inside `factor`). With an exact
     /// factorization the method refines its directions only once the iterate is close

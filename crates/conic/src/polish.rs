@@ -71,6 +71,32 @@ fn normal(con: &Con, s: &[f64], range: std::ops::Range<usize>, u: &mut Vec<f64>)
     }
 }
 
+/// Polishes a returned solution (its x, s and z; e.g. one the caller's own certificate does
+/// not accept): the polish of [`crate::solve`] run on demand. `None` if the active set cannot be
+/// formed or no step succeeds; otherwise the polished point with its certificate (keep it only
+/// if that is better).
+pub fn polish_solution<K: KktSystem + ?Sized>(
+    kkt: &mut K,
+    sol: &Solution,
+    opts: &Options,
+) -> Option<Solution> {
+    let (n, m) = (kkt.num_vars(), kkt.cones().rows());
+    if sol.x.len() != n || sol.s.len() != m || sol.z.len() != m {
+        return None;
+    }
+    let floors = crate::ipm::floors(kkt);
+    let pt = Point {
+        x: sol.x.clone(),
+        s: sol.s.clone(),
+        z: sol.z.clone(),
+    };
+    let mut w = crate::ipm::Work::new(n, m);
+    let (res, _) = crate::ipm::evaluate(kkt, &pt, &mut w, floors);
+    let mut out = polish(kkt, &pt, &res, opts, sol.iterations, floors)?;
+    out.status = sol.status;
+    Some(out)
+}
+
 /// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if the active
 /// set cannot be formed (a cone at its apex) or no step succeeds.
 pub(crate) fn polish<K: KktSystem + ?Sized>(

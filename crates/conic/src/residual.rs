@@ -101,12 +101,11 @@ pub(crate) fn certificate(p: &Parts<'_>, cones: &Cones) -> Residuals {
         let r = cones.range(bi);
         primal = primal.max(distance_to_cone(cone.kind(), &p.s[r.clone()]));
         buf.clear();
-        buf.extend_from_slice(&p.z[r]);
-        let orig = buf.clone();
+        buf.extend_from_slice(&p.z[r.clone()]);
         project_dual(cone.kind(), &mut buf);
         let moved = buf
             .iter()
-            .zip(&orig)
+            .zip(&p.z[r])
             .map(|(a, b)| (a - b) * (a - b))
             .sum::<f64>()
             .sqrt();
@@ -148,5 +147,9 @@ fn gap(p: &Parts<'_>, cones: &Cones, force: f64, length: f64) -> f64 {
                 .sum::<f64>();
         }
     }
-    sz.abs() / p.objective.abs().max(f64::EPSILON * force * length)
+    sz.abs()
+        / p.objective
+            .abs()
+            .max(f64::EPSILON * force * length)
+            .max(f64::MIN_POSITIVE)
 }

@@ -85,7 +85,7 @@ impl Weights {
     }
 
     /// Sets Θ_b = V⁻² for the NT scaling `scaling` of a block of kind `kind`.
-    pub(crate) fn set_nt(&mut self, b: usize, kind: Kind, scaling: &[f64]) {
+    pub fn set_nt(&mut self, b: usize, kind: Kind, scaling: &[f64]) {
         self.start[b] = self.data.len();
         self.data.extend_from_slice(scaling);
         self.tags[b] = Tag::Nt(kind);

@@ -6,6 +6,7 @@ use energy::{Hessian, System};
 use super::algorithm::{FixedProblem, FixedSolution};
 use super::operator::{self, Stencil};
 use super::problem::Constraint;
+use crate::backend::condensed::PointSet;
 use crate::Error;
 
 /// Relative floor of the paper iteration's weights: w_i ≥ PAPER_WEIGHT_FLOOR · mean(H_jj).
@@ -87,10 +88,10 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             _ => {}
         }
     }
-    // Balls alone: the interior-point method condensed onto the data vertices
-    // (super::condensed), accepted when the independent certificate reaches the target.
-    if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
-        match condensed_balls(fp, radii)? {
+    // Data constraints alone: the interior-point method condensed onto the data vertices
+    // (crate::backend), accepted when the independent certificate reaches the target.
+    if let (Some(sets), false) = (condensed_sets(fp), has_extra_constraints(fp)) {
+        match condensed_data(fp, &sets)? {
             Ok(sol) => return Ok(sol),
             // The full-vertex fallbacks cost minutes beyond the general solver's size limit
             // (a 10-point star with k = 10⁶ ran 15 minutes): refuse with the best residual.
@@ -184,43 +185,99 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     Ok(best)
 }
 
-/// The condensed interior-point solution of balls alone ([`super::condensed`]) if its
+/// The data constraint of each point as the condensed backend's sets, or `None` when the
+/// condensed method does not apply (no data constraint, or an unconstrained point where the
+/// condensation must start: point 0, and the last point of an open curve).
+fn condensed_sets(fp: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
+    use crate::backend::condensed::Face;
+    let n = fp.q.len();
+    let sets: Vec<Option<PointSet>> = match fp.constraint {
+        Constraint::Balls(r) => r
+            .iter()
+            .map(|&e| {
+                Some(if e == 0.0 {
+                    PointSet::Fixed
+                } else {
+                    PointSet::Ball(e)
+                })
+            })
+            .collect(),
+        Constraint::HalfSpaces(sets) => sets
+            .iter()
+            .map(|set| {
+                (!set.is_empty()).then(|| {
+                    PointSet::Faces(
+                        set.iter()
+                            .map(|h| {
+                                let norm = h.normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+                                Face {
+                                    normal: h.normal.iter().map(|x| x / norm).collect(),
+                                    offset: h.offset / norm,
+                                    norm,
+                                }
+                            })
+                            .collect(),
+                    )
+                })
+            })
+            .collect(),
+        _ => return None,
+    };
+    // The condensation needs data rows: two points of a closed curve (one would couple its row
+    // to itself), three of an open one (whose end rows are zero).
+    let constrained = sets.iter().filter(|s| s.is_some()).count();
+    let enough = if fp.knots.is_closed() {
+        constrained >= 2
+    } else {
+        constrained >= 3 && sets[n - 1].is_some()
+    };
+    (sets[0].is_some() && enough).then_some(sets)
+}
+
+/// The condensed working-set solution of data constraints alone ([`crate::backend`]) if its
 /// certificate is at most [`super::exact::EXACT_KKT_TARGET`]; otherwise (use a fallback) the
 /// iterations spent and the best certificate reached (∞ if the method failed).
-fn condensed_balls(
+fn condensed_data(
     fp: &FixedProblem<'_>,
-    radii: &[f64],
+    sets: &[Option<PointSet>],
 ) -> Result<Result<FixedSolution, (usize, f64)>, Error> {
     let stencil = Stencil::new(fp.knots);
     let mut iterations = 0;
     let mut best = f64::INFINITY;
-    for tolerance in [
-        super::condensed::CONDENSED_TOLERANCE,
-        super::condensed::CONDENSED_STRICT_TOLERANCE,
-    ] {
+    // The method's default tolerance, then a stricter one when the certificate is not reached
+    // (its active set, read off at the default, was not settled enough for the polish).
+    for tolerance in [1e-10, 1e-13] {
+        let opts = conic::Options::default().with_tolerance(tolerance);
+        let mut judge = |p: &Points, m: &[Vec<f64>]| {
+            let (cert, mult) = super::certify::certify(
+                &stencil,
+                p,
+                fp.q,
+                fp.data_vertex,
+                fp.constraint,
+                Some(m.to_vec()),
+                super::certify::ACTIVE_REL_TOL,
+                &[],
+            );
+            (cert.kkt_residual, (cert, mult))
+        };
         // A failure of the method (not converged) only means the fallbacks run.
-        let Ok(sol) = super::condensed::solve_balls(
+        let Ok(sol) = crate::backend::working_set::solve(
             fp.knots,
             &stencil,
             fp.q,
-            radii,
+            sets,
             fp.stride,
-            tolerance,
+            &opts,
+            &crate::backend::working_set::WorkingSetOptions::default(),
             fp.working_set,
+            &mut judge,
+            super::exact::EXACT_KKT_TARGET,
         ) else {
             return Ok(Err((iterations, best)));
         };
         iterations += sol.iterations;
-        let (cert, mult) = super::certify::certify(
-            &stencil,
-            &sol.points,
-            fp.q,
-            fp.data_vertex,
-            fp.constraint,
-            Some(sol.multipliers.clone()),
-            super::certify::ACTIVE_REL_TOL,
-            &[],
-        );
+        let (cert, mult) = sol.certificate;
         if cert.kkt_residual <= super::exact::EXACT_KKT_TARGET {
             return Ok(Ok(FixedSolution {
                 points: sol.points,
