@@ -10,7 +10,8 @@
 //! |---|---|
 //! | [`divdiff`] | knots, divided differences, discrete derivatives, parametrizations (Kersey §2) |
 //! | [`energy`] | the discrete energy E = ½pᵀHp, its identities and gradients, O(N) banded solves (Kersey §2) |
-//! | [`refine`] | Kersey's variational refinement (§3–4), Khan et al.'s n-ary schemes, Warren–Weimer's natural cubic subdivision |
+//! | [`refine`] | Kersey's variational refinement (§3–4) |
+//! | [`subdivision`] | Khan et al.'s (2m+2)-point n-ary schemes for curves and tensor-product surfaces, Warren–Weimer's natural cubic subdivision (§6.2–6.3) |
 //! | [`strip`] | best interpolation in a strip (Dontchev–Kolmanovsky) |
 //!
 //! plus [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line, callable in-process).
@@ -29,6 +30,7 @@ pub use divdiff;
 pub use energy;
 pub use refine;
 pub use strip;
+pub use subdivision;
 
 /// The vocabulary most programs need: `use curvefit::prelude::*;`.
 pub mod prelude {

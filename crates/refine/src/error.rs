@@ -11,17 +11,6 @@ pub enum Error {
     /// A failure of the cone solver (from `conic`) not mapped to a variant of this crate.
     #[error(transparent)]
     Conic(conic::Error),
-    /// A subdivision-scheme parameter is out of its valid range (e.g. an odd number of stencil
-    /// points, arity 1, a grid with one row).
-    #[error("{field} = {value} is invalid: {reason}")]
-    SchemeParameter {
-        /// The parameter (e.g. `"points"`, `"arity"`, `"rows"`).
-        field: &'static str,
-        /// The value given.
-        value: usize,
-        /// Why it is invalid.
-        reason: &'static str,
-    },
     /// The requested result would exceed a documented size limit (or overflow `usize`).
     #[error("{field}: the result would exceed the limit of {limit}")]
     TooLarge {
@@ -29,18 +18,6 @@ pub enum Error {
         field: &'static str,
         /// The limit that would be exceeded.
         limit: usize,
-    },
-    /// A quad mesh can be written as OBJ only for points in R^2 or R^3.
-    #[error("OBJ output needs points in R^2 or R^3, got dimension {dim}")]
-    ObjDimension {
-        /// The dimension of the grid's points.
-        dim: usize,
-    },
-    /// An exact linear system of a rule derivation turned out singular (pivot `index`).
-    #[error("exact rule derivation: singular system at pivot {index}")]
-    SingularExactSystem {
-        /// The pivot (row) at which elimination failed.
-        index: usize,
     },
     /// Too few data points for the curve's topology (`needed` is the smallest valid n).
     #[error("points: {topology} curve needs at least {needed} data points, got {got}")]

@@ -1,11 +1,11 @@
-//! Variational refinement of curves (Kersey §3–4) and uniform interpolating subdivision.
+//! Variational refinement of curves (Kersey §3–4).
 //!
 //! Implements S. N. Kersey, *near-interpolatory variational refinement of piecewise-linear
 //! curves* (J. Comput. Appl. Math. 223, 2009; seed `000_8a81be4d4deadca6.txt`) §3–4 on top of
 //! [`divdiff`] (knots, points, parametrizations) and [`energy`] (the Hessian H of (2.1) and its
 //! O(N) solves), for open and closed curves in R^d, any d ≥ 1. Indices are 0-based (the seed's
-//! are 1-based). The uniform (2m+2)-point n-ary schemes of Khan et al. and Warren–Weimer's
-//! natural cubic subdivision (§6.3) live in the same crate.
+//! are 1-based). (The uniform subdivision schemes of Khan et al. and Warren–Weimer live in the
+//! `subdivision` crate.)
 //!
 //! # Kersey's refinement
 //!
@@ -84,7 +84,6 @@ mod conic_problem;
 mod error;
 mod freeknots;
 mod kersey;
-mod schemes;
 
 pub use conic_problem::{
     ConicConstraint, ConicOptions, ConicProblem, ConicSolution, ConvexSet, ACTIVE_RTOL,
@@ -92,4 +91,3 @@ pub use conic_problem::{
 pub use error::Error;
 pub use freeknots::*;
 pub use kersey::*;
-pub use schemes::*;

@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 
 use divdiff::{Points, Topology};
-use refine::{NaryScheme, NaturalScheme};
+use subdivision::{NaryScheme, NaturalScheme};
 
 use super::{time_median, Opts};
 

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use curvefit::plot::{palette, Figure, Marker, Style};
 use divdiff::{Points, Topology};
-use refine::{NaryScheme, NaturalScheme, QuadGrid};
+use subdivision::{NaryScheme, NaturalScheme, QuadGrid};
 
 use super::save;
 

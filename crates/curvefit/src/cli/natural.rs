@@ -7,8 +7,8 @@
 //! "limit_energy": p₀ᵀE₀N₀p₀}`, energies summed over coordinates (E_k = 8^k D₂ᵀD₂; the limit
 //! energy is ∫|p''|² of the limit curve, Theorem 6.4).
 
-use refine::NaturalScheme;
 use serde::{Deserialize, Serialize};
+use subdivision::NaturalScheme;
 
 use super::scheme::validate_rows;
 use super::InputError;

@@ -4,7 +4,7 @@
 //! polygon.
 //!
 //! Result: `{"points": P, "arity": N, "rules": [{"residue": a, "offsets": [−m, …, m+1],
-//! "weights": ["num/den", …], "floats": [...]}, … for a = 0..N−1]}`, meaning
+//! "weights": ["num/den" or "num" for integers, …], "floats": [...]}, … for a = 0..N−1]}`, meaning
 //! p^{k+1}_{N·i+a} = Σ_l weights\[l\] · p^k_{i+offsets\[l\]}. `--surface` adds `"surface_rules":
 //! [{"residue": [a, b], "offsets": [[r, s], …], "weights": [...], "floats": [...]}, …]` (row-major
 //! in (a, b) and in (r, s)). `--apply` adds `"polygon": {"closed", "levels", "input", "output"}`.
@@ -12,12 +12,12 @@
 //! The polygon file (`--apply`) is JSON: `{"points": [[x, y, …], …], "closed": true}` — at least
 //! two points, all of the same dimension d ≥ 1, finite coordinates; `closed` defaults to `true`
 //! (a periodic polygon; `false` keeps the end points and uses one-sided end stencils that keep
-//! the polynomial reproduction, see `refine::NaryScheme`). Unknown fields are an error.
+//! the polynomial reproduction, see `subdivision::NaryScheme`). Unknown fields are an error.
 
 use divdiff::{Points, Topology};
-use refine::{rational_to_f64, BigRational, NaryScheme};
 use serde::Deserialize;
 use serde_json::{json, Value};
+use subdivision::{rational_to_f64, BigRational, NaryScheme};
 
 use super::InputError;
 
@@ -44,9 +44,14 @@ fn yes() -> bool {
     true
 }
 
-/// An exact weight as `"num/den"` (always with a denominator, in lowest terms, den > 0).
+/// An exact weight as `"num/den"` in lowest terms with den > 0, or `"num"` when it is an
+/// integer (den = 1): `"-1/16"`, `"0"`, `"1"`.
 pub fn format_rational(q: &BigRational) -> String {
-    format!("{}/{}", q.numer(), q.denom())
+    if q.is_integer() {
+        q.numer().to_string()
+    } else {
+        format!("{}/{}", q.numer(), q.denom())
+    }
 }
 
 /// Validates rows of points: at least `min` rows, equal dimension ≥ 1, finite coordinates.
@@ -211,7 +216,7 @@ mod tests {
             rules[1]["weights"],
             json!(["-5/81", "20/27", "10/27", "-4/81"])
         );
-        assert_eq!(rules[0]["weights"], json!(["0/1", "1/1", "0/1", "0/1"]));
+        assert_eq!(rules[0]["weights"], json!(["0", "1", "0", "0"]));
         let f = rules[1]["floats"][0].as_f64().unwrap();
         assert!((f + 5.0 / 81.0).abs() < 1e-17);
         assert!(v.get("surface_rules").is_none() && v.get("polygon").is_none());

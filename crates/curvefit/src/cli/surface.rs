@@ -9,13 +9,13 @@
 //! `points` lists the rows × cols grid points row-major (point (i, j) is entry i·cols + j), all of
 //! one dimension d ∈ {2, 3} (OBJ needs 2 or 3; d = 2 is written with z = 0). `closed` = [wrap the
 //! row index i, wrap the column index j] (default both open; open directions use the one-sided end
-//! stencils of `refine::NaryScheme`). `scheme` = the stencil size P = 2m + 2 and the arity N
+//! stencils of `subdivision::NaryScheme`). `scheme` = the stencil size P = 2m + 2 and the arity N
 //! (default {"points": 4, "arity": 2}: Kobbelt's tensor-product 4-point scheme). `levels` default
 //! 1. Result: `{"rows", "cols", "closed", "levels", "points": [...] (row-major), "quads": [[a, b,
 //! c, d], …] (0-based point indices)}`; [`obj_text`] gives the OBJ text for `--obj`.
 
-use refine::{quad_mesh_obj, QuadGrid};
 use serde::{Deserialize, Serialize};
+use subdivision::{quad_mesh_obj, QuadGrid};
 
 use super::scheme::{scheme_from_flags, validate_rows};
 use super::InputError;
@@ -209,7 +209,7 @@ impl super::Command for SurfaceCmd {
         let fine = scheme
             .subdivide_grid(&grid, problem.levels)
             .map_err(|e| match e {
-                refine::Error::TooLarge { .. } => InputError::new("levels", e),
+                subdivision::Error::TooLarge { .. } => InputError::new("levels", e),
                 // Affine combinations with weights > 1 can overflow for coordinates near the
                 // f64 limit.
                 _ => InputError::new(

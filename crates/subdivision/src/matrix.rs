@@ -1,6 +1,6 @@
 //! Small dense matrices of exact rationals, used only to *derive* rules (subdivision and
 //! interpolation matrices of the natural cubic scheme) and to check identities exactly. Sizes
-//! are bounded by [`super::MAX_EXACT_INTERVALS`]; no solve path of the library runs on them.
+//! are bounded by [`crate::MAX_EXACT_INTERVALS`]; no solve path of the library runs on them.
 
 use num_rational::BigRational;
 use num_traits::{One, Zero};
@@ -94,10 +94,44 @@ impl RationalMatrix {
         Some(p)
     }
 
+    /// The determinant (exact Gaussian elimination; 0 for a non-square matrix).
+    pub fn determinant(&self) -> BigRational {
+        let n = self.rows;
+        if self.cols != n {
+            return BigRational::zero();
+        }
+        let mut a = self.data.clone();
+        let mut det = BigRational::one();
+        for k in 0..n {
+            let Some(piv) = (k..n).find(|&r| !a[r * n + k].is_zero()) else {
+                return BigRational::zero();
+            };
+            if piv != k {
+                for j in 0..n {
+                    a.swap(k * n + j, piv * n + j);
+                }
+                det = -det;
+            }
+            let p = a[k * n + k].clone();
+            det *= &p;
+            for r in k + 1..n {
+                if a[r * n + k].is_zero() {
+                    continue;
+                }
+                let f = &a[r * n + k] / &p;
+                for j in k..n {
+                    let v = &f * &a[k * n + j];
+                    a[r * n + j] -= v;
+                }
+            }
+        }
+        det
+    }
+
     /// The matrix with every entry correctly rounded to `f64`, as rows.
     pub fn to_f64_rows(&self) -> Vec<Vec<f64>> {
         (0..self.rows)
-            .map(|i| self.row(i).iter().map(super::rational_to_f64).collect())
+            .map(|i| self.row(i).iter().map(crate::rational_to_f64).collect())
             .collect()
     }
 

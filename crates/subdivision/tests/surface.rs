@@ -10,7 +10,7 @@ use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Signed};
 use proptest::prelude::*;
-use refine::{quad_mesh_obj, rational_to_f64, Error, NaryScheme, QuadGrid};
+use subdivision::{quad_mesh_obj, rational_to_f64, Error, NaryScheme, QuadGrid};
 
 fn q(n: i64, d: i64) -> BigRational {
     BigRational::new(BigInt::from(n), BigInt::from(d))
@@ -311,17 +311,24 @@ fn grid_errors_are_typed() {
     let p = Points::from_rows(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap();
     assert!(matches!(
         QuadGrid::new(1, 3, p.clone(), false, false),
-        Err(Error::SchemeParameter { field: "rows", .. })
+        Err(Error::TooFew { field: "rows", .. })
     ));
     assert!(matches!(
         QuadGrid::new(2, 2, p, false, false),
-        Err(Error::Divdiff(divdiff::Error::LengthMismatch { .. }))
+        Err(Error::WrongLength {
+            field: "points",
+            expected: 4,
+            got: 3
+        })
     ));
     let p4 = Points::from_rows(&[[0.0; 4], [1.0; 4], [2.0; 4], [3.0; 4]]).unwrap();
     let g = QuadGrid::new(2, 2, p4, false, false).unwrap();
     assert!(matches!(
         quad_mesh_obj(&g),
-        Err(Error::ObjDimension { dim: 4 })
+        Err(Error::Unsupported {
+            field: "points",
+            ..
+        })
     ));
     let s = NaryScheme::new(4, 3).unwrap();
     assert!(matches!(

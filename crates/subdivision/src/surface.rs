@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use divdiff::{Points, Topology};
 use num_rational::BigRational;
 
-use super::nary::NaryScheme;
+use crate::nary::{NaryScheme, MAX_SUBDIVISION_COORDS};
 use crate::Error;
 
 /// A regular quad grid of `rows × cols` points in R^d, stored row-major: grid point (i, j) is
@@ -34,8 +34,9 @@ impl QuadGrid {
     /// A grid from its points (row-major) and shape.
     ///
     /// # Errors
-    /// [`Error::SchemeParameter`] if `rows` or `cols` is below 2, [`Error::Divdiff`]
-    /// (`LengthMismatch`) if `points.len() != rows * cols`.
+    /// [`Error::TooFew`] if `rows` or `cols` is below 2, [`Error::TooLarge`] (`rows`) if
+    /// `rows × cols` overflows, [`Error::WrongLength`] (`points`) if
+    /// `points.len() != rows * cols`.
     pub fn new(
         rows: usize,
         cols: usize,
@@ -45,24 +46,24 @@ impl QuadGrid {
     ) -> Result<Self, Error> {
         for (field, value) in [("rows", rows), ("cols", cols)] {
             if value < 2 {
-                return Err(Error::SchemeParameter {
+                return Err(Error::TooFew {
                     field,
-                    value,
-                    reason: "a quad grid needs at least 2 points in each direction",
+                    minimum: 2,
+                    got: value,
                 });
             }
         }
         let expected = rows.checked_mul(cols).ok_or(Error::TooLarge {
             field: "rows",
-            limit: usize::MAX,
+            limit: usize::MAX / cols,
+            got: rows,
         })?;
         if points.len() != expected {
-            return Err(divdiff::Error::LengthMismatch {
+            return Err(Error::WrongLength {
                 field: "points",
                 expected,
                 got: points.len(),
-            }
-            .into());
+            });
         }
         Ok(QuadGrid {
             rows,
@@ -176,8 +177,8 @@ impl NaryScheme {
     /// [`NaryScheme::surface_rules`] in the interior.
     ///
     /// # Errors
-    /// [`Error::TooLarge`] if the result would exceed [`super::MAX_SUBDIVISION_COORDS`]
-    /// coordinates; [`Error::Divdiff`] (`NonFinite`) if it overflows the `f64` range.
+    /// [`Error::TooLarge`] (`levels`) if the result would exceed [`MAX_SUBDIVISION_COORDS`]
+    /// coordinates; [`Error::NonFinite`] (`points`) if it overflows the `f64` range.
     pub fn subdivide_grid(&self, grid: &QuadGrid, levels: usize) -> Result<QuadGrid, Error> {
         let (tr, tc) = (topology(grid.closed_rows), topology(grid.closed_cols));
         let dim = grid.points.dim();
@@ -186,11 +187,14 @@ impl NaryScheme {
         let total = new_rows
             .checked_mul(new_cols)
             .and_then(|c| c.checked_mul(dim))
-            .filter(|&c| c <= super::MAX_SUBDIVISION_COORDS)
-            .ok_or(Error::TooLarge {
+            .unwrap_or(usize::MAX);
+        if total > MAX_SUBDIVISION_COORDS {
+            return Err(Error::TooLarge {
                 field: "levels",
-                limit: super::MAX_SUBDIVISION_COORDS,
-            })?;
+                limit: MAX_SUBDIVISION_COORDS,
+                got: total,
+            });
+        }
         let (mut rows, mut cols) = (grid.rows, grid.cols);
         let mut current = grid.points.coords().to_vec();
         let mut along_cols = Vec::new();
@@ -216,7 +220,7 @@ impl NaryScheme {
         QuadGrid::new(
             rows,
             cols,
-            Points::new(dim, current)?,
+            Points::new(dim, current).map_err(Error::from_output)?,
             grid.closed_rows,
             grid.closed_cols,
         )
@@ -229,20 +233,23 @@ impl NaryScheme {
 ///
 /// ```
 /// use divdiff::Points;
-/// use refine::{quad_mesh_obj, QuadGrid};
+/// use subdivision::{quad_mesh_obj, QuadGrid};
 /// let p = Points::from_rows(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 1.0]])?;
 /// let grid = QuadGrid::new(2, 2, p, false, false)?;
 /// let obj = quad_mesh_obj(&grid)?;
 /// assert!(obj.contains("v 1 1 1\n") && obj.contains("f 1 2 4 3\n"));
-/// # Ok::<(), refine::Error>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
 /// # Errors
-/// [`Error::ObjDimension`] for points outside R^2 and R^3.
+/// [`Error::Unsupported`] (`points`) for points outside R^2 and R^3.
 pub fn quad_mesh_obj(grid: &QuadGrid) -> Result<String, Error> {
     let dim = grid.points.dim();
     if !(2..=3).contains(&dim) {
-        return Err(Error::ObjDimension { dim });
+        return Err(Error::Unsupported {
+            field: "points",
+            reason: "OBJ output needs points in R^2 or R^3",
+        });
     }
     let mut s = String::new();
     let _ = writeln!(

@@ -4,7 +4,7 @@ use divdiff::{Points, Topology};
 use num_bigint::BigInt;
 use num_rational::BigRational;
 
-use super::rational::{lagrange_weights, rational_to_f64};
+use crate::rational::{lagrange_weights, rational_to_f64};
 use crate::Error;
 
 /// Largest number of stencil points 2m + 2 accepted by [`NaryScheme::new`]. The weights grow
@@ -43,7 +43,7 @@ pub const MAX_SUBDIVISION_COORDS: usize = 1 << 30;
 ///
 /// ```
 /// use divdiff::{Points, Topology};
-/// use refine::NaryScheme;
+/// use subdivision::NaryScheme;
 /// let four_point = NaryScheme::new(4, 2)?;
 /// let w = four_point.rule(1);
 /// assert!((w[0] + 1.0 / 16.0).abs() < 1e-16 && (w[1] - 9.0 / 16.0).abs() < 1e-16);
@@ -52,7 +52,7 @@ pub const MAX_SUBDIVISION_COORDS: usize = 1 << 30;
 /// let fine = four_point.subdivide(&square, Topology::Closed, 1)?;
 /// assert_eq!(fine.len(), 8);
 /// assert!((fine.point(1)[0] - 0.5).abs() < 1e-15 && (fine.point(1)[1] + 0.125).abs() < 1e-15);
-/// # Ok::<(), refine::Error>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct NaryScheme {
@@ -99,37 +99,32 @@ impl NaryScheme {
     /// The scheme with `points` = 2m + 2 stencil points and arity n = `arity`.
     ///
     /// # Errors
-    /// [`Error::SchemeParameter`] if `points` is odd, zero or above [`MAX_SCHEME_POINTS`], or if
-    /// `arity` is below 2 or above [`MAX_ARITY`].
+    /// [`Error::TooFew`] if `points` or `arity` is below 2, [`Error::InvalidValue`] if `points`
+    /// is odd, [`Error::TooLarge`] if `points` exceeds [`MAX_SCHEME_POINTS`] or `arity`
+    /// exceeds [`MAX_ARITY`].
     pub fn new(points: usize, arity: usize) -> Result<Self, Error> {
-        if points < 2 || points % 2 != 0 {
-            return Err(Error::SchemeParameter {
+        if points < 2 {
+            return Err(Error::TooFew {
                 field: "points",
-                value: points,
-                reason: "the number of stencil points must be even and at least 2 (2m + 2)",
+                minimum: 2,
+                got: points,
+            });
+        }
+        if points % 2 != 0 {
+            return Err(Error::InvalidValue {
+                field: "points",
+                index: 0,
+                reason: "the number of stencil points must be even (2m + 2)",
             });
         }
         if points > MAX_SCHEME_POINTS {
-            return Err(Error::SchemeParameter {
+            return Err(Error::TooLarge {
                 field: "points",
-                value: points,
-                reason: "at most MAX_SCHEME_POINTS = 32 stencil points",
+                limit: MAX_SCHEME_POINTS,
+                got: points,
             });
         }
-        if arity < 2 {
-            return Err(Error::SchemeParameter {
-                field: "arity",
-                value: arity,
-                reason: "the arity must be at least 2",
-            });
-        }
-        if arity > MAX_ARITY {
-            return Err(Error::SchemeParameter {
-                field: "arity",
-                value: arity,
-                reason: "the arity must be at most MAX_ARITY = 64",
-            });
-        }
+        check_arity(arity)?;
         let exact = rule_table(points, arity);
         let floats = flatten(&exact);
         let m = (points - 2) / 2;
@@ -219,9 +214,9 @@ impl NaryScheme {
     /// n i of level k + 1.
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points, [`Error::TooLarge`] if the result
-    /// would exceed [`MAX_SUBDIVISION_COORDS`] coordinates, [`Error::Divdiff`] (`NonFinite`) if
-    /// the result overflows the `f64` range.
+    /// [`Error::TooFew`] (`points`) for fewer than 2 points, [`Error::TooLarge`] (`levels`) if
+    /// the result would exceed [`MAX_SUBDIVISION_COORDS`] coordinates, [`Error::NonFinite`]
+    /// (`points`) if the result overflows the `f64` range.
     pub fn subdivide(
         &self,
         points: &Points,
@@ -237,7 +232,7 @@ impl NaryScheme {
             self.level_raw(dim, &current, topology, &mut next);
             std::mem::swap(&mut current, &mut next);
         }
-        Ok(Points::new(dim, current)?)
+        Points::new(dim, current).map_err(Error::from_output)
     }
 
     /// One level into a caller-owned buffer (resized as needed, so repeated calls of the same
@@ -258,7 +253,7 @@ impl NaryScheme {
         Ok(())
     }
 
-    pub(super) fn check_size(
+    pub(crate) fn check_size(
         &self,
         count: usize,
         dim: usize,
@@ -266,23 +261,23 @@ impl NaryScheme {
         levels: usize,
         field: &'static str,
     ) -> Result<usize, Error> {
-        let too_large = Error::TooLarge {
-            field,
-            limit: MAX_SUBDIVISION_COORDS,
-        };
-        let n = self
+        let sizes = self
             .refined_count(count, topology, levels)
-            .ok_or(too_large.clone())?;
-        match n.checked_mul(dim) {
-            Some(c) if c <= MAX_SUBDIVISION_COORDS => Ok(n),
-            _ => Err(too_large),
+            .and_then(|n| Some((n, n.checked_mul(dim)?)));
+        match sizes {
+            Some((n, coords)) if coords <= MAX_SUBDIVISION_COORDS => Ok(n),
+            other => Err(Error::TooLarge {
+                field,
+                limit: MAX_SUBDIVISION_COORDS,
+                got: other.map_or(usize::MAX, |(_, coords)| coords),
+            }),
         }
     }
 
     /// One level on raw vertex-major coordinates (`coords.len()` a multiple of `dim`, at least
     /// 2 points — checked by the callers). `dim` may be large: the surface code refines whole
     /// grid rows as single "points".
-    pub(super) fn level_raw(
+    pub(crate) fn level_raw(
         &self,
         dim: usize,
         coords: &[f64],
@@ -513,14 +508,32 @@ fn interior_general(
     }
 }
 
+/// The arity n must lie in 2..=[`MAX_ARITY`] (for schemes and masks alike).
+pub(crate) fn check_arity(arity: usize) -> Result<(), Error> {
+    if arity < 2 {
+        return Err(Error::TooFew {
+            field: "arity",
+            minimum: 2,
+            got: arity,
+        });
+    }
+    if arity > MAX_ARITY {
+        return Err(Error::TooLarge {
+            field: "arity",
+            limit: MAX_ARITY,
+            got: arity,
+        });
+    }
+    Ok(())
+}
+
 fn check_count(count: usize) -> Result<(), Error> {
     if count < 2 {
-        return Err(divdiff::Error::TooFew {
+        return Err(Error::TooFew {
             field: "points",
-            needed: 2,
+            minimum: 2,
             got: count,
-        }
-        .into());
+        });
     }
     Ok(())
 }

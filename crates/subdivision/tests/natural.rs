@@ -11,7 +11,7 @@ use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Zero};
 use proptest::prelude::*;
-use refine::{
+use subdivision::{
     natural_inner_product_matrix, natural_interpolation_matrix, natural_subdivision_matrix,
     upsampling_matrix, NaturalScheme, RationalMatrix,
 };
@@ -467,12 +467,15 @@ proptest! {
 
 #[test]
 fn bad_input_is_a_typed_error() {
-    use refine::Error;
+    use subdivision::Error;
     let scheme = NaturalScheme::new().unwrap();
     let one = Points::from_rows(&[[1.0]]).unwrap();
     assert!(matches!(
         scheme.subdivide_levels(&one, 1),
-        Err(Error::Divdiff(divdiff::Error::TooFew { .. }))
+        Err(Error::TooFew {
+            field: "points",
+            ..
+        })
     ));
     let two = Points::from_rows(&[[1.0], [2.0]]).unwrap();
     assert!(matches!(
@@ -481,7 +484,7 @@ fn bad_input_is_a_typed_error() {
     ));
     assert!(matches!(
         natural_subdivision_matrix(0, 0),
-        Err(Error::SchemeParameter {
+        Err(Error::TooFew {
             field: "intervals",
             ..
         })

@@ -11,7 +11,7 @@ use num_traits::{One, ToPrimitive, Zero};
 /// that node.
 ///
 /// ```
-/// use refine::{lagrange_weights, BigRational};
+/// use subdivision::{lagrange_weights, BigRational};
 /// // The 4-point binary rule: nodes −1..2 at x = 1/2 give (−1, 9, 9, −1)/16.
 /// let w = lagrange_weights(-1, 4, &BigRational::new(1.into(), 2.into()));
 /// let expect: Vec<BigRational> = [-1, 9, 9, -1]

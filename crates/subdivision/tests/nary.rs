@@ -10,7 +10,7 @@ use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Pow, Signed, Zero};
 use proptest::prelude::*;
-use refine::{rational_to_f64, Error, NaryScheme};
+use subdivision::{rational_to_f64, Error, NaryScheme};
 
 fn q(n: i64, d: i64) -> BigRational {
     BigRational::new(BigInt::from(n), BigInt::from(d))
@@ -287,39 +287,52 @@ fn short_open_polygon_reproduces_its_own_degree() {
 fn bad_parameters_are_typed_errors() {
     assert!(matches!(
         NaryScheme::new(3, 2),
-        Err(Error::SchemeParameter {
+        Err(Error::InvalidValue {
             field: "points",
-            value: 3,
             ..
         })
     ));
     assert!(matches!(
         NaryScheme::new(0, 2),
-        Err(Error::SchemeParameter {
+        Err(Error::TooFew {
             field: "points",
-            ..
+            minimum: 2,
+            got: 0
         })
     ));
     assert!(matches!(
         NaryScheme::new(4, 1),
-        Err(Error::SchemeParameter {
+        Err(Error::TooFew {
             field: "arity",
-            value: 1,
-            ..
+            minimum: 2,
+            got: 1
         })
     ));
     assert!(matches!(
         NaryScheme::new(34, 2),
-        Err(Error::SchemeParameter {
+        Err(Error::TooLarge {
             field: "points",
-            ..
+            limit: 32,
+            got: 34
+        })
+    ));
+    assert!(matches!(
+        NaryScheme::new(4, 65),
+        Err(Error::TooLarge {
+            field: "arity",
+            limit: 64,
+            got: 65
         })
     ));
     let s = NaryScheme::new(4, 2).unwrap();
     let one = Points::from_rows(&[[1.0, 2.0]]).unwrap();
     assert!(matches!(
         s.subdivide(&one, Topology::Closed, 1),
-        Err(Error::Divdiff(divdiff::Error::TooFew { .. }))
+        Err(Error::TooFew {
+            field: "points",
+            minimum: 2,
+            got: 1
+        })
     ));
     let two = Points::from_rows(&[[1.0, 2.0], [3.0, 4.0]]).unwrap();
     assert!(matches!(

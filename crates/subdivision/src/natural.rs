@@ -16,8 +16,8 @@ use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Zero};
 
-use super::dense::{solve, RationalMatrix};
-use super::rational::rational_to_f64;
+use crate::matrix::{solve, RationalMatrix};
+use crate::rational::rational_to_f64;
 use crate::Error;
 
 /// Largest number of grid intervals 2^k L of the exact (rational) matrices
@@ -31,21 +31,25 @@ pub const MAX_NATURAL_COORDS: usize = 1 << 30;
 /// Number of grid intervals 2^level · L, validated against [`MAX_EXACT_INTERVALS`].
 fn exact_intervals(intervals: usize, level: usize) -> Result<usize, Error> {
     if intervals == 0 {
-        return Err(Error::SchemeParameter {
+        return Err(Error::TooFew {
             field: "intervals",
-            value: 0,
-            reason: "the interval [0, L] needs L >= 1",
+            minimum: 1,
+            got: 0,
         });
     }
-    u32::try_from(level)
+    let n = u32::try_from(level)
         .ok()
         .and_then(|l| 1usize.checked_shl(l))
         .and_then(|f| f.checked_mul(intervals))
-        .filter(|&n| n <= MAX_EXACT_INTERVALS)
-        .ok_or(Error::TooLarge {
+        .unwrap_or(usize::MAX);
+    if n > MAX_EXACT_INTERVALS {
+        return Err(Error::TooLarge {
             field: "level",
             limit: MAX_EXACT_INTERVALS,
-        })
+            got: n,
+        });
+    }
+    Ok(n)
 }
 
 /// The inner-product matrix E_level = 8^level D₂ᵀD₂ on the grid 2^{−level} Z ∩ [0, L]
@@ -53,8 +57,8 @@ fn exact_intervals(intervals: usize, level: usize) -> Result<usize, Error> {
 /// rows 8^level (1, −2, 1) and 8^level (−2, 5, −4, 1) (Warren–Weimer §6.2.2).
 ///
 /// # Errors
-/// [`Error::SchemeParameter`] for L = 0, [`Error::TooLarge`] if 2^level L exceeds
-/// [`MAX_EXACT_INTERVALS`].
+/// [`Error::TooFew`] (`intervals`) for L = 0, [`Error::TooLarge`] (`level`) if 2^level L
+/// exceeds [`MAX_EXACT_INTERVALS`].
 pub fn natural_inner_product_matrix(
     intervals: usize,
     level: usize,
@@ -104,22 +108,22 @@ pub fn upsampling_matrix(intervals: usize, level: usize) -> Result<RationalMatri
 /// and pentadiagonal, so it is solved by banded elimination without pivoting.
 ///
 /// ```
-/// use refine::{natural_subdivision_matrix, BigRational};
+/// use subdivision::{natural_subdivision_matrix, BigRational};
 /// let s = natural_subdivision_matrix(4, 0)?; // [0, 4]: 9 × 5
 /// let eighth = BigRational::new(1.into(), 8.into());
 /// assert_eq!(s.get(4, 1), &eighth); // row 2j: (1/8, 3/4, 1/8) around column j
 /// assert_eq!(s.get(0, 0), &BigRational::from_integer(1.into()));
-/// # Ok::<(), refine::Error>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
 /// # Errors
-/// As [`natural_inner_product_matrix`] for the finer grid; [`Error::SingularExactSystem`]
+/// As [`natural_inner_product_matrix`] for the finer grid; [`Error::Singular`]
 /// cannot occur for these matrices but is reported rather than panicking.
 pub fn natural_subdivision_matrix(intervals: usize, level: usize) -> Result<RationalMatrix, Error> {
     let ef = natural_inner_product_matrix(intervals, level + 1)?;
     let ec = natural_inner_product_matrix(intervals, level)?;
     let u = upsampling_matrix(intervals, level)?;
-    let rhs = u.mul(&ec).ok_or(Error::SingularExactSystem { index: 0 })?;
+    let rhs = u.mul(&ec).ok_or(Error::Singular { index: 0 })?;
     let (nf, nc) = (ef.rows(), ec.rows());
     let mut s = RationalMatrix::zeros(nf, nc);
     s.set(0, 0, BigRational::one());
@@ -143,7 +147,7 @@ pub fn natural_subdivision_matrix(intervals: usize, level: usize) -> Result<Rati
     // Banded elimination (half-bandwidth 2); no fill-in outside the band without pivoting.
     for k in 0..m {
         if a.get(k, k).is_zero() {
-            return Err(Error::SingularExactSystem { index: k });
+            return Err(Error::Singular { index: k });
         }
         for r in k + 1..(k + 3).min(m) {
             let f = a.get(r, k) / a.get(k, k);
@@ -185,7 +189,7 @@ pub fn natural_subdivision_matrix(intervals: usize, level: usize) -> Result<Rati
 /// columns j−1..j+1. The tests check that the resulting matrices satisfy the full recurrence.
 ///
 /// # Errors
-/// As [`natural_subdivision_matrix`]; [`Error::SingularExactSystem`] (with the row j) if some
+/// As [`natural_subdivision_matrix`]; [`Error::Singular`] (with the row j) if some
 /// A_j had no unique normalized fixed point.
 pub fn natural_interpolation_matrix(
     intervals: usize,
@@ -200,7 +204,7 @@ pub fn natural_interpolation_matrix(
             ((2 * j).saturating_sub(1)..=(2 * j + 1).min(s.rows() - 1)).collect();
         let k = cols.len();
         if rows.len() != k {
-            return Err(Error::SingularExactSystem { index: j });
+            return Err(Error::Singular { index: j });
         }
         // (A_jᵀ − I) νᵀ = 0 has rank k − 1; replace one equation by Σ ν = 1, trying each
         // equation in turn, and accept a solution only if it satisfies all k equations.
@@ -236,7 +240,7 @@ pub fn natural_interpolation_matrix(
                 }
             }
         }
-        let nu = found.ok_or(Error::SingularExactSystem { index: j })?;
+        let nu = found.ok_or(Error::Singular { index: j })?;
         for (c, v) in cols.iter().zip(nu) {
             n.set(j, *c, v);
         }
@@ -470,14 +474,14 @@ impl Template {
 ///
 /// ```
 /// use divdiff::Points;
-/// use refine::NaturalScheme;
+/// use subdivision::NaturalScheme;
 /// let scheme = NaturalScheme::new()?;
 /// let p0 = Points::from_rows(&[[0.0], [1.0], [0.0], [1.0], [0.0]])?;
 /// let levels = scheme.subdivide_levels(&p0, 3)?;
 /// let energies: Vec<f64> = (0..=3).map(|k| NaturalScheme::energy(&levels[k], k)).collect();
 /// let exact = scheme.limit_energy(&p0)?; // p0ᵀ E0 N0 p0, Theorem 6.4
 /// assert!(energies.windows(2).all(|w| w[1] < w[0]) && energies[3] > exact);
-/// # Ok::<(), refine::Error>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct NaturalScheme {
@@ -495,12 +499,11 @@ fn derive_n(l: usize) -> Result<RationalMatrix, Error> {
 
 fn check_points(points: &Points) -> Result<usize, Error> {
     if points.len() < 2 {
-        return Err(divdiff::Error::TooFew {
+        return Err(Error::TooFew {
             field: "points",
-            needed: 2,
+            minimum: 2,
             got: points.len(),
-        }
-        .into());
+        });
     }
     Ok(points.len() - 1)
 }
@@ -509,7 +512,7 @@ impl NaturalScheme {
     /// Derives the rules (exactly, from the two-scale relation; see the module docs).
     ///
     /// # Errors
-    /// [`Error::SingularExactSystem`] — does not occur for these matrices.
+    /// [`Error::Singular`] — does not occur for these matrices.
     pub fn new() -> Result<Self, Error> {
         Ok(NaturalScheme {
             subdivision: Template::new(2, derive_s)?,
@@ -520,7 +523,7 @@ impl NaturalScheme {
     /// The subdivision matrix for L intervals as sparse rows (column, exact weight, `f64`).
     ///
     /// # Errors
-    /// [`Error::SchemeParameter`] for L = 0.
+    /// [`Error::TooFew`] (`intervals`) for L = 0.
     pub fn subdivision_rows(&self, intervals: usize) -> Result<Vec<SparseRow>, Error> {
         self.subdivision.rows_for(intervals)
     }
@@ -528,7 +531,7 @@ impl NaturalScheme {
     /// The interpolation matrix N for L intervals as sparse rows.
     ///
     /// # Errors
-    /// [`Error::SchemeParameter`] for L = 0.
+    /// [`Error::TooFew`] (`intervals`) for L = 0.
     pub fn interpolation_rows(&self, intervals: usize) -> Result<Vec<SparseRow>, Error> {
         self.interpolation.rows_for(intervals)
     }
@@ -537,18 +540,18 @@ impl NaturalScheme {
     /// [0, L] is S_0 on [0, 2^k L]).
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
+    /// [`Error::TooFew`] (`points`) for fewer than 2 points.
     pub fn subdivide_once(&self, points: &Points) -> Result<Points, Error> {
         let mut out = Vec::new();
         self.subdivide_once_into(points, &mut out)?;
-        Ok(Points::new(points.dim(), out)?)
+        Points::new(points.dim(), out).map_err(Error::from_output)
     }
 
     /// One level into a caller-owned buffer (resized as needed; repeated calls of the same size
     /// do not allocate): `out` receives S_k p_k, vertex-major, dimension `points.dim()`.
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
+    /// [`Error::TooFew`] (`points`) for fewer than 2 points.
     pub fn subdivide_once_into(&self, points: &Points, out: &mut Vec<f64>) -> Result<(), Error> {
         let l = check_points(points)?;
         let rows = self.subdivision.float_rows_for(l)?;
@@ -559,25 +562,25 @@ impl NaturalScheme {
     /// The polygons p_0, p_1, …, p_levels of `levels` rounds of subdivision from p_0 = `points`.
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points, [`Error::TooLarge`] if the last
-    /// level would exceed [`MAX_NATURAL_COORDS`] coordinates (counting all levels).
+    /// [`Error::TooFew`] (`points`) for fewer than 2 points, [`Error::TooLarge`] (`levels`) if
+    /// the levels together would exceed [`MAX_NATURAL_COORDS`] coordinates.
     pub fn subdivide_levels(&self, points: &Points, levels: usize) -> Result<Vec<Points>, Error> {
         let l = check_points(points)?;
-        let too_large = Error::TooLarge {
-            field: "levels",
-            limit: MAX_NATURAL_COORDS,
-        };
+        // Σ_k (2^k L + 1) d, saturating, stopping as soon as it exceeds the limit.
         let mut total = 0usize;
         for k in 0..=levels {
             let n = u32::try_from(k)
                 .ok()
                 .and_then(|k| 1usize.checked_shl(k))
-                .and_then(|f| f.checked_mul(l))
-                .and_then(|n| (n + 1).checked_mul(points.dim()))
-                .ok_or(too_large.clone())?;
-            total = total.checked_add(n).ok_or(too_large.clone())?;
+                .and_then(|f| f.checked_mul(l)?.checked_add(1)?.checked_mul(points.dim()))
+                .unwrap_or(usize::MAX);
+            total = total.saturating_add(n);
             if total > MAX_NATURAL_COORDS {
-                return Err(too_large);
+                return Err(Error::TooLarge {
+                    field: "levels",
+                    limit: MAX_NATURAL_COORDS,
+                    got: total,
+                });
             }
         }
         let mut out = Vec::with_capacity(levels + 1);
@@ -609,20 +612,20 @@ impl NaturalScheme {
     /// these points).
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
+    /// [`Error::TooFew`] (`points`) for fewer than 2 points.
     pub fn limit_values(&self, points: &Points) -> Result<Points, Error> {
         let l = check_points(points)?;
         let rows = self.interpolation.float_rows_for(l)?;
         let mut out = Vec::new();
         rows.apply_into(points.coords(), points.dim(), &mut out);
-        Ok(Points::new(points.dim(), out)?)
+        Points::new(points.dim(), out).map_err(Error::from_output)
     }
 
     /// The exact energy ∫ |p_∞''|² of the limit curve, p_0ᵀ E_0 N_0 p_0 (Theorem 6.4), summed
     /// over coordinates: (D₂ p_0) · (D₂ N_0 p_0).
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 points.
+    /// [`Error::TooFew`] (`points`) for fewer than 2 points.
     pub fn limit_energy(&self, points: &Points) -> Result<f64, Error> {
         let v = self.limit_values(points)?;
         let dim = points.dim();
@@ -644,7 +647,7 @@ impl NaturalScheme {
     /// the system is solved by the Thomas algorithm in O(L).
     ///
     /// # Errors
-    /// [`Error::Divdiff`] (`TooFew`) for fewer than 2 values; [`Error::SingularExactSystem`]
+    /// [`Error::TooFew`] (`points`) for fewer than 2 values; [`Error::Singular`]
     /// if N were not tridiagonal or a pivot vanished (does not occur for natural splines).
     pub fn interpolate(&self, values: &Points) -> Result<Points, Error> {
         let l = check_points(values)?;
@@ -658,7 +661,7 @@ impl NaturalScheme {
                     -1 => sub[i] = *w,
                     0 => diag[i] = *w,
                     1 => sup[i] = *w,
-                    _ => return Err(Error::SingularExactSystem { index: i }),
+                    _ => return Err(Error::Singular { index: i }),
                 }
             }
         }
@@ -673,7 +676,7 @@ impl NaturalScheme {
                 diag[i] - sub[i] * cp[i - 1]
             };
             if piv.abs() <= f64::EPSILON {
-                return Err(Error::SingularExactSystem { index: i });
+                return Err(Error::Singular { index: i });
             }
             cp[i] = sup[i] / piv;
             for d in 0..dim {
@@ -686,6 +689,6 @@ impl NaturalScheme {
                 x[i * dim + d] -= cp[i] * x[(i + 1) * dim + d];
             }
         }
-        Ok(Points::new(dim, x)?)
+        Points::new(dim, x).map_err(Error::from_output)
     }
 }
