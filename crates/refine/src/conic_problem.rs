@@ -14,7 +14,7 @@
 //! [`ConvexSet`]: a ball (3.4), a polytope (3.7), a direction wedge (Fig. 3.5b) or a point.
 //!
 //! The constraint kinds of a [`crate::Problem`] add their rows here
-//! ([`crate::kersey::constraint`]), and both backends read them: the full-vertex backend
+//! ([`crate::constraint`]), and both backends read them: the full-vertex backend
 //! (`backend::full`, every vertex a variable) and the condensed one (`backend::condensed`, only
 //! data vertices, when every constraint acts on a data vertex alone).
 //!
@@ -32,7 +32,7 @@ use divdiff::{Knots, Points, Topology};
 use energy::{Hessian, System};
 
 use crate::backend::full::{merge_stencil, set_scale, FullVertex};
-use crate::kersey::operator::Stencil;
+use crate::operator::Stencil;
 use crate::Error;
 
 /// A convex set in R^d that L_c p must lie in.

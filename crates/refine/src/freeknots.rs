@@ -480,7 +480,7 @@ struct Eval {
 
 /// Solves the fixed-knot problem on `knots` and evaluates F and ∂F/∂h (envelope theorem).
 fn evaluate(problem: &Problem, knots: Knots) -> Result<Eval, Error> {
-    let (points, energy, kkt) = crate::kersey::solve_stage0_on(problem, &knots)?;
+    let (points, energy, kkt) = crate::solve::solve_stage0_on(problem, &knots)?;
     let gt = energy::knot_gradient(&knots, &points)?;
     let s = knots.span_count();
     let mut dh = Vec::with_capacity(s);

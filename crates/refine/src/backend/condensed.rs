@@ -43,8 +43,8 @@ use divdiff::{Knots, Points};
 use energy::{Factor, System};
 
 use super::banded::Banded;
-use crate::kersey::fast::Condensation;
-use crate::kersey::operator::Stencil;
+use crate::fast::Condensation;
+use crate::operator::Stencil;
 use crate::Error;
 
 /// ρ of the module docs, relative to the largest diagonal entry of Q.
@@ -916,8 +916,8 @@ mod tests {
 #[cfg(test)]
 mod route_tests {
     use super::{Condensed, Face, PointSet};
-    use crate::kersey::fast::Condensation;
-    use crate::kersey::operator::Stencil;
+    use crate::fast::Condensation;
+    use crate::operator::Stencil;
     use conic::{KktSystem, Weights};
     use divdiff::{Knots, Topology};
 

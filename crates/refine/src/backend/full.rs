@@ -19,7 +19,7 @@
 //!   vertex it fixes the vertex instead).
 //!
 //! P x + q is evaluated in difference form through the α-rows of A (H = AᵀA,
-//! [`crate::kersey::operator`]), so its rounding scales with the steps between vertices, not
+//! [`crate::operator`]), so its rounding scales with the steps between vertices, not
 //! with |x|: the certificate's force scale is ‖H‖ times those steps.
 
 // The block kernels index several small arrays by the same row/column.
@@ -29,7 +29,7 @@ use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
 use energy::{Factor, System};
 
 use crate::conic_problem::{ConicProblem, ConvexSet};
-use crate::kersey::operator::Stencil;
+use crate::operator::Stencil;
 use crate::Error;
 
 /// Relative pivot tolerance of the Newton systems: positive definite by construction, with

@@ -26,8 +26,8 @@ use conic::{Start, Status};
 use divdiff::{Knots, Points};
 
 use super::condensed::{Condensed, PointSet};
-use crate::kersey::fast::Condensation;
-use crate::kersey::operator::Stencil;
+use crate::fast::Condensation;
+use crate::operator::Stencil;
 use crate::Error;
 
 /// Tuning of the working set, with documented defaults.
@@ -529,10 +529,10 @@ mod tests {
 
     use super::super::condensed::{Face, PointSet};
     use super::{solve_from, WorkingSetOptions};
+    use crate::certify::{certify, Certificate, ACTIVE_REL_TOL};
     use crate::conic_problem::{ConicProblem, ConvexSet};
-    use crate::kersey::certify::{certify, Certificate, ACTIVE_REL_TOL};
-    use crate::kersey::fast::{interpolate, Condensation};
-    use crate::kersey::operator::Stencil;
+    use crate::fast::{interpolate, Condensation};
+    use crate::operator::Stencil;
     use crate::{Constraint, HalfSpace};
 
     /// The exact acceptance level of the refinement (the independent certificate).

@@ -7,7 +7,7 @@
 //! there (all multipliers vanish and ker H is not pinned down), so the constant curve is
 //! returned directly.
 
-use super::problem::{Constraint, Problem};
+use crate::problem::{Constraint, Problem};
 
 /// Sweeps of alternating projections onto the constraint sets before giving up on finding a
 /// common point (a cheap necessary test runs first, so this only runs when it can succeed).

@@ -6,9 +6,9 @@
 use divdiff::{derivative_stencil, Points};
 use energy::Hessian;
 
-use super::algorithm::{FixedProblem, FixedSolution};
-use super::problem::{Boundary, Constraint, Tangent};
+use crate::algorithm::{FixedProblem, FixedSolution};
 use crate::conic_problem::{ConicOptions, ConicProblem, ConvexSet};
+use crate::problem::{Boundary, Constraint, Tangent};
 use crate::Error;
 
 /// The stricter target of the second conic solve. The conic solver measures complementarity
@@ -37,9 +37,9 @@ enum Origin {
 }
 
 /// Derivative-constraint forces: (stencil, force z_c) with Σ_c L_cᵀ z_c in the stationarity.
-pub(crate) type StencilForces = Vec<super::certify::StencilForce>;
+pub(crate) type StencilForces = Vec<crate::certify::StencilForce>;
 
-fn halfspaces(set: &[super::problem::HalfSpace]) -> ConvexSet {
+fn halfspaces(set: &[crate::problem::HalfSpace]) -> ConvexSet {
     ConvexSet::HalfSpaces(set.iter().map(|h| (h.normal.clone(), h.offset)).collect())
 }
 

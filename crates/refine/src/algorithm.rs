@@ -3,11 +3,11 @@
 
 use divdiff::{Knots, Parametrization, Points};
 
-use super::certify::{certify, Certificate, ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
-use super::operator::Stencil;
-use super::problem::{Constraint, Problem, Solver};
-use super::{degenerate, fixed};
+use crate::certify::{certify, Certificate, ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
+use crate::operator::Stencil;
+use crate::problem::{Constraint, Problem, Solver};
 use crate::Error;
+use crate::{degenerate, fixed};
 
 /// Iteration counts of a refinement.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -85,7 +85,7 @@ pub(crate) struct FixedSolution {
     /// The α-stencil of the knots, when the solver built it (reused by the certificate).
     pub stencil: Option<Stencil>,
     /// Derivative-constraint forces (stencil, z_c) for the certificate's stationarity.
-    pub extra: super::exact::StencilForces,
+    pub extra: crate::exact::StencilForces,
     /// The conic solver's own relative KKT residual, when it ran (its primal and
     /// complementarity parts cover the derivative constraints).
     pub solver_kkt: Option<f64>,
@@ -104,7 +104,7 @@ pub(crate) struct FixedProblem<'a> {
     /// The data vertices are 0, stride, 2·stride, … (stride = k + 1).
     pub stride: usize,
     /// The knots are exactly the k-level split (3.1) of the data knots (each data span divided
-    /// into `stride` equal sub-spans), so the closed forms of [`super::uniform`] apply.
+    /// into `stride` equal sub-spans), so the closed forms of [`crate::uniform`] apply.
     pub uniform_spans: bool,
     /// Balls that start the working set of the condensed balls method (those active in the
     /// previous knot iteration's solution); `None`: the default start.

@@ -1,34 +1,8 @@
-//! Kersey's variational refinement: split, interpolation, balls, smoothing, Algorithm 4.1.
+//! Solving a [`Problem`]: Algorithm 4.1 on centred data, the closed-form interpolatory
+//! refinement, and the stage-0 solve the free-knot optimizer calls.
 
-mod algorithm;
-pub(crate) mod certify;
-mod degenerate;
-mod exact;
-pub(crate) mod fast;
-mod fixed;
-pub(crate) mod operator;
-mod problem;
-mod slots;
-mod split;
-mod uniform;
-
-pub use algorithm::{Iterations, Refinement, Stage};
-pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
-pub use degenerate::{COMMON_POINT_STAGNATION, COMMON_POINT_SWEEPS, COMMON_POINT_TOL};
-pub use divdiff::{DerivativeRule, Parametrization};
-pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};
-pub use fixed::{
-    BALL_POLISH_ACTIVE_RTOL, BALL_POLISH_NEWTON_STEPS, BALL_POLISH_ROUNDS, BALL_POLISH_STIFFNESS,
-    HALFSPACE_POLISH_ACTIVE_RTOL, HALFSPACE_POLISH_AL_STEPS, HALFSPACE_POLISH_CHANGE_RTOL,
-    HALFSPACE_POLISH_REFINEMENT_STEPS, HALFSPACE_POLISH_ROUNDS, HALFSPACE_POLISH_STIFFNESS,
-    PAPER_WEIGHT_FLOOR,
-};
-pub use problem::{
-    Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
-    DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
-};
-pub use slots::halfplane_polygon;
-pub use split::{data_vertex, split};
+use crate::problem::{Constraint, Problem, Solver};
+use crate::{algorithm, certify, fixed, operator, uniform, Refinement};
 
 impl Problem {
     /// Validates the problem and runs Algorithm 4.1 (see the crate docs).
@@ -174,7 +148,7 @@ pub(crate) fn solve_stage0_on(
         &dv,
         &problem.constraint,
         s.multipliers,
-        ACTIVE_REL_TOL,
+        certify::ACTIVE_REL_TOL,
         &s.extra,
     );
     let kkt = s

@@ -3,10 +3,10 @@
 use divdiff::{Knots, Points};
 use energy::{Hessian, System};
 
-use super::algorithm::{FixedProblem, FixedSolution};
-use super::operator::{self, Stencil};
-use super::problem::Constraint;
+use crate::algorithm::{FixedProblem, FixedSolution};
 use crate::backend::condensed::PointSet;
+use crate::operator::{self, Stencil};
+use crate::problem::Constraint;
 use crate::Error;
 
 /// Relative floor of the paper iteration's weights: w_i ≥ PAPER_WEIGHT_FLOOR · mean(H_jj).
@@ -97,7 +97,7 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             // (a 10-point star with k = 10⁶ ran 15 minutes): refuse with the best residual.
             Err((iterations, residual))
                 if fp.knots.vertex_count().saturating_mul(fp.q.dim())
-                    > super::problem::MAX_CONIC_COORDS =>
+                    > crate::problem::MAX_CONIC_COORDS =>
             {
                 return Err(Error::NotConverged {
                     solver: "condensed balls",
@@ -116,7 +116,7 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         // the kernel of H) only means this shortcut does not apply.
         if let Ok(start) = paper(fp) {
             if let Ok(Some((polished, kp))) = polish_balls(fp, &start, radii) {
-                if kp <= super::exact::EXACT_KKT_TARGET {
+                if kp <= crate::exact::EXACT_KKT_TARGET {
                     return Ok(FixedSolution {
                         iterations: start.iterations + polished.iterations,
                         ..polished
@@ -126,26 +126,26 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         }
     }
     let certified = |tol: f64| -> Result<(FixedSolution, f64), Error> {
-        let (mut sol, extra, kkt) = super::exact::solve(fp, tol)?;
+        let (mut sol, extra, kkt) = crate::exact::solve(fp, tol)?;
         sol.extra = extra;
         sol.solver_kkt = Some(kkt);
-        let (cert, _) = super::certify::certify(
+        let (cert, _) = crate::certify::certify(
             &Stencil::new(fp.knots),
             &sol.points,
             fp.q,
             fp.data_vertex,
             fp.constraint,
             sol.multipliers.clone(),
-            super::certify::ACTIVE_REL_TOL,
+            crate::certify::ACTIVE_REL_TOL,
             &sol.extra,
         );
         Ok((sol, cert.kkt_residual.max(kkt)))
     };
-    let (first, k1) = certified(super::exact::CONIC_TOLERANCE)?;
-    if k1 <= super::exact::EXACT_KKT_TARGET {
+    let (first, k1) = certified(crate::exact::CONIC_TOLERANCE)?;
+    if k1 <= crate::exact::EXACT_KKT_TARGET {
         return Ok(first);
     }
-    let (mut best, mut k) = match certified(super::exact::EXACT_CONIC_TOLERANCE) {
+    let (mut best, mut k) = match certified(crate::exact::EXACT_CONIC_TOLERANCE) {
         Ok((second, k2)) if k2 < k1 => (
             FixedSolution {
                 iterations: first.iterations + second.iterations,
@@ -156,7 +156,7 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         _ => (first, k1),
     };
     if let (Constraint::Balls(radii), false) = (fp.constraint, has_extra_constraints(fp)) {
-        if k > super::exact::EXACT_KKT_TARGET {
+        if k > crate::exact::EXACT_KKT_TARGET {
             if let Ok(Some((polished, kp))) = polish_balls(fp, &best, radii) {
                 if kp < k {
                     best = FixedSolution {
@@ -169,7 +169,7 @@ pub(crate) fn exact(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         }
     }
     if let (Constraint::HalfSpaces(sets), false) = (fp.constraint, has_extra_constraints(fp)) {
-        if k > super::exact::EXACT_KKT_TARGET {
+        if k > crate::exact::EXACT_KKT_TARGET {
             if let Ok(Some((polished, kp))) = polish_halfspaces(fp, &best, sets) {
                 if kp < k {
                     best = FixedSolution {
@@ -235,7 +235,7 @@ fn condensed_sets(fp: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
 }
 
 /// The condensed working-set solution of data constraints alone ([`crate::backend`]) if its
-/// certificate is at most [`super::exact::EXACT_KKT_TARGET`]; otherwise (use a fallback) the
+/// certificate is at most [`crate::exact::EXACT_KKT_TARGET`]; otherwise (use a fallback) the
 /// iterations spent and the best certificate reached (∞ if the method failed).
 fn condensed_data(
     fp: &FixedProblem<'_>,
@@ -249,14 +249,14 @@ fn condensed_data(
     for tolerance in [1e-10, 1e-13] {
         let opts = conic::Options::default().with_tolerance(tolerance);
         let mut judge = |p: &Points, m: &[Vec<f64>]| {
-            let (cert, mult) = super::certify::certify(
+            let (cert, mult) = crate::certify::certify(
                 &stencil,
                 p,
                 fp.q,
                 fp.data_vertex,
                 fp.constraint,
                 Some(m.to_vec()),
-                super::certify::ACTIVE_REL_TOL,
+                crate::certify::ACTIVE_REL_TOL,
                 &[],
             );
             (cert.kkt_residual, (cert, mult))
@@ -272,13 +272,13 @@ fn condensed_data(
             &crate::backend::working_set::WorkingSetOptions::default(),
             fp.working_set,
             &mut judge,
-            super::exact::EXACT_KKT_TARGET,
+            crate::exact::EXACT_KKT_TARGET,
         ) else {
             return Ok(Err((iterations, best)));
         };
         iterations += sol.iterations;
         let (cert, mult) = sol.certificate;
-        if cert.kkt_residual <= super::exact::EXACT_KKT_TARGET {
+        if cert.kkt_residual <= crate::exact::EXACT_KKT_TARGET {
             return Ok(Ok(FixedSolution {
                 points: sol.points,
                 multipliers: Some(sol.multipliers),
@@ -386,14 +386,14 @@ fn polish_balls(
             continue;
         }
         let certify_here = |p: &Points, m: &[Vec<f64>]| {
-            super::certify::certify(
+            crate::certify::certify(
                 &Stencil::new(fp.knots),
                 p,
                 fp.q,
                 fp.data_vertex,
                 fp.constraint,
                 Some(m.to_vec()),
-                super::certify::ACTIVE_REL_TOL,
+                crate::certify::ACTIVE_REL_TOL,
                 &[],
             )
             .0
@@ -405,7 +405,7 @@ fn polish_balls(
         // tangential positions on the spheres move, with the Lagrangian's curvature w_i I there
         // and the normal direction held by a stiff penalty; then re-project and re-certify.
         for _ in 0..BALL_POLISH_NEWTON_STEPS {
-            if k <= super::exact::EXACT_KKT_TARGET {
+            if k <= crate::exact::EXACT_KKT_TARGET {
                 break;
             }
             // A failed step (e.g. a pivot test tripped by the penalty) only ends the polish.
@@ -478,7 +478,7 @@ pub const HALFSPACE_POLISH_ACTIVE_RTOL: f64 = 1e-6;
 fn polish_halfspaces(
     fp: &FixedProblem<'_>,
     start: &FixedSolution,
-    sets: &[Vec<super::problem::HalfSpace>],
+    sets: &[Vec<crate::problem::HalfSpace>],
 ) -> Result<Option<(FixedSolution, f64)>, Error> {
     let n = fp.q.len();
     let d = fp.q.dim();
@@ -667,14 +667,14 @@ fn polish_halfspaces(
                     .collect()
             })
             .collect();
-        let (cert, _) = super::certify::certify(
+        let (cert, _) = crate::certify::certify(
             &stencil,
             &p,
             fp.q,
             fp.data_vertex,
             fp.constraint,
             Some(multipliers.clone()),
-            super::certify::ACTIVE_REL_TOL,
+            crate::certify::ACTIVE_REL_TOL,
             &[],
         );
         return Ok(Some((
@@ -693,12 +693,12 @@ fn polish_halfspaces(
     Ok(None)
 }
 
-/// Interpolation (3.3) at every data vertex: the closed forms of [`super::uniform`] on the knots
-/// of the split, else the fused banded solver of [`super::fast`].
+/// Interpolation (3.3) at every data vertex: the closed forms of [`crate::uniform`] on the knots
+/// of the split, else the fused banded solver of [`crate::fast`].
 fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     if fp.uniform_spans {
         return Ok(FixedSolution {
-            points: super::uniform::interpolate(fp.knots, fp.q, fp.stride)?,
+            points: crate::uniform::interpolate(fp.knots, fp.q, fp.stride)?,
             multipliers: None,
             iterations: 1,
             stencil: None,
@@ -708,7 +708,7 @@ fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         });
     }
     let stencil = Stencil::new(fp.knots);
-    let p = super::fast::interpolate(fp.knots, &stencil, fp.q, fp.stride)?;
+    let p = crate::fast::interpolate(fp.knots, &stencil, fp.q, fp.stride)?;
     Ok(FixedSolution {
         points: p,
         multipliers: None,
@@ -782,11 +782,11 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
 }
 
 /// The paper's slot iteration for polygonal constraints in the plane (Fig. 4.1; see
-/// [`super::slots`]): one d×d spring block per slot at its data vertex, weights updated by
+/// [`crate::slots`]): one d×d spring block per slot at its data vertex, weights updated by
 /// w := w |u·p − m| / ε.
 fn paper_slots(
     fp: &FixedProblem<'_>,
-    sets: &[Vec<super::problem::HalfSpace>],
+    sets: &[Vec<crate::problem::HalfSpace>],
 ) -> Result<FixedSolution, Error> {
     let d = fp.q.dim();
     if d != 2 {
@@ -801,11 +801,11 @@ fn paper_slots(
             .flat_map(|x| x.iter().map(|v| v.abs()))
             .fold(1.0f64, f64::max)
             * 4.0;
-    let mut all: Vec<Vec<super::slots::Slot>> = Vec::with_capacity(n);
+    let mut all: Vec<Vec<crate::slots::Slot>> = Vec::with_capacity(n);
     for (i, set) in sets.iter().enumerate() {
         let q = fp.q.point(i);
         let s =
-            super::slots::slots(set, [q[0], q[1]], extent).ok_or(Error::InfeasibleConstraint {
+            crate::slots::slots(set, [q[0], q[1]], extent).ok_or(Error::InfeasibleConstraint {
                 field: "sets",
                 point: i,
             })?;

@@ -1,12 +1,12 @@
 //! Certificates of a fixed-knot solution: energy, KKT residual, active set, Corollary 3.3.
 //!
 //! Everything here is recomputed from the points, the knots and the multipliers with the
-//! matrix-free operator of [`super::operator`], independently of the solver that produced them.
+//! matrix-free operator of [`crate::operator`], independently of the solver that produced them.
 
 use divdiff::Points;
 
-use super::operator::Stencil;
-use super::problem::Constraint;
+use crate::operator::Stencil;
+use crate::problem::Constraint;
 
 /// A data vertex counts as active when |p_{i_k} − q_i| ≥ (1 − ACTIVE_REL_TOL) ε_i (balls) or
 /// when n·p ≥ c − ACTIVE_REL_TOL · |n| · scale (half-spaces).
