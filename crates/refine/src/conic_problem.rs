@@ -386,6 +386,24 @@ impl ConicProblem {
     /// curve, e.g. an open curve with less than two constrained vertices),
     /// [`Error::WrongDimension`] for a warm start of the wrong shape.
     pub fn solve(&self, opts: &ConicOptions) -> Result<ConicSolution, Error> {
+        let sol = self.solve_unchecked(opts)?;
+        if sol.kkt.total <= opts.accept {
+            return Ok(sol);
+        }
+        Err(self.diagnose(&sol).unwrap_or(Error::NotConverged {
+            solver: "conic interior-point method",
+            iterations: sol.iterations,
+            residual: sol.kkt.total,
+        }))
+    }
+
+    /// The method's answer whatever its certificate (the caller judges it).
+    ///
+    /// # Errors
+    /// [`Error::Infeasible`] for a constraint that contradicts fixed vertices,
+    /// [`Error::Energy`] when the first Newton matrix is singular, [`Error::WrongDimension`]
+    /// for a warm start of the wrong shape.
+    pub(crate) fn solve_unchecked(&self, opts: &ConicOptions) -> Result<ConicSolution, Error> {
         let mut be = FullVertex::new(self)?;
         let start = match &opts.warm_start {
             Some(w) => {
@@ -405,28 +423,25 @@ impl ConicProblem {
             None => None,
         };
         let sol = conic::solve_with(&mut be, &opts.conic, start, &mut conic::NoMonitor)?;
-        if sol.residuals.total <= opts.accept {
-            return Ok(self.report(&be, &sol));
-        }
-        // Diagnose: an empty polytope is named; otherwise a large primal residual names the most
-        // violated constraint.
+        Ok(self.report(&be, &sol))
+    }
+
+    /// Why a solution that is not certified may be no solution at all: an empty polytope, or
+    /// (with a large primal residual) the most violated constraint, as [`Error::Infeasible`].
+    pub(crate) fn diagnose(&self, sol: &ConicSolution) -> Option<Error> {
         for (c, con) in self.constraints.iter().enumerate() {
             if let ConvexSet::HalfSpaces(hs) = &con.set {
                 if polytope_is_empty(hs, self.dim) {
-                    return Err(Error::Infeasible { constraint: c });
+                    return Some(Error::Infeasible { constraint: c });
                 }
             }
         }
-        if sol.residuals.primal > 1e-6 {
-            if let Some(c) = self.worst_constraint(&sol.x) {
-                return Err(Error::Infeasible { constraint: c });
+        if sol.kkt.primal > 1e-6 {
+            if let Some(c) = self.worst_constraint(sol.points.coords()) {
+                return Some(Error::Infeasible { constraint: c });
             }
         }
-        Err(Error::NotConverged {
-            solver: "conic interior-point method",
-            iterations: sol.iterations,
-            residual: sol.residuals.total,
-        })
+        None
     }
 
     fn constraint_value(&self, con: &ConicConstraint, x: &[f64]) -> Vec<f64> {

@@ -83,44 +83,41 @@ mod algorithm;
 mod backend;
 mod certify;
 mod conic_problem;
+mod constraint;
 mod degenerate;
 mod error;
-mod exact;
 mod fast;
-mod fixed;
 mod freeknots;
+mod linear;
 mod operator;
+mod options;
+mod paper;
 mod problem;
 mod slots;
 mod solve;
 mod split;
+mod stage;
+mod strategy;
 mod uniform;
 
 pub use algorithm::{Iterations, Refinement, Stage};
-pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
 pub use conic_problem::{
     ConicConstraint, ConicOptions, ConicProblem, ConicSolution, ConvexSet, ACTIVE_RTOL,
 };
-pub use degenerate::{COMMON_POINT_STAGNATION, COMMON_POINT_SWEEPS, COMMON_POINT_TOL};
+pub use constraint::{Boundary, Constraint, HalfSpace, Tangent};
 pub use divdiff::{DerivativeRule, Parametrization};
 pub use error::Error;
-pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};
-pub use fixed::{
-    BALL_POLISH_ACTIVE_RTOL, BALL_POLISH_NEWTON_STEPS, BALL_POLISH_ROUNDS, BALL_POLISH_STIFFNESS,
-    HALFSPACE_POLISH_ACTIVE_RTOL, HALFSPACE_POLISH_AL_STEPS, HALFSPACE_POLISH_CHANGE_RTOL,
-    HALFSPACE_POLISH_REFINEMENT_STEPS, HALFSPACE_POLISH_ROUNDS, HALFSPACE_POLISH_STIFFNESS,
-    PAPER_WEIGHT_FLOOR,
-};
 pub use freeknots::{
     optimize_knots, reduced_objective, FreeKnotOptions, FreeKnotResult, FreeKnots, KnotDiagnostics,
     DEFAULT_FREE_KNOT_ITERATIONS, DEFAULT_FREE_KNOT_MEMORY, DEFAULT_FREE_KNOT_TOLERANCE,
     FREE_KNOT_ARMIJO, FREE_KNOT_LINE_SEARCH_STEPS, FREE_KNOT_MAX_STEP, FREE_KNOT_ROUNDING_SLACK,
     FREE_KNOT_ZERO_ENERGY,
 };
+pub use options::{
+    CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
+};
 pub use problem::{
-    Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
-    DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
+    Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
 };
 pub use slots::halfplane_polygon;
-pub use solve::EXACT_ACCEPT_KKT;
 pub use split::{data_vertex, split};

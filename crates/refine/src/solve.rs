@@ -1,8 +1,10 @@
 //! Solving a [`Problem`]: Algorithm 4.1 on centred data, the closed-form interpolatory
 //! refinement, and the stage-0 solve the free-knot optimizer calls.
 
-use crate::problem::{Constraint, Problem, Solver};
-use crate::{algorithm, certify, fixed, operator, uniform, Refinement};
+use crate::constraint::Constraint;
+use crate::problem::{Problem, Solver};
+use crate::stage::FixedProblem;
+use crate::{algorithm, strategy, uniform, Refinement};
 
 impl Problem {
     /// Validates the problem and runs Algorithm 4.1 (see the crate docs).
@@ -34,15 +36,10 @@ impl Problem {
                 *x -= c;
             }
         }
-        if let Constraint::HalfSpaces(sets) = &mut centred.constraint {
-            for h in sets.iter_mut().flatten() {
-                h.offset -= h
-                    .normal
-                    .iter()
-                    .zip(&centroid)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
-            }
+        // Each kind moves its own data with the points (half-space offsets, …).
+        let offset: Vec<f64> = centroid.iter().map(|c| -c).collect();
+        for kind in self.kinds() {
+            kind.translate(&offset, &mut centred);
         }
         let mut r = algorithm::run(&centred)?;
         for j in 0..r.points.len() {
@@ -98,11 +95,11 @@ impl Problem {
         algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)
     }
 
-    /// Refuses an exact result whose independent certificate is above [`EXACT_ACCEPT_KKT`]:
-    /// an answer that is not (nearly) optimal is an error carrying the best residual reached,
-    /// never a result.
+    /// Refuses an exact result whose independent certificate (the largest over its stages) is
+    /// above [`crate::SolveOptions::accept_kkt`]: an answer that is not optimal is an error
+    /// carrying the best residual reached, never a result.
     fn accept(&self, r: Refinement) -> Result<Refinement, crate::Error> {
-        let certified = r.kkt_residual <= EXACT_ACCEPT_KKT; // false for NaN too
+        let certified = r.kkt_residual <= self.options.accept_kkt; // false for NaN too
         if self.solver == Solver::Exact && !certified {
             return Err(crate::Error::NotConverged {
                 solver: "exact refinement",
@@ -114,11 +111,6 @@ impl Problem {
     }
 }
 
-/// Largest relative KKT residual with which an exact refinement is returned. The solver aims at
-/// 1e-12 and normally certifies below 1e-9; between 1e-9 and this level the result is returned
-/// with its residual; above it, [`crate::Error::NotConverged`] with the best residual reached.
-pub const EXACT_ACCEPT_KKT: f64 = 1e-6;
-
 /// One exact fixed-knot solve of stage 0 (the near-interpolatory k-level step) on the given
 /// refined knots, certified: the points, E, and the relative KKT residual. Used by the free-knot
 /// optimizer ([`crate::optimize_knots`]), which validates `problem` and `knots` first.
@@ -129,30 +121,20 @@ pub(crate) fn solve_stage0_on(
     let q = &problem.points;
     let stride = problem.k + 1;
     let dv: Vec<usize> = (0..q.len()).map(|i| stride * i).collect();
-    let fp = algorithm::FixedProblem {
+    let fp = FixedProblem {
         knots,
         q,
         data_vertex: &dv,
         constraint: &problem.constraint,
         problem,
+        derivatives: true,
         stride,
         uniform_spans: false,
         working_set: None,
+        options: &problem.options,
     };
-    let s = fixed::exact(&fp)?;
-    let stencil = s.stencil.unwrap_or_else(|| operator::Stencil::new(knots));
-    let (cert, _) = certify::certify(
-        &stencil,
-        &s.points,
-        q,
-        &dv,
-        &problem.constraint,
-        s.multipliers,
-        certify::ACTIVE_REL_TOL,
-        &s.extra,
-    );
-    let kkt = s
-        .solver_kkt
-        .map_or(cert.kkt_residual, |k| cert.kkt_residual.max(k));
+    let s = strategy::exact(&fp)?;
+    let (cert, _) = strategy::certificate(&fp, &s);
+    let kkt = cert.kkt_residual;
     Ok((s.points, cert.energy, kkt))
 }

@@ -124,8 +124,9 @@ fn complement_basis(a: &[f64]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The rows (cone, F rows, g) of a set: s = g + F y, y = L p.
-fn set_rows(set: &ConvexSet, d: usize) -> Vec<(Cone, Vec<Vec<f64>>, Vec<f64>)> {
+/// The rows (cone, F rows, g) of a set: s = g + F y, y = L p (the certificate recomputes them,
+/// [`crate::constraint::derivative_terms`]).
+pub(crate) fn set_rows(set: &ConvexSet, d: usize) -> Vec<(Cone, Vec<Vec<f64>>, Vec<f64>)> {
     let unit = |k: usize| {
         let mut r = vec![0.0; d];
         r[k] = 1.0;

@@ -529,7 +529,7 @@ mod tests {
 
     use super::super::condensed::{Face, PointSet};
     use super::{solve_from, WorkingSetOptions};
-    use crate::certify::{certify, Certificate, ACTIVE_REL_TOL};
+    use crate::certify::{certify, Certificate};
     use crate::conic_problem::{ConicProblem, ConvexSet};
     use crate::fast::{interpolate, Condensation};
     use crate::operator::Stencil;
@@ -580,16 +580,18 @@ mod tests {
     ) -> (Points, Certificate) {
         let stencil = Stencil::new(kn);
         let dv: Vec<usize> = (0..q.len()).map(|i| i * m).collect();
+        let kinds = [constraint.kind()];
         let mut judge = |p: &Points, mult: &[Vec<f64>]| {
             let (c, _) = certify(
-                &stencil,
+                kn,
                 p,
                 q,
                 &dv,
-                constraint,
+                &kinds,
                 Some(mult.to_vec()),
-                ACTIVE_REL_TOL,
                 &[],
+                divdiff::DerivativeRule::Bessel,
+                1e-7,
             );
             (c.kkt_residual, c)
         };
