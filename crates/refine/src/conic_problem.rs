@@ -80,6 +80,10 @@ pub struct ConicOptions {
     pub accept: f64,
     /// Optional starting curve (e.g. the previous solution in Algorithm 4.1's alternation).
     pub warm_start: Option<Points>,
+    /// A constraint is reported active ([`ConicSolution::active`]) when its slack (distance of
+    /// L_c p to the boundary of K_c, inside) is at most this times the constraint's scale
+    /// (radius, |L_c p|, offsets) (default 1e-7).
+    pub active_rtol: f64,
 }
 
 impl Default for ConicOptions {
@@ -88,6 +92,7 @@ impl Default for ConicOptions {
             conic: conic::Options::default(),
             accept: 1e-9,
             warm_start: None,
+            active_rtol: 1e-7,
         }
     }
 }
@@ -124,7 +129,8 @@ pub struct ConicSolution {
     /// Per constraint: the dual of its cone blocks (ball / wedge: the second-order-cone dual;
     /// half-spaces: one multiplier ≥ 0 per half-space, for the unit normal).
     pub cone_duals: Vec<Vec<f64>>,
-    /// Per constraint: whether it is active (slack ≤ [`ACTIVE_RTOL`] × scale; points always).
+    /// Per constraint: whether it is active (slack ≤ [`ConicOptions::active_rtol`] × scale;
+    /// points always).
     pub active: Vec<bool>,
     /// E = ½ pᵀ(H⊗I)p.
     pub energy: f64,
@@ -139,10 +145,6 @@ pub struct ConicSolution {
     /// it only up to O(√gap).
     pub polished: bool,
 }
-
-/// A constraint is reported active when its slack (distance of L_c p to the boundary of K_c,
-/// inside) is at most this times the constraint's scale (radius, |L_c p|, offsets).
-pub const ACTIVE_RTOL: f64 = 1e-7;
 
 /// A fixed-knot convex refinement problem (see the module docs).
 #[derive(Clone, Debug)]
@@ -423,7 +425,7 @@ impl ConicProblem {
             None => None,
         };
         let sol = conic::solve_with(&mut be, &opts.conic, start, &mut conic::NoMonitor)?;
-        Ok(self.report(&be, &sol))
+        Ok(self.report(&be, &sol, opts.active_rtol))
     }
 
     /// Why a solution that is not certified may be no solution at all: an empty polytope, or
@@ -471,7 +473,7 @@ impl ConicProblem {
     }
 
     /// The solution record of the method's answer.
-    fn report(&self, be: &FullVertex, sol: &conic::Solution) -> ConicSolution {
+    fn report(&self, be: &FullVertex, sol: &conic::Solution, active_rtol: f64) -> ConicSolution {
         let (n, d) = (self.len(), self.dim);
         let nc = self.constraints.len();
         let x = &sol.x;
@@ -522,7 +524,7 @@ impl ConicProblem {
             let y = self.constraint_value(con, x);
             let (_, scale) = set_distance(&con.set, &y);
             let den = scale.max(norm(&y));
-            active[ci] = set_slack(&con.set, &y) <= ACTIVE_RTOL * den;
+            active[ci] = set_slack(&con.set, &y) <= active_rtol * den;
             if let ConvexSet::Ball { radius, .. } = &con.set {
                 if *radius > 0.0 {
                     ball_weights[ci] =

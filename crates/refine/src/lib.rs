@@ -101,17 +101,12 @@ mod strategy;
 mod uniform;
 
 pub use algorithm::{Iterations, Refinement, Stage};
-pub use conic_problem::{
-    ConicConstraint, ConicOptions, ConicProblem, ConicSolution, ConvexSet, ACTIVE_RTOL,
-};
+pub use conic_problem::{ConicConstraint, ConicOptions, ConicProblem, ConicSolution, ConvexSet};
 pub use constraint::{Boundary, Constraint, HalfSpace, Tangent};
 pub use divdiff::{DerivativeRule, Parametrization};
 pub use error::Error;
 pub use freeknots::{
     optimize_knots, reduced_objective, FreeKnotOptions, FreeKnotResult, FreeKnots, KnotDiagnostics,
-    DEFAULT_FREE_KNOT_ITERATIONS, DEFAULT_FREE_KNOT_MEMORY, DEFAULT_FREE_KNOT_TOLERANCE,
-    FREE_KNOT_ARMIJO, FREE_KNOT_LINE_SEARCH_STEPS, FREE_KNOT_MAX_STEP, FREE_KNOT_ROUNDING_SLACK,
-    FREE_KNOT_ZERO_ENERGY,
 };
 pub use options::{
     CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
