@@ -592,9 +592,10 @@ impl Newton {
                 break;
             }
         }
-        // Far from the target after the refinement: the factorization is too far from the exact
-        // matrix for this direction.
-        let accurate = steps == 0 || last <= 1e2 * rtol * bnorm;
+        // Far from its target after the refinement — and not even accurate to 1e-4 — the
+        // factorization is too far from the exact matrix for this direction. (A direction a few
+        // digits short of a tight target still makes progress; escalating costs more.)
+        let accurate = steps == 0 || last <= (1e2 * rtol).max(1e-4) * bnorm;
         kkt.apply_a(&out.dx, &mut ws.ax);
         for (bi, cone) in cones.blocks().iter().enumerate() {
             let r = cones.range(bi);
@@ -827,7 +828,13 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
         } else {
             0
         };
-        let rtol = (opts.refinement.accuracy * res.total).max(opts.refinement.floor);
+        // (Without cones there is no central path to follow: an equality-constrained QP is
+        // solved by one direction, refined all the way.)
+        let rtol = if degree > 0.0 {
+            (opts.refinement.accuracy * res.total).max(opts.refinement.floor)
+        } else {
+            opts.refinement.floor
+        };
         let pred_ok = newton.solve(kkt, &cones, &w.rx, &w.rs, &xi, pred_steps, rtol, &mut aff);
         let alpha_a = max_step(&cones, &pt, &aff, 1.0);
         let mut sigma = 0.0;

@@ -25,6 +25,11 @@ pub struct SolveOptions {
     /// The acceptance level of the independent certificate (default [`EXACT_ACCEPT_KKT`]): every
     /// stage of an exact solve is certified at most this, or the solve refuses.
     pub accept_kkt: f64,
+    /// The condensed method polishes a result whose certificate is above this (default 1e-11,
+    /// a hundredth of the default acceptance: the interior-point iterate is usually certified far
+    /// below the acceptance, and when it is not, the polish — whose systems cost O(N) — gives the
+    /// margin back).
+    pub polish_above: f64,
     /// A data constraint counts as active when its slack is at most this relative to its size
     /// (the radius, or the length scale for half-spaces) (default 1e-7); a clearly inactive
     /// constraint's leftover multiplier is charged to stationarity.
@@ -42,6 +47,7 @@ impl Default for SolveOptions {
             strict_tolerance: 1e-13,
             working_set: WorkingSetOptions::default(),
             accept_kkt: EXACT_ACCEPT_KKT,
+            polish_above: 1e-11,
             active_rtol: 1e-7,
             paper: PaperOptions::default(),
             common_point: CommonPointOptions::default(),

@@ -220,7 +220,7 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         &fp.options.working_set,
         fp.working_set,
         &mut judge,
-        fp.options.accept_kkt,
+        fp.options.polish_above,
     )?;
     Ok(FixedSolution {
         certificate: Some(sol.certificate),

@@ -271,3 +271,5 @@ fn clarabel_solve_tol(
         iterations: sol.iterations,
     })
 }
+
+pub mod cases;
