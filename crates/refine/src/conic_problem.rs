@@ -428,6 +428,24 @@ impl ConicProblem {
         Ok(self.report(&be, &sol, opts.active_rtol))
     }
 
+    /// Solves the same program with Clarabel (feature `clarabel`): the full-vertex backend
+    /// exports it ([`conic::clarabel::Sparse`], the energy factored) and this crate certifies the
+    /// answer with the method's residuals ([`ConicSolution::kkt`]), independently of Clarabel's
+    /// stopping test. `iterations` counts Clarabel's.
+    ///
+    /// # Errors
+    /// As [`ConicProblem::solve`]'s construction errors; [`Error::Conic`] when Clarabel refuses
+    /// the data.
+    #[cfg(feature = "clarabel")]
+    pub fn solve_clarabel(
+        &self,
+        opts: &conic::clarabel::ClarabelOptions,
+    ) -> Result<ConicSolution, Error> {
+        let mut be = FullVertex::new(self)?;
+        let sol = conic::clarabel::solve(&mut be, opts)?;
+        Ok(self.report(&be, &sol, ConicOptions::default().active_rtol))
+    }
+
     /// Why a solution that is not certified may be no solution at all: an empty polytope, or
     /// (with a large primal residual) the most violated constraint, as [`Error::Infeasible`].
     pub(crate) fn diagnose(&self, sol: &ConicSolution) -> Option<Error> {

@@ -40,13 +40,13 @@ impl Stencil {
 
     /// The three vertex indices of row i.
     #[inline]
-    fn cols(&self, i: usize, n: usize) -> [usize; 3] {
+    pub(crate) fn cols(&self, i: usize, n: usize) -> [usize; 3] {
         let l = if i == 0 { n - 1 } else { i - 1 };
         let r = if i + 1 == n { 0 } else { i + 1 };
         [l, i, r]
     }
 
-    fn row_range(&self, n: usize) -> std::ops::Range<usize> {
+    pub(crate) fn row_range(&self, n: usize) -> std::ops::Range<usize> {
         if self.closed {
             0..n
         } else {

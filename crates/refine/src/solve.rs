@@ -85,6 +85,38 @@ impl Problem {
         )
     }
 
+    /// The conic program of the first fixed-knot solve — stage 0 on the k-level split of the
+    /// data knots, before any knot update — as the constraint kinds state it: what the exact
+    /// solver's full-vertex entries solve ([`crate::strategy`]), for inspection and for
+    /// solving with another method (e.g. [`ConicProblem::solve_clarabel`]). The data are not
+    /// centred ([`Problem::solve`] centres them first).
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`]; errors of the derivative stencils.
+    pub fn conic_problem(&self) -> Result<crate::ConicProblem, crate::Error> {
+        self.validate()?;
+        let knots = algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)?;
+        let stride = self.k + 1;
+        let dv: Vec<usize> = (0..self.points.len()).map(|i| stride * i).collect();
+        let fp = FixedProblem {
+            knots: &knots,
+            q: &self.points,
+            data_vertex: &dv,
+            constraint: &self.constraint,
+            problem: self,
+            derivatives: true,
+            stride,
+            uniform_spans: true,
+            working_set: None,
+            options: &self.options,
+        };
+        let mut rows = crate::constraint::Rows::new(&fp)?;
+        for k in fp.kinds() {
+            k.rows(&fp, &mut rows)?;
+        }
+        Ok(rows.problem)
+    }
+
     /// The knots of the k-level split (3.1) of the data knots: the knots of
     /// [`Problem::refine_points`] (and of the first solve of [`Problem::solve`]).
     ///

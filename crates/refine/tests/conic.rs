@@ -630,3 +630,25 @@ fn warm_start_from_the_optimum_converges_quickly() {
     assert!(warm.kkt.total <= 1e-9);
     assert!((warm.objective - cold.objective).abs() <= 1e-9 * cold.objective);
 }
+
+/// The Clarabel backend (feature `clarabel`) solves the same program: on balls, polytopes and
+/// derivative wedges its certified answer has the energy of the method's to 1e-8.
+#[cfg(feature = "clarabel")]
+#[test]
+fn the_clarabel_backend_solves_the_same_program() {
+    for (top, seed) in [(Topology::Closed, 5u64), (Topology::Open, 6)] {
+        let spec = balls_spec(top, 9, 2, 2, seed);
+        let p = spec.problem();
+        let ours = p.solve(&ConicOptions::default()).unwrap();
+        let theirs = p
+            .solve_clarabel(&conic::clarabel::ClarabelOptions::default())
+            .unwrap();
+        assert!(theirs.kkt.total <= 1e-7, "{:?}", theirs.kkt);
+        assert!(
+            (ours.energy - theirs.energy).abs() <= 1e-8 * ours.energy,
+            "{} vs {}",
+            ours.energy,
+            theirs.energy
+        );
+    }
+}

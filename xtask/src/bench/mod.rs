@@ -1,6 +1,7 @@
 //! `cargo xtask bench [--quick] [FILTER]`: benchmark tables. Every speed claim is a ratio against
 //! a baseline measured in the same run; nothing here is asserted as a wall-clock limit.
 
+mod conic;
 mod energy;
 mod refine;
 mod schemes;
@@ -43,6 +44,9 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     }
     if "refine".contains(filter) || filter.is_empty() {
         refine::run(opts)?;
+    }
+    if "conic".contains(filter) || filter.is_empty() {
+        conic::run(opts)?;
     }
     if "schemes".contains(filter) || filter.is_empty() {
         schemes::run(opts)?;

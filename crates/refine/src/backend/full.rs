@@ -605,3 +605,91 @@ impl KktSystem for FullVertex {
         }
     }
 }
+
+/// The same program for Clarabel (module docs of `conic::clarabel`), with the energy factored:
+/// z = (A ⊗ I_d) x (the α-rows of H = AᵀA, zero-cone rows), P = I on z plus the smoothing
+/// weights on x — Clarabel's KKT system then does not carry H, whose condition number (~N⁴)
+/// stops it at `InsufficientProgress` as posed. The fixed vertices are zero-cone rows
+/// x_v = a_v. The backend's m rows come first, with its A and b, so the duals map back.
+#[cfg(feature = "clarabel")]
+impl conic::clarabel::Sparse for FullVertex {
+    fn sparse(&self) -> Result<conic::clarabel::SparseProgram, conic::Error> {
+        use conic::clarabel::{SparseProgram, Triplets};
+        let (n, d) = (self.n, self.d);
+        let nx = n * d;
+        let rows = self.stencil.row_range(n);
+        let nz = rows.len() * d;
+        let mut p = Triplets::default();
+        let mut q = vec![0.0; nx + nz];
+        for v in 0..n {
+            if self.weight[v] > 0.0 {
+                for k in 0..d {
+                    p.push(v * d + k, v * d + k, self.weight[v]);
+                    q[v * d + k] = -self.target[v * d + k];
+                }
+            }
+        }
+        for j in 0..nz {
+            p.push(nx + j, nx + j, 1.0);
+        }
+        // The backend's rows: A = −F L over the free stencil vertices.
+        let mut a = Triplets::default();
+        let mut b = self.b.clone();
+        let mut cones = self.cones.blocks().to_vec();
+        let mut row = 0;
+        for blk in &self.blocks {
+            for r in 0..blk.cone.dim() {
+                for &(v, c) in &blk.stencil {
+                    for k in 0..d {
+                        let f = blk.f[r * d + k];
+                        if f != 0.0 {
+                            a.push(row + r, v * d + k, -c * f);
+                        }
+                    }
+                }
+            }
+            row += blk.cone.dim();
+        }
+        // z − (A ⊗ I) x = 0.
+        for (zi, i) in rows.clone().enumerate() {
+            let alpha = self.stencil.rows[i];
+            let cols = self.stencil.cols(i, n);
+            for k in 0..d {
+                let r = row + zi * d + k;
+                for (t, &col) in cols.iter().enumerate() {
+                    if alpha[t] != 0.0 {
+                        a.push(r, col * d + k, -alpha[t]);
+                    }
+                }
+                a.push(r, nx + zi * d + k, 1.0);
+                b.push(0.0);
+            }
+        }
+        row += nz;
+        // Fixed vertices.
+        let mut fixed_rows = 0;
+        for (v, f) in self.fixed.iter().enumerate() {
+            if let Some(val) = f {
+                for k in 0..d {
+                    a.push(row + fixed_rows, v * d + k, 1.0);
+                    b.push(val[k]);
+                    fixed_rows += 1;
+                }
+            }
+        }
+        if nz > 0 {
+            cones.push(conic::Cone::Zero(nz));
+        }
+        if fixed_rows > 0 {
+            cones.push(conic::Cone::Zero(fixed_rows));
+        }
+        Ok(SparseProgram {
+            n: nx + nz,
+            p,
+            q,
+            a,
+            b,
+            cones,
+        })
+    }
+}
