@@ -127,8 +127,8 @@ fn other_subcommands_refuse_oversized_results() {
     );
     // `scheme` takes flags: an absurd stencil and arity.
     for args in [
-        vec!["scheme", "--points", "1000000000", "--arity", "2"],
-        vec!["scheme", "--points", "4", "--arity", "1000000000"],
+        vec!["scheme", "--stencil", "1000000000", "--arity", "2"],
+        vec!["scheme", "--stencil", "4", "--arity", "1000000000"],
     ] {
         let (code, stdout, stderr) = run_cli(&args, "");
         assert_eq!(code, 2, "{args:?}: {stderr}");
@@ -164,7 +164,7 @@ fn deeply_nested_json_is_refused_without_a_stack_overflow() {
             // The typed parser stops at the first level that cannot be a point (`points[0][0]`;
             // `strip` has no such field) — no `Value` tree is built (ROBUSTNESS.md finding 10).
             refused(sub, &format!(r#"{{"points": {nested}}}"#), "points");
-            refused(sub, &nested, "invalid type");
+            refused(sub, &nested, "must be a JSON object");
         }
         // Nested objects inside a field the parser would otherwise descend into.
         let objs = format!("{}1{}", r#"{"a":"#.repeat(depth), "}".repeat(depth));
@@ -288,4 +288,84 @@ fn general_interior_point_problems_have_a_size_limit() {
         r#"{{"points": {SQUARE}, "k": 1000000, "constraint": {{"type": "halfspaces", "sets": [[], [], [], []]}}}}"#
     );
     refused("refine", &halfspaces, "k");
+}
+
+/// An endless input: `head`, then `item` forever; counts the bytes handed out.
+struct Endless {
+    head: Vec<u8>,
+    item: Vec<u8>,
+    pos: usize,
+    given: u64,
+}
+
+impl std::io::Read for Endless {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let mut n = 0;
+        while n < buf.len() {
+            let src = if self.pos < self.head.len() {
+                &self.head[self.pos..]
+            } else {
+                let k = (self.pos - self.head.len()) % self.item.len();
+                &self.item[k..]
+            };
+            let m = src.len().min(buf.len() - n);
+            buf[n..n + m].copy_from_slice(&src[..m]);
+            n += m;
+            self.pos += m;
+        }
+        self.given += n as u64;
+        Ok(n)
+    }
+}
+
+/// Issue 17 §3: an over-limit `points` array is refused when it passes the limit, while it is
+/// read — not after the input has been held in memory. The input here never ends: a reader that
+/// held the text, or a `Vec` per point, would run until the 1 GiB input limit (or out of
+/// memory); the streaming reader stops at the limit, having consumed its first 8 MiB and then
+/// about 4 bytes (`[1],`) per coordinate, and names `points`. The same reader and visitor as `curvefit refine`'s, with a
+/// limit of 10⁵ coordinates instead of `MAX_POINT_COORDS` = 2.5·10⁷ (which a debug build takes a
+/// minute to reach; `cargo xtask bench cli` and ROBUSTNESS.md measure the real one).
+#[test]
+fn over_limit_points_are_refused_while_reading() {
+    #[derive(serde::Deserialize)]
+    #[allow(dead_code)]
+    struct Small {
+        k: usize,
+        points: curvefit::spec::Rows<100_000>,
+    }
+    let limit = 100_000u64;
+    let mut json = Endless {
+        head: br#"{"k": 3, "points": ["#.to_vec(),
+        item: b"[1],".to_vec(),
+        pos: 0,
+        given: 0,
+    };
+    let e = curvefit::cli::input::read_json::<Small>(&mut json, "json")
+        .err()
+        .unwrap();
+    assert!(e.field.starts_with("points"), "{e}");
+    assert!(e.message.contains(&limit.to_string()), "{e}");
+    // The 8 MiB read whole at first, then 4 bytes per coordinate and the reader's 64 KiB buffer.
+    let whole = curvefit::cli::input::READ_WHOLE_BYTES as u64;
+    assert!(
+        json.given <= whole + 4 * limit + (1 << 17),
+        "read {} bytes",
+        json.given
+    );
+    let mut csv = Endless {
+        head: b"x\n".to_vec(),
+        item: b"1\n".to_vec(),
+        pos: 0,
+        given: 0,
+    };
+    let e = curvefit::cli::input::read_csv_limited(&mut csv, "csv", limit as usize)
+        .err()
+        .unwrap();
+    assert_eq!(e.field, "points", "{e}");
+    assert!(e.message.contains(&limit.to_string()), "{e}");
+    assert!(
+        csv.given <= 2 * limit + (1 << 17),
+        "read {} bytes",
+        csv.given
+    );
 }

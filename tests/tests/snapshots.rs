@@ -76,14 +76,14 @@ snap!(surface_small, "surface", "surface-small.json");
 
 #[test]
 fn scheme_rules_binary_4_point() {
-    insta::assert_snapshot!(snapshot_of(&["scheme", "--points", "4", "--arity", "2"]));
+    insta::assert_snapshot!(snapshot_of(&["scheme", "--stencil", "4", "--arity", "2"]));
 }
 
 #[test]
 fn scheme_rules_ternary_6_point_with_surface() {
     insta::assert_snapshot!(snapshot_of(&[
         "scheme",
-        "--points",
+        "--stencil",
         "6",
         "--arity",
         "3",
@@ -96,7 +96,7 @@ fn scheme_applied_to_a_square() {
     let p = problem_path("polygon-square.json");
     insta::assert_snapshot!(snapshot_of(&[
         "scheme",
-        "--points",
+        "--stencil",
         "4",
         "--arity",
         "3",

@@ -14,7 +14,15 @@
 //! | [`subdivision`] | Khan et al.'s (2m+2)-point n-ary schemes for curves and tensor-product surfaces, Warren–Weimer's natural cubic subdivision (§6.2–6.3) |
 //! | [`strip`] | best interpolation in a strip (Dontchev–Kolmanovsky) |
 //!
-//! plus [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line, callable in-process).
+//! plus [`spec`], the JSON contract of every subcommand as a library (problem and result types,
+//! validation naming the user's field and index, one entry point per subcommand), and — with the
+//! default feature `cli` — [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line,
+//! callable in-process).
+//!
+//! # Features
+//! - `cli` (default): the command line (clap) and the pictures (svg); the `curvefit` binary needs
+//!   it. As a library dependency, turn it off to build without clap and svg:
+//!   `curvefit = { path = "…/crates/curvefit", default-features = false }`.
 //!
 //! ```
 //! use curvefit::prelude::*;
@@ -23,8 +31,11 @@
 //! assert_eq!(h.len(), 4);
 //! ```
 
+#[cfg(feature = "cli")]
 pub mod cli;
+#[cfg(feature = "cli")]
 pub mod plot;
+pub mod spec;
 
 pub use divdiff;
 pub use energy;

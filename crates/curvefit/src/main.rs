@@ -6,9 +6,12 @@ fn main() {
     if std::env::var_os("CURVEFIT_DEBUG_PANICS").is_none() {
         std::panic::set_hook(Box::new(|_| {}));
     }
-    let code = curvefit::cli::run(
+    use std::io::IsTerminal;
+    let stdin = std::io::stdin();
+    let code = curvefit::cli::run_with_terminal(
         std::env::args_os(),
-        &mut std::io::stdin().lock(),
+        &mut stdin.lock(),
+        stdin.is_terminal(),
         &mut std::io::stdout().lock(),
         &mut std::io::stderr().lock(),
     );

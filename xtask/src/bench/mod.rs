@@ -1,6 +1,7 @@
 //! `cargo xtask bench [--quick] [FILTER]`: benchmark tables. Every speed claim is a ratio against
 //! a baseline measured in the same run; nothing here is asserted as a wall-clock limit.
 
+mod cli;
 mod conic;
 mod energy;
 mod refine;
@@ -53,6 +54,9 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     }
     if "strip".contains(filter) || filter.is_empty() {
         strip::run(opts)?;
+    }
+    if "cli".contains(filter) || filter.is_empty() {
+        cli::run(opts)?;
     }
     Ok(true)
 }

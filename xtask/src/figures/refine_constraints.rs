@@ -52,7 +52,7 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
     draw_one(
         dir,
         "kersey_fig3_4_convex_polygons.svg",
-        json!({"points": centers, "k": 3, "constraint": {"type": "halfspaces", "sets": sets}}),
+        json!({"points": centers, "closed": true, "k": 3, "constraint": {"type": "halfspaces", "sets": sets}}),
     )?;
     // Figs. 3.6–3.8: tangent balls about horizontal/vertical vectors, direction wedges, tension;
     // tolerances shrink from left (a) to right (c).
@@ -65,7 +65,7 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
         draw_one(
             dir,
             &format!("kersey_fig3_6{tag}_tangent_balls.svg"),
-            json!({"points": diamond(), "k": 6, "constraint": {"type": "balls", "radii": [0.05, 0.05, 0.05, 0.05]}, "tangents": balls}),
+            json!({"points": diamond(), "closed": true, "k": 6, "constraint": {"type": "balls", "radii": [0.05, 0.05, 0.05, 0.05]}, "tangents": balls}),
         )?;
         let wedges: Vec<_> = dirs
             .iter()
@@ -77,7 +77,7 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
         draw_one(
             dir,
             &format!("kersey_fig3_7{tag}_tangent_wedges.svg"),
-            json!({"points": diamond(), "k": 6, "constraint": {"type": "balls", "radii": [0.05, 0.05, 0.05, 0.05]}, "tangents": wedges}),
+            json!({"points": diamond(), "closed": true, "k": 6, "constraint": {"type": "balls", "radii": [0.05, 0.05, 0.05, 0.05]}, "tangents": wedges}),
         )?;
         let tension: Vec<_> = (0..4)
             .map(|_| json!({"type": "tension", "radius": 2.0 * tol}))
@@ -85,7 +85,7 @@ pub fn draw(dir: &Path) -> anyhow::Result<()> {
         draw_one(
             dir,
             &format!("kersey_fig3_8{tag}_tension.svg"),
-            json!({"points": diamond(), "k": 6, "constraint": {"type": "balls", "radii": [0.05, 0.05, 0.05, 0.05]}, "tangents": tension}),
+            json!({"points": diamond(), "closed": true, "k": 6, "constraint": {"type": "balls", "radii": [0.05, 0.05, 0.05, 0.05]}, "tangents": tension}),
         )?;
     }
     draw_slots(dir)?;
@@ -137,7 +137,7 @@ fn draw_slots(dir: &Path) -> anyhow::Result<()> {
             .collect()
     };
     let sets: Vec<_> = c.iter().map(|&[x, y]| tri(x, y, 0.6)).collect();
-    let base = json!({"points": c, "k": 3, "constraint": {"type": "halfspaces", "sets": sets}});
+    let base = json!({"points": c, "closed": true, "k": 3, "constraint": {"type": "halfspaces", "sets": sets}});
     let mut paper = base.clone();
     paper["solver"] = json!("paper");
     let pp: RefineProblem = serde_json::from_value(paper)?;

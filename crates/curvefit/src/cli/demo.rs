@@ -116,12 +116,7 @@ pub fn solve_with<C: Command>(
     problem: &str,
     describe: impl Fn(&C::Solution) -> String,
 ) -> Result<Summary, InputError> {
-    let value: serde_json::Value = serde_json::from_str(problem)
-        .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
-    let p: C::Problem = serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
-        InputError::new(path, e.into_inner())
-    })?;
+    let p: C::Problem = crate::spec::from_json(problem)?;
     let s = C::solve(&p)?;
     let json = serde_json::to_string_pretty(&s).map_err(|e| InputError::new("", e))?;
     Ok(Summary {
@@ -131,27 +126,27 @@ pub fn solve_with<C: Command>(
     })
 }
 
-/// Runs all examples into `out`, printing the summary table to `stdout`.
+/// Runs all examples into `out`, printing the summary table to `stdout`. All files and the
+/// summary are committed together ([`super::Outputs`]): a failure leaves no file behind (and
+/// removes `out` if this run created it).
 ///
 /// # Errors
-/// When an example fails (a bug: the built-in data are valid) or the directory cannot be written.
+/// When an example fails (a bug: the built-in data are valid) or an output cannot be written.
 pub fn run(
     out: &Path,
     stdout: &mut dyn Write,
     solve: impl Fn(&Example) -> Result<Summary, InputError>,
 ) -> Result<(), InputError> {
-    std::fs::create_dir_all(out)
-        .map_err(|e| InputError::new("--out", format!("cannot create {}: {e}", out.display())))?;
     let mut html = String::from(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>curvefit demo</title>\
          <style>body{font-family:sans-serif;max-width:1400px;margin:auto}figure{display:inline-block;margin:8px;\
          vertical-align:top;width:660px}figcaption{font-size:14px}</style></head><body>\n<h1>curvefit demo</h1>\n",
     );
     let mut files = Vec::new();
-    let _ = writeln!(stdout, "{:<28} {:<8} result", "example", "command");
+    let mut summary = format!("{:<28} {:<8} result\n", "example", "command");
     for ex in EXAMPLES {
         let s = solve(ex).map_err(|e| InputError::new(format!("example {}", ex.name), e))?;
-        let _ = writeln!(stdout, "{:<28} {:<8} {}", ex.name, ex.command, s.line);
+        summary.push_str(&format!("{:<28} {:<8} {}\n", ex.name, ex.command, s.line));
         files.push((out.join(format!("{}.json", ex.name)), s.json.into_bytes()));
         if let Some(svg) = s.svg {
             files.push((out.join(format!("{}.svg", ex.name)), svg.into_bytes()));
@@ -166,10 +161,29 @@ pub fn run(
     }
     html.push_str("</body></html>\n");
     files.push((out.join("index.html"), html.into_bytes()));
-    let written = files.len();
-    super::write_files(files)?;
-    let _ = writeln!(stdout, "wrote {written} files to {}", out.display());
-    Ok(())
+    summary.push_str(&format!(
+        "wrote {} files to {}\n",
+        files.len(),
+        out.display()
+    ));
+    let created = !out.exists();
+    std::fs::create_dir_all(out)
+        .map_err(|e| InputError::new("--out", format!("cannot create {}: {e}", out.display())))?;
+    let mut outputs = super::Outputs::new();
+    for (path, bytes) in files {
+        outputs.add("--out", Some(&path), super::bytes_writer(bytes))?;
+    }
+    outputs.add(
+        "standard output",
+        None,
+        super::bytes_writer(summary.into_bytes()),
+    )?;
+    outputs.commit(stdout).inspect_err(|_| {
+        if created {
+            // Only an empty directory is removed: nothing else was put there.
+            let _ = std::fs::remove_dir(out);
+        }
+    })
 }
 
 fn html_escape(s: &str) -> String {

@@ -4,52 +4,26 @@
 //! to `-o FILE` (default stdout) and, with `--svg FILE`, a picture. Bad input gives exit code 2,
 //! one line on stderr naming the field (and index), and no output file.
 
+mod commands;
 pub mod demo;
-pub mod natural;
-pub mod refine;
-pub mod refine_types;
-pub mod scheme;
-pub mod strip;
-pub mod surface;
+pub mod format;
+pub mod input;
+pub mod output;
+
+pub use self::commands::{natural, refine, strip, surface};
+/// The JSON types of `refine` (kept at this path for existing callers; the home is
+/// [`crate::spec::refine`]).
+pub use crate::spec::refine as refine_types;
+pub use crate::spec::InputError;
+pub use input::MAX_INPUT_BYTES;
+pub use output::{bytes_writer, Outputs, Writer};
 
 use std::ffi::OsString;
-use std::fmt::Display;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand};
-
-/// A bad-input error: the field path (e.g. `points[3]`, `constraint.radii[2]`) and what is wrong.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct InputError {
-    /// Path of the offending field, with indices.
-    pub field: String,
-    /// What is wrong with it.
-    pub message: String,
-}
-
-impl InputError {
-    /// A new error for `field`.
-    pub fn new(field: impl Into<String>, message: impl Display) -> Self {
-        InputError {
-            field: field.into(),
-            message: message.to_string(),
-        }
-    }
-}
-
-impl Display for InputError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        if self.field.is_empty() {
-            write!(f, "{}", self.message)
-        } else {
-            write!(f, "{}: {}", self.field, self.message)
-        }
-    }
-}
-
-impl std::error::Error for InputError {}
 
 /// One subcommand: a JSON problem in, a JSON solution (and optionally a picture) out.
 pub trait Command {
@@ -61,6 +35,28 @@ pub trait Command {
     fn solve(problem: &Self::Problem) -> Result<Self::Solution, InputError>;
     /// The picture for `--svg`, or `None`.
     fn svg(problem: &Self::Problem, solution: &Self::Solution) -> Option<String>;
+    /// Puts the points of `--points FILE.csv` into the problem.
+    ///
+    /// # Errors
+    /// When the command takes no points from a CSV file, or the problem has points already.
+    fn set_points(_problem: &mut Self::Problem, _csv: input::Csv) -> Result<(), InputError> {
+        Err(InputError::new(
+            "--points",
+            "this subcommand reads no points from a CSV file",
+        ))
+    }
+    /// Writes the JSON result (one line); the default is serde_json's. A command with large
+    /// arrays may format them faster, byte for byte the same.
+    ///
+    /// # Errors
+    /// The output's write errors.
+    fn write_json(solution: &Self::Solution, w: &mut dyn Write) -> std::io::Result<()> {
+        format::write_json(solution, w)
+    }
+    /// The result's main array for `--format csv|npy`, or `None` (JSON only).
+    fn table(_solution: &Self::Solution) -> Option<format::Table<'_>> {
+        None
+    }
     /// A mesh for `--obj` (Wavefront OBJ text), or `None` when the command has none.
     fn obj(
         _problem: &Self::Problem,
@@ -78,36 +74,52 @@ fn run_scheme_cmd(
 ) -> Result<(), Failure> {
     let t0 = Instant::now();
     let polygon = match &a.apply {
-        Some(p) => {
-            let file = std::fs::File::open(p).map_err(|e| {
-                InputError::new("--apply", format!("cannot open {}: {e}", p.display()))
-            })?;
-            Some(read_limited(&mut &file, &p.display().to_string())?)
-        }
+        Some(p) => Some(
+            input::read_json(input::open(p, "--apply")?, &p.display().to_string()).map_err(
+                |e| {
+                    let field = if e.field.is_empty() || e.field == "problem" {
+                        "polygon".to_string()
+                    } else {
+                        format!("polygon.{}", e.field)
+                    };
+                    InputError::new(field, e.message)
+                },
+            )?,
+        ),
         None => None,
     };
     let t1 = Instant::now();
-    let value = scheme::run_scheme(
-        a.points,
-        a.arity,
-        a.surface,
-        polygon.as_deref().map(|t| (t, a.levels)),
-    )?;
+    let problem = crate::spec::SchemeProblem {
+        points: a.stencil,
+        arity: a.arity,
+        surface: a.surface,
+        polygon,
+        levels: a.levels,
+    };
+    // Field names of the JSON problem back to the flags they came from.
+    let value = crate::spec::scheme(&problem).map_err(|e| {
+        let field = match e.field.as_str() {
+            "points" => "--stencil".to_string(),
+            "arity" => "--arity".to_string(),
+            "levels" => "--levels".to_string(),
+            f => f.to_string(),
+        };
+        InputError::new(field, e.message)
+    })?;
     let t2 = Instant::now();
-    let json = value.to_string() + "\n";
-    match &a.output {
-        Some(path) => write_files(vec![(path.clone(), json.into_bytes())])?,
-        None => stdout
-            .write_all(json.as_bytes())
-            .map_err(|e| InputError::new("-o", format!("cannot write to standard output: {e}")))?,
-    }
+    let json = serde_json::to_string(&value).map_err(|e| InputError::new("", e))? + "\n";
+    let mut outputs = Outputs::new();
+    outputs.add("-o", a.output.as_deref(), bytes_writer(json.into_bytes()))?;
+    outputs.commit(stdout)?;
     if a.timings {
         let line = serde_json::json!({
             "parse_s": (t1 - t0).as_secs_f64(),
             "solve_s": (t2 - t1).as_secs_f64(),
             "write_s": t2.elapsed().as_secs_f64(),
         });
-        let _ = writeln!(stderr, "{line}");
+        writeln!(stderr, "{line}").map_err(|e| {
+            InputError::new("--timings", format!("cannot write to standard error: {e}"))
+        })?;
     }
     Ok(())
 }
@@ -131,11 +143,15 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 /// Exit code for an internal error (a bug): nothing was written.
 pub const EXIT_INTERNAL: i32 = 70;
 
-/// Largest problem file accepted (bytes); larger input is refused before parsing.
-pub const MAX_INPUT_BYTES: u64 = 1 << 30;
-
 #[derive(Parser, Debug)]
-#[command(name = "curvefit", version, about = "Variational curve refinement and constrained spline interpolation", long_about = None)]
+#[command(
+    name = "curvefit",
+    version,
+    about = "Variational curve refinement and constrained spline interpolation",
+    long_about = None,
+    arg_required_else_help = true,
+    after_help = "Every JSON subcommand reads its problem from a file, `-` or standard input; `curvefit schema SUBCOMMAND` prints its fields, docs/input.md explains them."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Cmd,
@@ -144,7 +160,8 @@ struct Cli {
 /// Options shared by the JSON subcommands.
 #[derive(Args, Debug, Clone, Default)]
 pub struct JsonArgs {
-    /// Problem file (JSON), or `-` for standard input. May be omitted when `--points` is given.
+    /// Problem file (JSON); `-` or nothing reads standard input (nothing: unless `--points` is
+    /// given, then the problem is `{}` with those points).
     pub problem: Option<PathBuf>,
     /// Write the JSON result here (default: standard output).
     #[arg(short = 'o', long = "output", value_name = "FILE")]
@@ -152,20 +169,29 @@ pub struct JsonArgs {
     /// Also draw the result as an SVG picture.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
-    /// Read the problem's `points` from a CSV file (one point per line, comma-separated coordinates).
+    /// Read the problem's points from a CSV file: one point per line, coordinates separated by
+    /// commas, an optional header line (`x,y`); for `strip` two columns, t and y.
     #[arg(long = "points", value_name = "FILE.csv")]
     pub points_csv: Option<PathBuf>,
+    /// Output format: the whole JSON result, or the result's main array (refined points,
+    /// strip pieces) as CSV or as a NumPy .npy file [default: json, or the -o file's extension]
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub format: Option<format::Format>,
     /// Print one JSON line {"parse_s", "solve_s", "write_s"} on standard error.
     #[arg(long)]
     pub timings: bool,
+    /// Whether standard input is a terminal (then no problem file is an error, not a wait).
+    #[arg(skip)]
+    pub stdin_is_terminal: bool,
 }
 
 /// Options of `curvefit scheme`.
 #[derive(Args, Debug, Clone)]
 pub struct SchemeArgs {
-    /// Number of points P = 2m + 2 of the rule (even, ≥ 2).
+    /// Stencil size: the number of points P = 2m + 2 of the rule (even, 2 ≤ P ≤ 16; the JSON
+    /// result's "points").
     #[arg(long, value_name = "P")]
-    pub points: usize,
+    pub stencil: usize,
     /// Arity N ≥ 2 (binary 2, ternary 3, …).
     #[arg(long, value_name = "N")]
     pub arity: usize,
@@ -208,6 +234,15 @@ enum Cmd {
     Scheme(SchemeArgs),
     /// The tensor-product n-ary scheme on a quad grid; `--obj` writes the refined quad mesh.
     Surface(SurfaceArgs),
+    /// The JSON Schema of a subcommand's problem (generated from the types).
+    Schema {
+        /// refine, strip, scheme, surface or natural.
+        #[arg(value_parser = clap::builder::PossibleValuesParser::new(crate::spec::SUBCOMMANDS))]
+        subcommand: String,
+        /// Write the schema here (default: standard output).
+        #[arg(short = 'o', long = "output", value_name = "FILE")]
+        output: Option<PathBuf>,
+    },
     /// The main job on built-in data: solves the seeds' examples, writes SVGs, index.html and a summary.
     Demo {
         /// Output directory.
@@ -247,13 +282,43 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
+    run_with_terminal(args, stdin, false, stdout, stderr)
+}
+
+/// [`run`], told whether standard input is a terminal: then a JSON subcommand without a problem
+/// file refuses instead of waiting for input.
+pub fn run_with_terminal<I, T>(
+    args: I,
+    stdin: &mut dyn Read,
+    stdin_is_terminal: bool,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            // A bare `curvefit` (or `curvefit scheme` without flags): the usage and the list of
+            // subcommands, on standard error, exit 2.
+            let _ = write!(stderr, "{}", e.render());
+            return EXIT_BAD_INPUT;
+        }
         Err(e) => {
             let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
             let text = e.render().to_string();
             if code == 0 {
-                let _ = stdout.write_all(text.as_bytes());
+                // `--help`, `--version`: a failed write (e.g. `> /dev/full`) is an error too.
+                if stdout
+                    .write_all(text.as_bytes())
+                    .and_then(|_| stdout.flush())
+                    .is_err()
+                {
+                    let _ = writeln!(stderr, "error: cannot write to standard output");
+                    return EXIT_BAD_INPUT;
+                }
             } else {
                 // One line: clap's message up to its usage section, whitespace collapsed.
                 let msg: Vec<&str> = text
@@ -275,7 +340,7 @@ where
         }
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        dispatch(cli, stdin, stdout, stderr)
+        dispatch(cli, stdin, stdin_is_terminal, stdout, stderr)
     }));
     match result {
         Ok(Ok(())) => 0,
@@ -296,10 +361,17 @@ where
 fn dispatch(
     cli: Cli,
     stdin: &mut dyn Read,
+    stdin_is_terminal: bool,
     stdout: &mut dyn Write,
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
-    match cli.command {
+    let mut command = cli.command;
+    match &mut command {
+        Cmd::Refine(a) | Cmd::Strip(a) | Cmd::Natural(a) => a.stdin_is_terminal = stdin_is_terminal,
+        Cmd::Surface(a) => a.json.stdin_is_terminal = stdin_is_terminal,
+        _ => {}
+    }
+    match command {
         Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
         Cmd::Strip(a) => run_json::<strip::Strip>(&a, "strip", stdin, stdout, stderr),
         Cmd::Natural(a) => run_json::<natural::NaturalCmd>(&a, "natural", stdin, stdout, stderr),
@@ -313,6 +385,19 @@ fn dispatch(
         ),
         Cmd::Scheme(a) => run_scheme_cmd(&a, stdout, stderr),
         Cmd::Demo { out } => Ok(demo::run(&out, stdout, solve_example)?),
+        Cmd::Schema { subcommand, output } => {
+            let schema = crate::spec::schema(&subcommand).ok_or_else(|| {
+                InputError::new("subcommand", format!("no schema for `{subcommand}`"))
+            })?;
+            let text = serde_json::to_string_pretty(&schema).map_err(|e| InputError::new("", e))?;
+            let mut outputs = Outputs::new();
+            outputs.add(
+                "-o",
+                output.as_deref(),
+                bytes_writer((text + "\n").into_bytes()),
+            )?;
+            Ok(outputs.commit(stdout)?)
+        }
     }
 }
 
@@ -392,14 +477,21 @@ pub fn run_json_with<C: Command>(
         Some(_) => C::svg(&problem, &solution),
         None => None,
     };
-    let mut outputs: Vec<(PathBuf, Writer<'_>)> = Vec::new();
+    let mut outputs = Outputs::new();
+    // The result is streamed into its file (or standard output): no copy of it in memory.
+    let fmt = format::Format::choose(args.format, args.output.as_deref());
+    let json: Writer<'_> = Box::new(|w: &mut dyn Write| C::write_json(&solution, w));
+    let result = format::writer(fmt, json, C::table(&solution), name)?;
+    outputs.add("-o", args.output.as_deref(), result)?;
     if let Some(path) = obj {
         let text = C::obj(&problem, &solution)
             .ok_or_else(|| InputError::new("--obj", format!("`{name}` has no mesh output")))??;
-        outputs.push((path.to_path_buf(), bytes_writer(text.into_bytes())));
+        outputs.add("--obj", Some(path), bytes_writer(text.into_bytes()))?;
     }
     match (&args.svg, svg) {
-        (Some(path), Some(svg)) => outputs.push((path.clone(), bytes_writer(svg.into_bytes()))),
+        (Some(path), Some(svg)) => {
+            outputs.add("--svg", Some(path), bytes_writer(svg.into_bytes()))?
+        }
         (Some(path), None) => {
             return Err(InputError::new(
                 "--svg",
@@ -412,24 +504,7 @@ pub fn run_json_with<C: Command>(
         }
         _ => {}
     }
-    // The JSON result is streamed into its file (or standard output): no copy of it in memory.
-    let json_to = |w: &mut dyn Write| -> std::io::Result<()> {
-        serde_json::to_writer(&mut *w, &solution).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
-    };
-    match &args.output {
-        Some(path) => {
-            outputs.push((path.clone(), Box::new(json_to)));
-            write_files_with(outputs)?;
-        }
-        None => {
-            write_files_with(outputs)?;
-            let mut buf = std::io::BufWriter::with_capacity(1 << 16, &mut *stdout);
-            json_to(&mut buf).and_then(|_| buf.flush()).map_err(|e| {
-                InputError::new("-o", format!("cannot write to standard output: {e}"))
-            })?;
-        }
-    }
+    outputs.commit(stdout)?;
     let t3 = Instant::now();
     if args.timings {
         let line = serde_json::json!({
@@ -437,271 +512,33 @@ pub fn run_json_with<C: Command>(
             "solve_s": (t2 - t1).as_secs_f64(),
             "write_s": (t3 - t2).as_secs_f64(),
         });
-        let _ = writeln!(stderr, "{line}");
-    }
-    Ok(())
-}
-
-/// Reads and parses the problem; `--points FILE.csv` supplies (or must not duplicate) `points`.
-fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C::Problem, Failure> {
-    let text = match &args.problem {
-        Some(p) if p.as_os_str() == "-" => read_limited(stdin, "standard input")?,
-        Some(p) => {
-            let file = std::fs::File::open(p).map_err(|e| {
-                InputError::new("problem", format!("cannot open {}: {e}", p.display()))
-            })?;
-            refuse_large_file(&file, &p.display().to_string())?;
-            read_limited(&mut &file, &p.display().to_string())?
-        }
-        None if args.points_csv.is_some() => "{}".to_string(),
-        None => {
-            return Err(InputError::new(
-                "problem",
-                "no problem file given (a path, or - for standard input)",
-            )
-            .into())
-        }
-    };
-    let path_error = |e: serde_path_to_error::Error<serde_json::Error>| -> Failure {
-        let path = e.path().to_string();
-        let field = if path == "." { String::new() } else { path };
-        let inner = e.into_inner();
-        if inner.is_syntax() || inner.is_eof() {
-            InputError::new("problem", format!("malformed JSON: {inner}")).into()
-        } else {
-            InputError::new(field, inner).into()
-        }
-    };
-    let Some(csv) = &args.points_csv else {
-        // Straight from the text into the typed problem: no `Value` tree, whose size is many
-        // times the text's (ROBUSTNESS.md finding 10).
-        let mut de = serde_json::Deserializer::from_str(&text);
-        let problem = serde_path_to_error::deserialize(&mut de).map_err(path_error)?;
-        de.end()
-            .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
-        return Ok(problem);
-    };
-    let mut value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| InputError::new("problem", format!("malformed JSON: {e}")))?;
-    let rows = read_csv_points(csv)?;
-    let obj = value
-        .as_object_mut()
-        .ok_or_else(|| InputError::new("problem", "the problem must be a JSON object"))?;
-    if obj.contains_key("points") {
-        return Err(InputError::new("points", "given both in the problem and by --points").into());
-    }
-    obj.insert("points".into(), serde_json::Value::from(rows));
-    serde_path_to_error::deserialize(value).map_err(path_error)
-}
-
-/// A regular file above [`MAX_INPUT_BYTES`] is refused from its metadata, before any byte is read
-/// (pipes and devices are limited while reading, by [`read_limited`]).
-fn refuse_large_file(file: &std::fs::File, what: &str) -> Result<(), Failure> {
-    match file.metadata() {
-        Ok(m) if m.is_file() && m.len() > MAX_INPUT_BYTES => Err(InputError::new(
-            "problem",
-            format!("{what} is larger than {MAX_INPUT_BYTES} bytes"),
-        )
-        .into()),
-        _ => Ok(()),
-    }
-}
-
-fn read_limited(r: &mut dyn Read, what: &str) -> Result<String, Failure> {
-    let mut buf = String::new();
-    let n = r
-        .take(MAX_INPUT_BYTES + 1)
-        .read_to_string(&mut buf)
-        .map_err(|e| InputError::new("problem", format!("cannot read {what}: {e}")))?;
-    if n as u64 > MAX_INPUT_BYTES {
-        return Err(InputError::new(
-            "problem",
-            format!("{what} is larger than {MAX_INPUT_BYTES} bytes"),
-        )
-        .into());
-    }
-    Ok(buf)
-}
-
-/// Parses a CSV of points: one point per line, coordinates separated by commas (or whitespace);
-/// blank lines and lines starting with `#` are skipped; all rows must have the same length.
-pub fn parse_csv_points(text: &str) -> Result<Vec<Vec<f64>>, InputError> {
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    for (lineno, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let idx = rows.len();
-        let row = line
-            .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
-            .filter(|s| !s.is_empty())
-            .map(|s| {
-                s.parse::<f64>()
-                    .ok()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| {
-                        InputError::new(
-                            format!("points[{idx}]"),
-                            format!("line {}: `{s}` is not a finite number", lineno + 1),
-                        )
-                    })
-            })
-            .collect::<Result<Vec<f64>, _>>()?;
-        if let Some(first) = rows.first() {
-            if first.len() != row.len() {
-                return Err(InputError::new(
-                    format!("points[{idx}]"),
-                    format!(
-                        "line {}: {} coordinates, expected {}",
-                        lineno + 1,
-                        row.len(),
-                        first.len()
-                    ),
-                ));
-            }
-        }
-        rows.push(row);
-    }
-    Ok(rows)
-}
-
-fn read_csv_points(path: &Path) -> Result<Vec<Vec<f64>>, Failure> {
-    let file = std::fs::File::open(path)
-        .map_err(|e| InputError::new("--points", format!("cannot open {}: {e}", path.display())))?;
-    refuse_large_file(&file, &path.display().to_string())?;
-    let text = read_limited(&mut &file, &path.display().to_string())?;
-    Ok(parse_csv_points(&text)?)
-}
-
-/// Something that writes one output file's content.
-pub type Writer<'a> = Box<dyn FnOnce(&mut dyn Write) -> std::io::Result<()> + 'a>;
-
-fn bytes_writer<'a>(bytes: Vec<u8>) -> Writer<'a> {
-    Box::new(move |w: &mut dyn Write| w.write_all(&bytes))
-}
-
-/// Writes every `(path, bytes)` to a temporary sibling first, then renames them all; on any
-/// failure the temporaries are removed and no target file is created or changed.
-pub fn write_files(files: Vec<(PathBuf, Vec<u8>)>) -> Result<(), InputError> {
-    write_files_with(
-        files
-            .into_iter()
-            .map(|(p, b)| (p, bytes_writer(b)))
-            .collect(),
-    )
-}
-
-/// [`write_files`] with streamed contents: each writer fills a buffered temporary file.
-pub fn write_files_with(files: Vec<(PathBuf, Writer<'_>)>) -> Result<(), InputError> {
-    let mut temps: Vec<(PathBuf, PathBuf)> = Vec::new();
-    let cleanup = |temps: &[(PathBuf, PathBuf)]| {
-        for (t, _) in temps {
-            let _ = std::fs::remove_file(t);
-        }
-    };
-    let mut direct: Vec<(PathBuf, Writer<'_>)> = Vec::new();
-    for (k, (path, write)) in files.into_iter().enumerate() {
-        // A device, FIFO or other special file (e.g. /dev/null, /dev/stdout) is written in
-        // place: renaming a temporary over it would replace the device with a regular file.
-        if std::fs::metadata(&path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
-            direct.push((path, write));
-            continue;
-        }
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "out".into());
-        let tmp = path.with_file_name(format!(".{name}.{}.{k}.tmp", std::process::id()));
-        let result = std::fs::File::create(&tmp).and_then(|f| {
-            let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
-            write(&mut w)?;
-            w.flush()
-        });
-        if let Err(e) = result {
-            cleanup(&temps);
-            let _ = std::fs::remove_file(&tmp);
-            return Err(InputError::new(
-                "output",
-                format!("cannot write {}: {e}", path.display()),
-            ));
-        }
-        temps.push((tmp, path));
-    }
-    for (tmp, path) in &temps {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            cleanup(&temps);
-            return Err(InputError::new(
-                "output",
-                format!("cannot write {}: {e}", path.display()),
-            ));
-        }
-    }
-    for (path, write) in direct {
-        let result = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&path)
-            .and_then(|f| {
-                let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
-                write(&mut w)?;
-                w.flush()
-            });
-        result.map_err(|e| {
-            InputError::new("output", format!("cannot write {}: {e}", path.display()))
+        writeln!(stderr, "{line}").map_err(|e| {
+            InputError::new("--timings", format!("cannot write to standard error: {e}"))
         })?;
     }
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::refine_types::*;
-
-    fn parse(s: &str) -> Result<RefineProblem, String> {
-        let v: serde_json::Value = serde_json::from_str(s).map_err(|e| e.to_string())?;
-        serde_path_to_error::deserialize(v).map_err(|e| {
-            let p = e.path().to_string();
-            format!("{p} | {}", e.into_inner())
-        })
+/// Reads and parses the problem (streamed: the text is never held); `--points FILE.csv`
+/// supplies `points` (or `t` and `y`), which the problem must not have already.
+fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C::Problem, Failure> {
+    let mut problem: C::Problem = match &args.problem {
+        Some(p) if p.as_os_str() == "-" => input::read_json(stdin, "standard input")?,
+        Some(p) => input::read_json(input::open(p, "problem")?, &p.display().to_string())?,
+        None if args.points_csv.is_some() => crate::spec::from_json("{}")?,
+        None if args.stdin_is_terminal => {
+            return Err(InputError::new(
+                "problem",
+                "no problem given: name a JSON file, or pipe one into standard input (curvefit refine < problem.json)",
+            )
+            .into())
+        }
+        None => input::read_json(stdin, "standard input")?,
+    };
+    if let Some(csv) = &args.points_csv {
+        let what = csv.display().to_string();
+        let points = input::read_csv(input::open(csv, "--points")?, &what)?;
+        C::set_points(&mut problem, points)?;
     }
-
-    #[test]
-    fn refine_defaults_follow_the_contract() {
-        let p = parse(r#"{"points": [[0,0],[1,0],[0,1]]}"#).unwrap();
-        assert!(p.closed && p.knots.is_none());
-        assert_eq!((p.k, p.knot_iterations, p.levels, p.level_k), (3, 3, 0, 1));
-        assert_eq!(p.parametrization, ParamSpec::Centripetal);
-        assert_eq!(p.constraint, ConstraintSpec::Interpolate);
-        assert_eq!(p.derivative, DerivativeSpec::Bessel);
-        assert_eq!(p.boundary, BoundarySpec::Natural);
-        assert_eq!(p.solver, SolverSpec::Exact);
-    }
-
-    #[test]
-    fn refine_variants_parse() {
-        let p = parse(
-            r#"{"points": [[0,0],[1,0],[0,1]], "parametrization": {"exponent": 0.3},
-                "constraint": {"type": "balls", "radii": [0.1, 0, 0.2]},
-                "tangents": [null, {"type": "wedge", "direction": [1,0], "half_angle": 0.2}, {"type": "tension", "radius": 1}],
-                "boundary": {"type": "near_clamped", "start": [1,0], "end": [0,1], "radius": 0.1},
-                "derivative": "average", "solver": "paper"}"#,
-        )
-        .unwrap();
-        assert_eq!(p.parametrization, ParamSpec::Exponent(0.3));
-        assert!(matches!(p.constraint, ConstraintSpec::Balls { ref radii } if radii.len() == 3));
-        assert_eq!(p.solver, SolverSpec::Paper);
-    }
-
-    #[test]
-    fn unknown_fields_are_errors_with_paths() {
-        let e = parse(r#"{"points": [[0,0]], "bogus": 1}"#).unwrap_err();
-        assert!(e.contains("bogus"), "{e}");
-        let e = parse(
-            r#"{"points": [[0,0]], "constraint": {"type": "balls", "radii": [1], "extra": 2}}"#,
-        )
-        .unwrap_err();
-        assert!(e.contains("extra"), "{e}");
-        let e = parse(r#"{"points": [[0,0], [1, "x"]]}"#).unwrap_err();
-        assert!(e.starts_with("points[1][1]"), "{e}");
-    }
+    Ok(problem)
 }

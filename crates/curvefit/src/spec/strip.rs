@@ -1,4 +1,4 @@
-//! `curvefit strip PROBLEM` — best interpolation in a strip (Dontchev–Kolmanovsky; the `strip`
+//! `strip` — best interpolation in a strip (Dontchev–Kolmanovsky; the `strip`
 //! crate).
 //!
 //! Problem: `t`, `y`, `lower`, `upper`, optional `end_slopes` \[s_start or null, s_end or null\].
@@ -13,15 +13,16 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Command, InputError};
-use crate::plot::{palette, Figure, Marker, Style};
+use super::messages::num;
+use super::{InputError, Numbers};
 
 /// Largest number of data points accepted (the solver is O(n) per iteration; this guards
 /// against absurd inputs).
 pub const MAX_POINTS: usize = 2_000_000;
 
 /// A bound in the JSON problem.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundSpec {
     /// One cubic per data interval, coefficients in s = t − t_i.
@@ -31,13 +32,17 @@ pub enum BoundSpec {
 }
 
 /// The JSON problem of `curvefit strip`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Problem {
-    /// Data sites, strictly increasing.
-    pub t: Vec<f64>,
-    /// Data values.
-    pub y: Vec<f64>,
+    /// Data sites, strictly increasing (required; the command line may read `t` and `y` from
+    /// the two columns of `--points FILE.csv`).
+    #[serde(default)]
+    pub t: Numbers,
+    /// Data values (required, like `t`).
+    #[serde(default)]
+    pub y: Numbers,
     /// Lower bound (default: none).
     #[serde(default)]
     pub lower: Option<BoundSpec>,
@@ -79,9 +84,6 @@ pub struct Solution {
     pub gradient_norm: f64,
 }
 
-/// The `strip` subcommand.
-pub enum Strip {}
-
 fn bound(b: &Option<BoundSpec>) -> strip::Bound {
     match b {
         None => strip::Bound::None,
@@ -122,9 +124,7 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
     match e {
         E::TooFewPoints { .. } => InputError::new("t", e),
         E::LengthMismatch { field, .. } => InputError::new(*field, e),
-        E::NonFinite { field, index } | E::TooLarge { field, index, .. } => {
-            InputError::new(format!("{field}[{index}]"), e)
-        }
+        E::NonFinite { field, index } => InputError::new(format!("{field}[{index}]"), e),
         E::NonIncreasingSites { index } => InputError::new(format!("t[{index}]"), e),
         E::NonIncreasingPolyline { side, index } => {
             InputError::new(format!("{}.polyline[{index}]", side_name(*side)), e)
@@ -132,154 +132,116 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
         E::PolylineDoesNotCover { side } => {
             InputError::new(format!("{}.polyline", side_name(*side)), e)
         }
-        E::DataOutsideBounds { index, .. } => InputError::new(format!("y[{index}]"), e),
-        E::EmptyStrip { interval, .. } => {
-            let f = bound_field(strip::Side::Lower);
-            if f.ends_with("pieces") {
-                InputError::new(format!("{f}[{interval}]"), e)
-            } else {
-                InputError::new(f, e)
-            }
-        }
+        // The strip crate prints these numbers in exponent form; the user reads them as written.
+        E::DataOutsideBounds {
+            index,
+            interval,
+            side,
+            by,
+        } => InputError::new(
+            format!("y[{index}]"),
+            format!(
+                "lies outside the {side} bound by {} at an end of interval {interval}",
+                num(*by)
+            ),
+        ),
+        E::TooLarge { field, index, max } => InputError::new(
+            format!("{field}[{index}]"),
+            format!("exceeds {} in magnitude", num(*max)),
+        ),
         E::NoFeasibleCandidate { interval } => InputError::new(
             format!("lower.pieces[{interval}]"),
             format!(
                 "{e} (cubic bounds with more than two contacts per interval are not supported)"
             ),
         ),
-        E::StripViolated { side, .. } => InputError::new(side_name(*side), e),
-        E::Discontinuous { .. } => InputError::new("t", e),
+        E::StripViolated {
+            side,
+            interval,
+            by,
+            tolerance,
+        } => InputError::new(
+            side_name(*side),
+            format!(
+                "the solution leaves the {side} bound by {} in interval {interval} (tolerance {})",
+                num(*by),
+                num(*tolerance)
+            ),
+        ),
+        E::Discontinuous { at, by, tolerance } => InputError::new(
+            "t",
+            format!(
+                "the solution's pieces do not join at t = {} (by {}, tolerance {}): rescale t and y",
+                num(*at),
+                num(*by),
+                num(*tolerance)
+            ),
+        ),
+        E::EmptyStrip { interval, t } => {
+            let f = bound_field(strip::Side::Lower);
+            let f = if f.ends_with("pieces") {
+                format!("{f}[{interval}]")
+            } else {
+                f
+            };
+            InputError::new(
+                f,
+                format!(
+                    "the lower bound is not below the upper bound in interval {interval} (at t = {})",
+                    num(*t)
+                ),
+            )
+        }
+        E::NotConverged {
+            iterations,
+            gradient_norm,
+        } => InputError::new(
+            "",
+            format!(
+                "not converged in {iterations} iterations (gradient norm {})",
+                num(*gradient_norm)
+            ),
+        ),
         _ => InputError::new("", e),
     }
 }
 
-impl Command for Strip {
-    type Problem = Problem;
-    type Solution = Solution;
-
-    fn solve(p: &Problem) -> Result<Solution, InputError> {
-        if p.t.len() > MAX_POINTS {
-            return Err(InputError::new(
-                "t",
-                format!("{} data points exceed the limit of {MAX_POINTS}", p.t.len()),
-            ));
-        }
-        let problem = strip::Problem {
-            t: p.t.clone(),
-            y: p.y.clone(),
-            lower: bound(&p.lower),
-            upper: bound(&p.upper),
-            end_slopes: p.end_slopes.unwrap_or([None, None]),
-        };
-        let s =
-            strip::solve(&problem, &strip::Options::default()).map_err(|e| input_error(p, &e))?;
-        Ok(Solution {
-            breaks: s.breaks,
-            coefficients: s.coefficients,
-            slopes: s.slopes,
-            extra_knots: s
-                .extra_knots
-                .iter()
-                .map(|k| ExtraKnot {
-                    t: k.t,
-                    kind: kind_name(k.kind),
-                })
-                .collect(),
-            energy: s.energy,
-            norm: s.norm,
-            iterations: s.iterations,
-            gradient_norm: s.gradient_norm,
-        })
+/// `curvefit strip`: validates and solves the problem with [`strip::solve`].
+///
+/// # Errors
+/// An [`InputError`] naming the user's field and index.
+pub fn solve(p: &Problem) -> Result<Solution, InputError> {
+    if p.t.len() > MAX_POINTS {
+        return Err(InputError::new(
+            "t",
+            format!("{} data points exceed the limit of {MAX_POINTS}", p.t.len()),
+        ));
     }
-
-    fn svg(p: &Problem, s: &Solution) -> Option<String> {
-        Some(figure(p, s, "best interpolation in a strip").to_svg())
-    }
-}
-
-fn eval_piece(c: &[f64; 4], s: f64) -> f64 {
-    c[0] + s * (c[1] + s * (c[2] + s * c[3]))
-}
-
-/// Samples of f on every piece (16 per piece).
-pub fn curve_points(s: &Solution) -> Vec<[f64; 2]> {
-    let mut pts = Vec::new();
-    for (j, c) in s.coefficients.iter().enumerate() {
-        let (a, b) = (s.breaks[j], s.breaks[j + 1]);
-        for k in 0..16 {
-            let x = a + (b - a) * k as f64 / 16.0;
-            pts.push([x, eval_piece(c, x - a)]);
-        }
-    }
-    if let (Some(c), Some(&b), Some(&a)) = (
-        s.coefficients.last(),
-        s.breaks.last(),
-        s.breaks.get(s.breaks.len().wrapping_sub(2)),
-    ) {
-        pts.push([b, eval_piece(c, b - a)]);
-    }
-    pts
-}
-
-/// The bound drawn as polylines (one per data interval for pieces, so jumps show).
-fn bound_lines(t: &[f64], b: &Option<BoundSpec>) -> Vec<Vec<[f64; 2]>> {
-    match b {
-        None => vec![],
-        Some(BoundSpec::Polyline(p)) => vec![p.clone()],
-        Some(BoundSpec::Pieces(pc)) => pc
+    let problem = strip::Problem {
+        t: p.t.0.clone(),
+        y: p.y.0.clone(),
+        lower: bound(&p.lower),
+        upper: bound(&p.upper),
+        end_slopes: p.end_slopes.unwrap_or([None, None]),
+    };
+    let s = strip::solve(&problem, &strip::Options::default()).map_err(|e| input_error(p, &e))?;
+    Ok(Solution {
+        breaks: s.breaks,
+        coefficients: s.coefficients,
+        slopes: s.slopes,
+        extra_knots: s
+            .extra_knots
             .iter()
-            .enumerate()
-            .filter(|(i, _)| i + 1 < t.len())
-            .map(|(i, c)| {
-                (0..=24)
-                    .map(|k| {
-                        let s = (t[i + 1] - t[i]) * k as f64 / 24.0;
-                        [t[i] + s, eval_piece(c, s)]
-                    })
-                    .collect()
+            .map(|k| ExtraKnot {
+                t: k.t,
+                kind: kind_name(k.kind),
             })
             .collect(),
-    }
-}
-
-/// The figure: bounds (dashed), the solution, the data, and the extra knots as stars.
-pub fn figure(p: &Problem, s: &Solution, title: &str) -> Figure {
-    let mut fig = Figure::new(title);
-    fig.equal_aspect(false);
-    let bstyle = Style::stroke(palette::BOUND, 1.2).dashed("5 3");
-    for line in bound_lines(&p.t, &p.lower)
-        .into_iter()
-        .chain(bound_lines(&p.t, &p.upper))
-    {
-        fig.polyline(&line, bstyle.clone());
-    }
-    fig.polyline(&curve_points(s), Style::stroke(palette::CURVE, 2.0));
-    let data: Vec<[f64; 2]> = p.t.iter().zip(&p.y).map(|(a, b)| [*a, *b]).collect();
-    fig.points(&data, Marker::Ring, Style::stroke(palette::DATA, 1.5));
-    let knots: Vec<[f64; 2]> = s
-        .extra_knots
-        .iter()
-        .map(|k| {
-            let j = s
-                .breaks
-                .partition_point(|b| *b <= k.t)
-                .clamp(1, s.coefficients.len())
-                - 1;
-            [k.t, eval_piece(&s.coefficients[j], k.t - s.breaks[j])]
-        })
-        .collect();
-    fig.points(&knots, Marker::Star, Style::fill(palette::KNOT));
-    fig.legend("bounds", bstyle);
-    fig.legend("solution", Style::stroke(palette::CURVE, 2.0));
-    fig.legend("extra knots", Style::fill(palette::KNOT));
-    fig.caption(&format!(
-        "‖f''‖ = {:.4}   ∫f''² = {:.4}   {} extra knots   {} iterations",
-        s.norm,
-        s.energy,
-        s.extra_knots.len(),
-        s.iterations
-    ));
-    fig
+        energy: s.energy,
+        norm: s.norm,
+        iterations: s.iterations,
+        gradient_norm: s.gradient_norm,
+    })
 }
 
 #[cfg(test)]
@@ -297,28 +259,27 @@ mod tests {
                 "lower": {"pieces": [[-0.05,0,0,0],[-0.05,0,0,0],[-0.05,0,0,0],[-0.05,0,0,0]]},
                 "upper": null}"#,
         );
-        let s = Strip::solve(&p).unwrap();
+        let s = solve(&p).unwrap();
         assert!(!s.extra_knots.is_empty());
         assert!(s.extra_knots.iter().all(|k| k.kind.ends_with("lower")));
         assert!((s.norm * s.norm - s.energy).abs() <= 1e-12 * s.energy);
         assert_eq!(s.breaks.len(), s.coefficients.len() + 1);
-        assert!(Strip::svg(&p, &s).unwrap().starts_with("<svg"));
     }
 
     #[test]
     fn errors_name_the_field() {
         let p = parse(r#"{"t": [0, 1, 2], "y": [0, 1, 0], "lower": {"pieces": [[0,0,0,0]]}}"#);
-        assert_eq!(Strip::solve(&p).unwrap_err().field, "lower.pieces");
+        assert_eq!(solve(&p).unwrap_err().field, "lower.pieces");
         let p = parse(r#"{"t": [0, 1, 1], "y": [0, 1, 0]}"#);
-        assert_eq!(Strip::solve(&p).unwrap_err().field, "t[2]");
+        assert_eq!(solve(&p).unwrap_err().field, "t[2]");
         let p = parse(
             r#"{"t": [0, 1, 2], "y": [0, 2, 0], "upper": {"pieces": [[1,0,0,0],[1,0,0,0]]}}"#,
         );
-        assert_eq!(Strip::solve(&p).unwrap_err().field, "y[1]");
+        assert_eq!(solve(&p).unwrap_err().field, "y[1]");
         let p = parse(
             r#"{"t": [0, 1, 2], "y": [0, 0.5, 0], "lower": {"pieces": [[-1,0,0,0],[2,0,0,0]]}, "upper": {"pieces": [[1,0,0,0],[1,0,0,0]]}}"#,
         );
-        assert_eq!(Strip::solve(&p).unwrap_err().field, "lower.pieces[1]");
+        assert_eq!(solve(&p).unwrap_err().field, "lower.pieces[1]");
         assert!(
             serde_json::from_str::<Problem>(r#"{"t": [0, 1], "y": [0, 1], "extra": 1}"#).is_err()
         );

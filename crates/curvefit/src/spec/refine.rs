@@ -1,6 +1,7 @@
-//! `curvefit refine`: validation of the JSON problem and the call into `refine`.
+//! `refine`: validation of the JSON problem, its mapping onto [`refine::Problem`] and the JSON
+//! result ([`solve`]).
 
-use super::refine_types::*;
+pub use super::refine_types::*;
 use super::InputError;
 
 /// Largest refined problem accepted: vertices × dimension of the final curve. A problem beyond it
@@ -37,7 +38,10 @@ fn finite(field: impl Fn() -> String, x: f64) -> Result<f64, InputError> {
 fn nonneg(field: impl Fn() -> String, x: f64) -> Result<f64, InputError> {
     let x = finite(&field, x)?;
     if x < 0.0 {
-        return Err(InputError::new(field(), format!("must be ≥ 0, got {x}")));
+        return Err(InputError::new(
+            field(),
+            format!("must be ≥ 0, got {}", super::messages::num(x)),
+        ));
     }
     Ok(x)
 }
@@ -95,20 +99,12 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
             ),
         ));
     }
-    let d = p.points[0].len();
-    if d == 0 {
-        return Err(InputError::new(
-            "points[0]",
-            "has no coordinates (dimension must be at least 1)",
-        ));
-    }
-    for (i, q) in p.points.iter().enumerate() {
-        vector(|| format!("points[{i}]"), q, d)?;
-    }
+    // Rows guarantee one dimension d ≥ 1 and finite coordinates.
+    let d = p.points.dim();
     let spans = if p.closed { n } else { n - 1 };
     for i in 0..spans {
         let j = (i + 1) % n;
-        if p.points[i] == p.points[j] {
+        if p.points.point(i) == p.points.point(j) {
             return Err(InputError::new(
                 format!("points[{j}]"),
                 format!(
@@ -211,7 +207,10 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
                     if a >= std::f64::consts::FRAC_PI_2 {
                         return Err(InputError::new(
                             format!("{f}.half_angle"),
-                            format!("must be below π/2 (a convex wedge), got {a}"),
+                            format!(
+                                "must be below π/2 (a convex wedge), got {}",
+                                super::messages::num(a)
+                            ),
                         ));
                     }
                 }
@@ -252,8 +251,8 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
 /// # Errors
 /// An [`InputError`] for points the library rejects.
 pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
-    use divdiff::{DerivativeRule, Parametrization, Points, Topology};
-    let points = Points::from_rows(&p.points).map_err(|e| InputError::new("", e))?;
+    use divdiff::{DerivativeRule, Parametrization, Topology};
+    let points = p.points.0.clone();
     let hs = |h: &HalfSpaceSpec| refine::HalfSpace {
         normal: h.normal.clone(),
         offset: h.offset,
@@ -344,258 +343,33 @@ pub fn to_result(r: refine::Refinement) -> RefineResult {
         knots: r.knots.values().to_vec(),
         data_vertex: r.data_vertex,
         energy: r.energy,
-        multipliers: serde_json::json!(r.multipliers),
+        multipliers: r.multipliers,
         active: r.active,
         kkt_residual: r.kkt_residual,
-        iterations: serde_json::json!({
-            "solves": r.iterations.solves,
-            "knot_updates": r.iterations.knot_updates,
-            "solver": r.iterations.solver,
-        }),
+        iterations: RefineIterations {
+            knot_updates: r.iterations.knot_updates,
+            solver: r.iterations.solver,
+            solves: r.iterations.solves,
+        },
     }
 }
 
-/// The `refine` subcommand.
-pub enum RefineCmd {}
-
-impl super::Command for RefineCmd {
-    type Problem = RefineProblem;
-    type Solution = RefineResult;
-
-    fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
-        validate(problem)?;
-        let prob = to_library(problem)?;
-        let r = prob.solve().map_err(|e| match e {
-            refine::Error::TooLarge { field, limit } => InputError::new(
-                field,
-                format!("the first stage would exceed {limit} coordinates, the limit of the general interior-point solver (tangents, end conditions, half-spaces); lower k"),
-            ),
-            e => InputError::new("", e),
-        })?;
-        Ok(to_result(r))
-    }
-
-    fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
-        Some(picture(problem, solution))
-    }
-}
-
-/// Draws each tangent constraint at its data vertex: the derivative of the refined curve there
-/// (central difference of the neighbours) as a solid arrow, the wedge's bounding rays dashed and
-/// the ball of a ball/tension constraint around the vertex, all scaled to a common length.
-fn draw_tangents(
-    fig: &mut crate::plot::Figure,
-    tangents: &[Option<TangentSpec>],
-    r: &RefineResult,
-) {
-    use crate::plot::{palette, Style};
-    let n = r.points.len();
-    if n < 3 {
-        return;
-    }
-    let closed_len = r.knots.len() > n;
-    let span: f64 =
-        r.knots.last().copied().unwrap_or(1.0) - r.knots.first().copied().unwrap_or(0.0);
-    let extent = r
-        .points
-        .iter()
-        .flat_map(|v| v.iter().take(2))
-        .fold(0.0f64, |m, x| m.max(x.abs()))
-        .max(1e-300);
-    let len = 0.12 * extent;
-    for (i, t) in tangents.iter().enumerate() {
-        let (Some(t), Some(&j)) = (t, r.data_vertex.get(i)) else {
-            continue;
-        };
-        let (a, b) = if closed_len {
-            ((j + n - 1) % n, (j + 1) % n)
-        } else {
-            (j.saturating_sub(1), (j + 1).min(n - 1))
-        };
-        let dt = if b > a {
-            r.knots[b] - r.knots[a]
-        } else {
-            r.knots[b] + span - r.knots[a]
-        };
-        // Knots are strictly increasing, so dt > 0; guard anyway (a picture never fails).
-        let dt = if dt > 0.0 { dt } else { 1.0 };
-        let df = [
-            (r.points.point(b)[0] - r.points.point(a)[0]) / dt,
-            (r.points.point(b)[1] - r.points.point(a)[1]) / dt,
-        ];
-        let p0 = [r.points.point(j)[0], r.points.point(j)[1]];
-        let norm = (df[0] * df[0] + df[1] * df[1]).sqrt().max(1e-300);
-        let arrow = [p0[0] + len * df[0] / norm, p0[1] + len * df[1] / norm];
-        fig.segment(p0, arrow, Style::stroke(palette::SECOND, 2.0));
-        if let TangentSpec::Wedge {
-            direction,
-            half_angle,
-        } = t
-        {
-            let u = (direction[0].hypot(direction[1])).max(1e-300);
-            for s in [-1.0, 1.0] {
-                let (c, sn) = ((s * half_angle).cos(), (s * half_angle).sin());
-                let v = [
-                    (c * direction[0] - sn * direction[1]) / u,
-                    (sn * direction[0] + c * direction[1]) / u,
-                ];
-                fig.segment(
-                    p0,
-                    [p0[0] + 1.4 * len * v[0], p0[1] + 1.4 * len * v[1]],
-                    Style::stroke(palette::THIRD, 1.0).dashed("3 2"),
-                );
-            }
-        }
-    }
-    fig.legend("Df at vertex", Style::stroke(palette::SECOND, 2.0));
-}
-
-/// The 2-D polygon of a JSON half-space set, clipped to a square (see
-/// [`refine::halfplane_polygon`]).
-pub fn halfplane_polygon(
-    halfspaces: &[HalfSpaceSpec],
-    around: [f64; 2],
-    extent: f64,
-) -> Vec<[f64; 2]> {
-    let set: Vec<refine::HalfSpace> = halfspaces
-        .iter()
-        .map(|h| refine::HalfSpace {
-            normal: h.normal.clone(),
-            offset: h.offset,
-        })
-        .collect();
-    refine::halfplane_polygon(&set, around, extent)
-}
-
-/// The picture of a refinement: data points, their tolerance regions (active ones highlighted),
-/// the refined curve and the attached data vertices; curves in R^d show the first two coordinates,
-/// curves in R^1 are drawn as graphs over their knots.
-pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
-    use crate::plot::{palette, Figure, Marker, Style};
-    let d = p.points.first().map_or(0, Vec::len);
-    let xy = |v: &[f64], t: f64| -> [f64; 2] {
-        if d >= 2 {
-            [v[0], v[1]]
-        } else {
-            [t, v.first().copied().unwrap_or(0.0)]
-        }
-    };
-    let kind = match &p.constraint {
-        ConstraintSpec::Interpolate => "interpolation",
-        ConstraintSpec::Balls { .. } => "balls",
-        ConstraintSpec::Smoothing { .. } => "smoothing",
-        ConstraintSpec::Halfspaces { .. } => "convex polygons",
-    };
-    let extras = match (&p.tangents, &p.boundary) {
-        (Some(_), BoundarySpec::Natural) => " + tangents",
-        (Some(_), _) => " + tangents + ends",
-        (None, BoundarySpec::Clamped { .. }) => ", clamped ends",
-        (None, BoundarySpec::NearClamped { .. }) => ", near-clamped ends",
-        (None, BoundarySpec::Natural) => "",
-    };
-    let mut fig = Figure::new(&format!(
-        "Refinement: {kind}{extras} ({}, {} → {} vertices)",
-        if p.closed { "closed" } else { "open" },
-        p.points.len(),
-        r.points.len()
-    ));
-    fig.equal_aspect(d >= 2);
-    let data_t: Vec<f64> = r
-        .data_vertex
-        .iter()
-        .map(|&j| r.knots.get(j).copied().unwrap_or(0.0))
-        .collect();
-    let active_style = Style::stroke(palette::ACTIVE, 1.3).with_fill(palette::ACTIVE, 0.08);
-    let inactive_style = Style::stroke(palette::REGION, 1.0).with_fill(palette::REGION, 0.08);
-    match &p.constraint {
-        ConstraintSpec::Balls { radii } if d >= 2 => {
-            for (i, q) in p.points.iter().enumerate() {
-                let st = if r.active.get(i).copied().unwrap_or(false) {
-                    &active_style
-                } else {
-                    &inactive_style
-                };
-                fig.circle(xy(q, 0.0), radii[i], st.clone());
-            }
-        }
-        ConstraintSpec::Halfspaces { sets } if d == 2 => {
-            // Unbounded sets are clipped to a box around the data (a quarter of its size beyond it).
-            let (lo, hi) = p.points.iter().fold(
-                ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
-                |(lo, hi), q| {
-                    (
-                        [lo[0].min(q[0]), lo[1].min(q[1])],
-                        [hi[0].max(q[0]), hi[1].max(q[1])],
-                    )
-                },
-            );
-            let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300);
-            let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
-            for (i, (_q, set)) in p.points.iter().zip(sets).enumerate() {
-                let poly = halfplane_polygon(set, centre, 0.75 * size);
-                let st = if r.active.get(i).copied().unwrap_or(false) {
-                    &active_style
-                } else {
-                    &inactive_style
-                };
-                if poly.len() >= 3 {
-                    fig.polygon(&poly, st.clone());
-                }
-            }
-        }
-        _ => {}
-    }
-    let curve: Vec<[f64; 2]> = r
-        .points
-        .iter()
-        .zip(&r.knots)
-        .map(|(v, &t)| xy(v, t))
-        .collect();
-    if p.closed && d >= 2 {
-        fig.polygon(&curve, Style::stroke(palette::CURVE, 1.6));
-    } else {
-        fig.polyline(&curve, Style::stroke(palette::CURVE, 1.6));
-    }
-    if let (Some(tangents), true) = (&p.tangents, d >= 2) {
-        draw_tangents(&mut fig, tangents, r);
-    }
-    let attached: Vec<[f64; 2]> = r
-        .data_vertex
-        .iter()
-        .zip(&data_t)
-        .filter(|&(&j, _)| j < r.points.len())
-        .map(|(&j, &t)| xy(r.points.point(j), t))
-        .collect();
-    fig.points_sized(
-        &attached,
-        Marker::Ring,
-        6.0,
-        Style::stroke(palette::CURVE, 1.0),
-    );
-    let data: Vec<[f64; 2]> = p
-        .points
-        .iter()
-        .zip(&data_t)
-        .map(|(q, &t)| xy(q, t))
-        .collect();
-    fig.points(&data, Marker::Dot, Style::fill(palette::DATA));
-    fig.legend("refined curve", Style::stroke(palette::CURVE, 1.6));
-    fig.legend("data point", Style::fill(palette::DATA));
-    if !matches!(
-        p.constraint,
-        ConstraintSpec::Interpolate | ConstraintSpec::Smoothing { .. }
-    ) {
-        fig.legend("active constraint", Style::stroke(palette::ACTIVE, 1.3));
-        fig.legend("inactive constraint", Style::stroke(palette::REGION, 1.0));
-    }
-    let n_active = r.active.iter().filter(|&&a| a).count();
-    fig.caption(&format!(
-        "E = {:.6}   KKT residual = {:.1e}   active: {n_active} of {}",
-        r.energy,
-        r.kkt_residual,
-        r.active.len()
-    ));
-    fig.to_svg()
+/// `curvefit refine`: validates the problem, solves it with [`refine::Problem::solve`] and returns
+/// the JSON result.
+///
+/// # Errors
+/// An [`InputError`] naming the user's field and index.
+pub fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
+    validate(problem)?;
+    let prob = to_library(problem)?;
+    let r = prob.solve().map_err(|e| match e {
+        refine::Error::TooLarge { field, limit } => InputError::new(
+            field,
+            format!("the first stage would exceed {limit} coordinates, the limit of the general interior-point solver (tangents, end conditions, half-spaces); lower k"),
+        ),
+        e => InputError::new("", e),
+    })?;
+    Ok(to_result(r))
 }
 
 #[cfg(test)]
@@ -603,7 +377,7 @@ mod tests {
     use super::*;
 
     fn problem(json: &str) -> RefineProblem {
-        serde_json::from_str(json).unwrap()
+        super::super::from_json(json).unwrap()
     }
 
     #[test]
@@ -616,15 +390,20 @@ mod tests {
     #[test]
     fn validation_names_fields_and_indices() {
         let cases = [
-            (r#"{"points": [[0,0],[1,0]]}"#, "points"),
+            (r#"{"points": [[0,0],[1,0]], "closed": true}"#, "points"),
+            (r#"{"points": [[0,0]]}"#, "points"),
             (r#"{"points": [[0,0],[1,0],[1,0]]}"#, "points[2]"),
             (r#"{"points": [[0,0],[1,0],[0]]}"#, "points[2]"),
             (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,1,2]}"#,
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": true, "knots": [0,1,1,2]}"#,
                 "knots[2]",
             ),
             (
-                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2]}"#,
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": true, "knots": [0,1,2]}"#,
+                "knots",
+            ),
+            (
+                r#"{"points": [[0,0],[1,0],[0,1]], "knots": [0,1,2,3]}"#,
                 "knots",
             ),
             (r#"{"points": [[0,0],[1,0],[0,1]], "k": 0}"#, "k"),
@@ -642,7 +421,7 @@ mod tests {
                 "tangents[1].direction",
             ),
             (
-                r#"{"points": [[0,0],[1,0],[0,1]], "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
+                r#"{"points": [[0,0],[1,0],[0,1]], "closed": true, "boundary": {"type": "clamped", "start": [1,0], "end": [1,0]}}"#,
                 "boundary",
             ),
             (
@@ -651,7 +430,10 @@ mod tests {
             ),
         ];
         for (json, field) in cases {
-            let e = validate(&problem(json)).unwrap_err();
+            let e = match super::super::from_json::<RefineProblem>(json) {
+                Ok(p) => validate(&p).unwrap_err(),
+                Err(e) => e,
+            };
             assert_eq!(e.field, field, "{json}: {e}");
         }
         assert_eq!(

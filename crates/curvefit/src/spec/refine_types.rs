@@ -1,10 +1,9 @@
-//! JSON problem and result of `curvefit refine` (issue 7's contract, field for field).
+//! JSON problem and result of `refine` (issue 7's contract, field for field).
 
 use serde::{Deserialize, Serialize};
 
-fn yes() -> bool {
-    true
-}
+pub use super::points::Rows;
+
 fn three() -> usize {
     3
 }
@@ -12,16 +11,20 @@ fn one() -> usize {
     1
 }
 
-/// A Kersey refinement problem. Defaults: `closed` true, `parametrization` centripetal, `k` 3,
+/// A Kersey refinement problem. Defaults: `closed` false, `parametrization` centripetal, `k` 3,
 /// `knot_iterations` 3, `levels` 0, `level_k` 1, `constraint` interpolate, `derivative` bessel,
 /// `boundary` natural, `solver` exact.
-#[derive(Clone, Debug, Deserialize)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RefineProblem {
-    /// The data q_1..q_n, all of the same dimension d ≥ 1.
-    pub points: Vec<Vec<f64>>,
-    /// Closed curve (the last span closes it) or open.
-    #[serde(default = "yes")]
+    /// The data points q_1..q_n, all of the same dimension d ≥ 1 (required; the command line can
+    /// read them from `--points FILE.csv` instead).
+    #[serde(default)]
+    pub points: Rows,
+    /// Closed curve (the last span, from the last point back to the first, closes it) or open
+    /// (default: open, as scipy's splines and most curve fitters are).
+    #[serde(default)]
     pub closed: bool,
     /// Data parameters: open n values, closed n + 1 (the last closes the curve).
     #[serde(default)]
@@ -59,7 +62,8 @@ pub struct RefineProblem {
 }
 
 /// `"uniform" | "centripetal" | "chordal" | {"exponent": e}`.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ParamSpec {
     /// e = 0.
@@ -74,7 +78,8 @@ pub enum ParamSpec {
 }
 
 /// One half-space `normal · x ≤ offset`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct HalfSpaceSpec {
     /// Outward normal (length d, non-zero).
@@ -84,7 +89,8 @@ pub struct HalfSpaceSpec {
 }
 
 /// The constraint on the data vertices.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ConstraintSpec {
     /// p_{i_k} = q_i.
@@ -108,7 +114,8 @@ pub enum ConstraintSpec {
 }
 
 /// A constraint on the derivative Df at a data vertex.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TangentSpec {
     /// |Df − center| ≤ radius.
@@ -138,7 +145,8 @@ pub enum TangentSpec {
 }
 
 /// `"average" | "bessel"`.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum DerivativeSpec {
     /// (2.2): ½(s_{i−1} + s_i); one-sided differences at open ends.
@@ -149,7 +157,8 @@ pub enum DerivativeSpec {
 }
 
 /// End conditions of an open curve.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundarySpec {
     /// Natural ends (default).
@@ -174,7 +183,8 @@ pub enum BoundarySpec {
 }
 
 /// `"exact" | "paper"`.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverSpec {
     /// Interior point + polish: the exact optimum with a KKT certificate.
@@ -182,29 +192,6 @@ pub enum SolverSpec {
     Exact,
     /// Kersey's multiplier iteration (approximate; reproduces the paper's figures).
     Paper,
-}
-
-/// Points serialized as `[[x, y, …], …]` straight from their flat storage (no per-point
-/// allocation: results can have millions of vertices).
-#[derive(Clone, Debug, Default)]
-pub struct Rows(pub divdiff::Points);
-
-impl std::ops::Deref for Rows {
-    type Target = divdiff::Points;
-    fn deref(&self) -> &divdiff::Points {
-        &self.0
-    }
-}
-
-impl Serialize for Rows {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeSeq;
-        let mut seq = s.serialize_seq(Some(self.0.len()))?;
-        for p in self.0.iter() {
-            seq.serialize_element(p)?;
-        }
-        seq.end()
-    }
 }
 
 /// The result of `curvefit refine`.
@@ -218,12 +205,24 @@ pub struct RefineResult {
     pub data_vertex: Vec<usize>,
     /// E of (2.1) for `points` and `knots`.
     pub energy: f64,
-    /// Multipliers of the final solve (see the README for their meaning per constraint type).
-    pub multipliers: serde_json::Value,
+    /// Multipliers of the final solve, one list per data point (see the README for their
+    /// meaning per constraint type).
+    pub multipliers: Vec<Vec<f64>>,
     /// Which data-point constraints are active at the optimum.
     pub active: Vec<bool>,
     /// Relative KKT residual of the final solve.
     pub kkt_residual: f64,
     /// Iteration counts.
-    pub iterations: serde_json::Value,
+    pub iterations: RefineIterations,
+}
+
+/// Iteration counts of a refinement (fields in the order the result has always printed them).
+#[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
+pub struct RefineIterations {
+    /// Knot updates over all stages.
+    pub knot_updates: usize,
+    /// Inner iterations of the fixed-knot solver over all stages.
+    pub solver: usize,
+    /// Fixed-knot solves over all stages.
+    pub solves: usize,
 }

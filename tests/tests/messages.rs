@@ -1,0 +1,144 @@
+//! Error messages in the user's words (issue 19 §2): each bad input below is refused with a
+//! message that says what the field must look like in JSON, never a Rust type name, with numbers
+//! as a person writes them.
+
+use curvefit_tests::run_cli;
+
+const P: &str = r#""points": [[0, 0], [1, 0], [0, 1]]"#;
+
+/// Words of the implementation that must never reach a user.
+const RUST_WORDS: &[&str] = &[
+    "usize",
+    "f64",
+    "Spec",
+    "struct",
+    "enum",
+    "Vec<",
+    "Option",
+    "tuple",
+    "a sequence",
+    "a map",
+    "variant",
+    "internally tagged",
+];
+
+fn message(sub: &str, doc: &str) -> String {
+    let (code, out, err) = run_cli(&[sub, "-"], doc);
+    assert_eq!(code, 2, "{doc}: {err}");
+    assert!(out.is_empty());
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    for w in RUST_WORDS {
+        assert!(!err.contains(w), "{doc}: `{w}` in {err}");
+    }
+    // No number in exponent form with a long mantissa (3.400000000000001e-1).
+    let long = err
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == 'e' || c == '-'))
+        .any(|w| w.contains('e') && w.split('e').next().is_some_and(|m| m.len() > 8));
+    assert!(!long, "{doc}: unreadable number in {err}");
+    err.trim_end().to_string()
+}
+
+#[test]
+fn messages_say_what_the_field_must_be() {
+    let cases: &[(&str, String, &str)] = &[
+        (
+            "refine",
+            format!(r#"{{{P}, "closed": false, "boundary": "clamped"}}"#),
+            r#"error: boundary: must be an object like {"type": "clamped", "start": [...], "end": [...]}"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": "balls"}}"#),
+            r#"error: constraint: must be an object like {"type": "balls", "radii": [...]}"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": {{"type": "balls"}}}}"#),
+            r#"error: constraint: needs the field "radii""#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "tangents": ["wedge", null, null]}}"#),
+            r#"error: tangents[0]: must be null or an object like {"type": "wedge", "direction": [...], "half_angle": 0.2}"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "parametrization": "centripedal"}}"#),
+            r#"error: parametrization: "centripedal" is not allowed: parametrization must be "uniform", "centripetal", "chordal" or an object like {"exponent": 0.5}"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "parametrization": 0.5}}"#),
+            r#"error: parametrization: must be "uniform", "centripetal", "chordal" or an object like {"exponent": 0.5}"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "closed": false, "boundary": {{"type": "clamp"}}}}"#),
+            r#"error: boundary.type: "clamp" is not allowed: boundary must be an object like"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "k": -1}}"#),
+            "error: k: must be a whole number ≥ 0, not -1",
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "k": 1.5}}"#),
+            "error: k: must be a whole number ≥ 0, not 1.5",
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "closed": "yes"}}"#),
+            r#"error: closed: must be true or false, not the string "yes""#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "knots": [0, 1, 2, "a"]}}"#),
+            r#"error: knots[3]: must be a number, not the string "a""#,
+        ),
+        (
+            "refine",
+            r#"{"points": [1, 2, 3]}"#.to_string(),
+            "error: points[0]: must be a point, an array of numbers like [0.5, 1.25], not 1",
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": {{"type": "balls", "radii": [1, -0.34, 1]}}}}"#),
+            "error: constraint.radii[1]: must be ≥ 0, got -0.34",
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": {{"type": "balls", "radii": [1, -1e-300, 1]}}}}"#),
+            "error: constraint.radii[1]: must be ≥ 0, got -1e-300",
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1, 2], "y": [0, 1.34, 0], "upper": {"pieces": [[1, 0, 0, 0], [1, 0, 0, 0]]}}"#.to_string(),
+            "error: y[1]: lies outside the upper bound by 0.34 at an end of interval 1",
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1, 2], "y": [0, 1, 0], "upper": {"polyline": [[1, 0, 0]]}}"#.to_string(),
+            "error: upper.polyline[0]: must be a vertex [t, value]: two numbers",
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1, 2], "y": [0, 1, 0], "upper": [[1, 0, 0, 0]]}"#.to_string(),
+            r#"error: upper: must be null or an object like {"pieces": [[c0, c1, c2, c3], ...]}"#,
+        ),
+        (
+            "strip",
+            r#"{"t": [0, 1, 2], "y": [0, 1, 0], "end_slopes": [1]}"#.to_string(),
+            "error: end_slopes: must be an array [start, end] of two numbers or nulls, not an array of 1 entry",
+        ),
+        (
+            "surface",
+            r#"{"rows": 2, "cols": 2, "points": [[0, 0], [1, 0], [0, 1], [1, 1]], "scheme": 4}"#.to_string(),
+            r#"error: scheme: must be an object like {"points": 4, "arity": 2}, not 4"#,
+        ),
+    ];
+    for (sub, doc, want) in cases {
+        let got = message(sub, doc);
+        assert!(got.starts_with(*want), "{doc}\n got: {got}\nwant: {want}");
+    }
+}
