@@ -6,7 +6,6 @@
 //! ones measured and tabulated in ROBUSTNESS.md (run with `--nocapture` to print the table).
 
 use divdiff::{Parametrization, Points, Topology};
-use energy::Hessian;
 use refine::{
     ConicOptions, ConicProblem, Constraint, ConvexSet, Error, HalfSpace, Problem, Refinement,
 };
@@ -398,8 +397,7 @@ fn radii_from_zero_to_beyond_the_data() {
 fn iteration_limit_gives_not_converged_with_the_best_residual() {
     let q = data(8, true, 1.0, 0.0);
     let knots = divdiff::parametrize(&q, Topology::Closed, Parametrization::Centripetal).unwrap();
-    let h = Hessian::new(&knots);
-    let mut cp = ConicProblem::new(&h, 2).unwrap();
+    let mut cp = ConicProblem::new(&knots, 2).unwrap();
     for i in 0..8 {
         cp.add_constraint(
             &[(i, 1.0)],
@@ -411,12 +409,10 @@ fn iteration_limit_gives_not_converged_with_the_best_residual() {
         .unwrap();
     }
     let full = cp.solve(&ConicOptions::default()).unwrap();
-    assert!(full.kkt.total <= refine::CONIC_ACCEPT);
+    let accept = ConicOptions::default().accept;
+    assert!(full.kkt.total <= accept);
     for limit in [0, 1, 2] {
-        let opts = ConicOptions {
-            max_iterations: limit,
-            ..ConicOptions::default()
-        };
+        let opts = ConicOptions::default().with_max_iterations(limit);
         match cp.solve(&opts) {
             Err(Error::NotConverged {
                 iterations,
@@ -427,7 +423,7 @@ fn iteration_limit_gives_not_converged_with_the_best_residual() {
                     "limit {limit}: NotConverged after {iterations}, best residual {residual:e}"
                 );
                 assert!(iterations <= limit.max(1));
-                assert!(residual.is_finite() && residual > refine::CONIC_ACCEPT);
+                assert!(residual.is_finite() && residual > accept);
             }
             other => panic!("limit {limit}: expected NotConverged, got {other:?}"),
         }

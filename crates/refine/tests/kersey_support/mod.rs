@@ -438,3 +438,5 @@ fn solve_socp_tol(data: SocpData, d: usize, tol: f64) -> Result<Reference, Strin
         iterations: sol.iterations,
     })
 }
+
+pub mod cases;

@@ -1,46 +1,10 @@
-//! Kersey's variational refinement: split, interpolation, balls, smoothing, Algorithm 4.1.
+//! Solving a [`Problem`]: Algorithm 4.1 on centred data, the closed-form interpolatory
+//! refinement, and the stage-0 solve the free-knot optimizer calls.
 
-mod algorithm;
-mod certify;
-mod condensed;
-mod degenerate;
-mod exact;
-mod fast;
-mod fixed;
-mod operator;
-mod problem;
-mod slots;
-mod split;
-mod uniform;
-
-pub use algorithm::{Iterations, Refinement, Stage};
-pub use certify::{ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
-pub use condensed::{
-    CONDENSED_ACCEPT, CONDENSED_MAX_ITERATIONS, CONDENSED_MAX_REFINEMENT_STEPS,
-    CONDENSED_MAX_REGULARIZATION, CONDENSED_NEWTON_ACCURACY, CONDENSED_POLISH_ACTIVE_CHANGES,
-    CONDENSED_POLISH_ACTIVE_RTOL, CONDENSED_POLISH_SKIP, CONDENSED_POLISH_STEPS,
-    CONDENSED_POLISH_STIFFNESS, CONDENSED_REFINEMENT_RTOL, CONDENSED_REGULARIZATION,
-    CONDENSED_REGULARIZATION_GROWTH, CONDENSED_ROUND_TOLERANCE, CONDENSED_STEP_FRACTION,
-    CONDENSED_STRICT_TOLERANCE, CONDENSED_TOLERANCE, WORKING_SET_ADD_ALL, WORKING_SET_DENSE,
-    WORKING_SET_DENSE_ROUND, WORKING_SET_MARGIN, WORKING_SET_MAX_ROUNDS, WORKING_SET_MAX_STRIDE,
-    WORKING_SET_MIN_POINTS, WORKING_SET_NEAR, WORKING_SET_START_POINTS, WORKING_SET_START_STEP,
-    WORKING_SET_WINDOW,
-};
-pub use degenerate::{COMMON_POINT_STAGNATION, COMMON_POINT_SWEEPS, COMMON_POINT_TOL};
-pub use divdiff::{DerivativeRule, Parametrization};
-pub use exact::{EXACT_CONIC_TOLERANCE, EXACT_KKT_TARGET};
-pub use fixed::{
-    BALL_POLISH_ACTIVE_RTOL, BALL_POLISH_NEWTON_STEPS, BALL_POLISH_ROUNDS, BALL_POLISH_STIFFNESS,
-    HALFSPACE_POLISH_ACTIVE_RTOL, HALFSPACE_POLISH_AL_STEPS, HALFSPACE_POLISH_CHANGE_RTOL,
-    HALFSPACE_POLISH_REFINEMENT_STEPS, HALFSPACE_POLISH_ROUNDS, HALFSPACE_POLISH_STIFFNESS,
-    PAPER_WEIGHT_FLOOR,
-};
-pub use problem::{
-    Boundary, Constraint, HalfSpace, Problem, Solver, Tangent, DEFAULT_K, DEFAULT_KNOT_ITERATIONS,
-    DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
-};
-pub use slots::halfplane_polygon;
-pub use split::{data_vertex, split};
+use crate::constraint::Constraint;
+use crate::problem::{Problem, Solver};
+use crate::stage::FixedProblem;
+use crate::{algorithm, strategy, uniform, Refinement};
 
 impl Problem {
     /// Validates the problem and runs Algorithm 4.1 (see the crate docs).
@@ -72,15 +36,10 @@ impl Problem {
                 *x -= c;
             }
         }
-        if let Constraint::HalfSpaces(sets) = &mut centred.constraint {
-            for h in sets.iter_mut().flatten() {
-                h.offset -= h
-                    .normal
-                    .iter()
-                    .zip(&centroid)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
-            }
+        // Each kind moves its own data with the points (half-space offsets, …).
+        let offset: Vec<f64> = centroid.iter().map(|c| -c).collect();
+        for kind in self.kinds() {
+            kind.translate(&offset, &mut centred);
         }
         let mut r = algorithm::run(&centred)?;
         for j in 0..r.points.len() {
@@ -126,6 +85,38 @@ impl Problem {
         )
     }
 
+    /// The conic program of the first fixed-knot solve — stage 0 on the k-level split of the
+    /// data knots, before any knot update — as the constraint kinds state it: what the exact
+    /// solver's full-vertex entries solve ([`crate::strategy`]), for inspection and for
+    /// solving with another method (e.g. [`ConicProblem::solve_clarabel`]). The data are not
+    /// centred ([`Problem::solve`] centres them first).
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`]; errors of the derivative stencils.
+    pub fn conic_problem(&self) -> Result<crate::ConicProblem, crate::Error> {
+        self.validate()?;
+        let knots = algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)?;
+        let stride = self.k + 1;
+        let dv: Vec<usize> = (0..self.points.len()).map(|i| stride * i).collect();
+        let fp = FixedProblem {
+            knots: &knots,
+            q: &self.points,
+            data_vertex: &dv,
+            constraint: &self.constraint,
+            problem: self,
+            derivatives: true,
+            stride,
+            uniform_spans: true,
+            working_set: None,
+            options: &self.options,
+        };
+        let mut rows = crate::constraint::Rows::new(&fp)?;
+        for k in fp.kinds() {
+            k.rows(&fp, &mut rows)?;
+        }
+        Ok(rows.problem)
+    }
+
     /// The knots of the k-level split (3.1) of the data knots: the knots of
     /// [`Problem::refine_points`] (and of the first solve of [`Problem::solve`]).
     ///
@@ -136,11 +127,11 @@ impl Problem {
         algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)
     }
 
-    /// Refuses an exact result whose independent certificate is above [`EXACT_ACCEPT_KKT`]:
-    /// an answer that is not (nearly) optimal is an error carrying the best residual reached,
-    /// never a result.
+    /// Refuses an exact result whose independent certificate (the largest over its stages) is
+    /// above [`crate::SolveOptions::accept_kkt`]: an answer that is not optimal is an error
+    /// carrying the best residual reached, never a result.
     fn accept(&self, r: Refinement) -> Result<Refinement, crate::Error> {
-        let certified = r.kkt_residual <= EXACT_ACCEPT_KKT; // false for NaN too
+        let certified = r.kkt_residual <= self.options.accept_kkt; // false for NaN too
         if self.solver == Solver::Exact && !certified {
             return Err(crate::Error::NotConverged {
                 solver: "exact refinement",
@@ -152,11 +143,6 @@ impl Problem {
     }
 }
 
-/// Largest relative KKT residual with which an exact refinement is returned. The solver aims at
-/// 1e-12 and normally certifies below 1e-9; between 1e-9 and this level the result is returned
-/// with its residual; above it, [`crate::Error::NotConverged`] with the best residual reached.
-pub const EXACT_ACCEPT_KKT: f64 = 1e-6;
-
 /// One exact fixed-knot solve of stage 0 (the near-interpolatory k-level step) on the given
 /// refined knots, certified: the points, E, and the relative KKT residual. Used by the free-knot
 /// optimizer ([`crate::optimize_knots`]), which validates `problem` and `knots` first.
@@ -167,30 +153,20 @@ pub(crate) fn solve_stage0_on(
     let q = &problem.points;
     let stride = problem.k + 1;
     let dv: Vec<usize> = (0..q.len()).map(|i| stride * i).collect();
-    let fp = algorithm::FixedProblem {
+    let fp = FixedProblem {
         knots,
         q,
         data_vertex: &dv,
         constraint: &problem.constraint,
         problem,
+        derivatives: true,
         stride,
         uniform_spans: false,
         working_set: None,
+        options: &problem.options,
     };
-    let s = fixed::exact(&fp)?;
-    let stencil = s.stencil.unwrap_or_else(|| operator::Stencil::new(knots));
-    let (cert, _) = certify::certify(
-        &stencil,
-        &s.points,
-        q,
-        &dv,
-        &problem.constraint,
-        s.multipliers,
-        ACTIVE_REL_TOL,
-        &s.extra,
-    );
-    let kkt = s
-        .solver_kkt
-        .map_or(cert.kkt_residual, |k| cert.kkt_residual.max(k));
+    let s = strategy::exact(&fp)?;
+    let (cert, _) = strategy::certificate(&fp, &s);
+    let kkt = cert.kkt_residual;
     Ok((s.points, cert.energy, kkt))
 }

@@ -3,8 +3,8 @@
 //! The split divides data span i into m = k + 1 equal sub-spans of length h_i, so every *span
 //! row* of A (the rows v_i + 1 … v_i + k, whose three vertices lie in one span) is
 //! σ_i (1, −2, 1) with σ_i = h_i^{−3/2} (`alpha_row(h, h)`). The span matrix of
-//! [`super::fast`] is then B_i = σ_i L with L = tridiag(1, −2, 1) of order k, whose inverse is
-//! known: (L⁻¹)_{jl} = −min(j, l)(m − max(j, l))/m. Everything [`super::fast`] computes per span
+//! [`crate::fast`] is then B_i = σ_i L with L = tridiag(1, −2, 1) of order k, whose inverse is
+//! known: (L⁻¹)_{jl} = −min(j, l)(m − max(j, l))/m. Everything [`crate::fast`] computes per span
 //! by an LU chain has a closed form (l = 1 … k):
 //!
 //! - g_l = −(m − l)/(m σ), h_l = −l/(m σ);
@@ -22,11 +22,11 @@
 //!
 //! So one O(n) pass builds the data-row system, one cyclic tridiagonal solve gives s, and one
 //! streaming pass writes the N vertices — no per-vertex divisions and no O(N) temporaries. The
-//! result agrees with [`super::fast::interpolate`] on the same knots to rounding (tested).
+//! result agrees with [`crate::fast::interpolate`] on the same knots to rounding (tested).
 
 use divdiff::{Knots, Points};
 
-use super::operator::alpha_row;
+use crate::operator::alpha_row;
 use crate::Error;
 
 /// Solves (3.3) on `knots`, which must be the k-level split of data knots (every data span
@@ -108,7 +108,7 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                 rhs[j * d + c] = (a1 * (yp - yi) + a3 * (ynx - yi)) / mf;
             }
         }
-        super::fast::solve_tridiagonal(&mut diag, &mut off, &mut rhs, d, closed && size >= 3)
+        crate::fast::solve_tridiagonal(&mut diag, &mut off, &mut rhs, d, closed && size >= 3)
             .map_err(|j| {
                 Error::from(energy::Error::Singular {
                     vertex: (first + j) * m,
@@ -188,7 +188,7 @@ fn fill<const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kersey::operator::Stencil;
+    use crate::operator::Stencil;
     use proptest::prelude::*;
 
     fn split_knots(u: &[f64], m: usize, closed: bool) -> Knots {
@@ -233,7 +233,7 @@ mod tests {
             let q = Points::new(d, (0..n * d).map(|_| 4.0 * rnd() - 2.0).collect()).unwrap();
             let knots = split_knots(&u, m, closed);
             let ours = interpolate(&knots, &q, m).unwrap();
-            let reference = super::super::fast::interpolate(&knots, &Stencil::new(&knots), &q, m).unwrap();
+            let reference = crate::fast::interpolate(&knots, &Stencil::new(&knots), &q, m).unwrap();
             prop_assert_eq!(ours.len(), reference.len());
             let scale = q.coords().iter().fold(1.0f64, |a, v| a.max(v.abs()));
             for (a, b) in ours.coords().iter().zip(reference.coords()) {

@@ -9,7 +9,7 @@
 //! the slack condition of (3.8) requires. It is approximate, like the ball iteration; the exact
 //! solver is the default.
 
-use super::problem::HalfSpace;
+use crate::constraint::HalfSpace;
 
 /// Vertices of the polygon ∩ {n·x ≤ c} clipped to the square of half-size `extent` about
 /// `around` (Sutherland–Hodgman); empty when the intersection is empty. Unbounded polygons are

@@ -3,10 +3,11 @@
 
 use divdiff::{Knots, Parametrization, Points};
 
-use super::certify::{certify, Certificate, ACTIVE_REL_TOL, PAPER_ACTIVE_REL_TOL};
-use super::operator::Stencil;
-use super::problem::{Constraint, Problem, Solver};
-use super::{degenerate, fixed};
+use crate::certify::{certify, Certificate};
+use crate::constraint::{Constraint, Kind};
+use crate::degenerate;
+use crate::problem::{Problem, Solver};
+use crate::stage::{FixedProblem, FixedSolution};
 use crate::Error;
 
 /// Iteration counts of a refinement.
@@ -76,45 +77,10 @@ impl Refinement {
     }
 }
 
-/// What one fixed-knot solve returns.
-pub(crate) struct FixedSolution {
-    pub points: Points,
-    /// `None`: the reactions −(Hp)_{i_k} (interpolation), filled in by the certificate.
-    pub multipliers: Option<Vec<Vec<f64>>>,
-    pub iterations: usize,
-    /// The α-stencil of the knots, when the solver built it (reused by the certificate).
-    pub stencil: Option<Stencil>,
-    /// Derivative-constraint forces (stencil, z_c) for the certificate's stationarity.
-    pub extra: super::exact::StencilForces,
-    /// The conic solver's own relative KKT residual, when it ran (its primal and
-    /// complementarity parts cover the derivative constraints).
-    pub solver_kkt: Option<f64>,
-    /// The certificate of exactly these points and multipliers at `ACTIVE_REL_TOL` (and the
-    /// multipliers it reports), when the solver already computed it to accept them.
-    pub certificate: Option<(Certificate, Vec<Vec<f64>>)>,
-}
-
-/// One fixed-knot problem: data `q` attached at `data_vertex` of a curve with `knots`.
-pub(crate) struct FixedProblem<'a> {
-    pub knots: &'a Knots,
-    pub q: &'a Points,
-    pub data_vertex: &'a [usize],
-    pub constraint: &'a Constraint,
-    pub problem: &'a Problem,
-    /// The data vertices are 0, stride, 2·stride, … (stride = k + 1).
-    pub stride: usize,
-    /// The knots are exactly the k-level split (3.1) of the data knots (each data span divided
-    /// into `stride` equal sub-spans), so the closed forms of [`super::uniform`] apply.
-    pub uniform_spans: bool,
-    /// Balls that start the working set of the condensed balls method (those active in the
-    /// previous knot iteration's solution); `None`: the default start.
-    pub working_set: Option<&'a [bool]>,
-}
-
 fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     match fp.problem.solver {
-        Solver::Exact => fixed::exact(fp),
-        Solver::Paper => fixed::paper(fp),
+        Solver::Exact => crate::strategy::exact(fp),
+        Solver::Paper => crate::paper::paper(fp),
     }
 }
 
@@ -136,17 +102,17 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     let mut knots = split_knots(&u, k)?;
     let (mut p, multipliers, cert) = if let Some(c) = &constant {
         // The constant curve on the split knots; no knot update is possible (zero spans).
-        let pts = constant_points(knots.vertex_count(), c);
-        let mult = degenerate::zero_multipliers(problem);
+        let pts = constant_points(knots.vertex_count(), &c.point);
         let (cert, mult) = certify(
-            &Stencil::new(&knots),
+            &knots,
             &pts,
             q,
             &data_vertex,
-            &problem.constraint,
-            Some(mult),
-            ACTIVE_REL_TOL,
+            &problem.kinds(),
+            Some(c.multipliers.clone()),
             &[],
+            problem.derivative,
+            problem.options.active_rtol,
         );
         iterations.solves += 1;
         (pts, mult, cert)
@@ -175,15 +141,17 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
         let dv: Vec<usize> = (0..p.len()).map(|i| (lk + 1) * i).collect();
         let (np, _, cert) = if constant.is_some() {
             let np = constant_points(next_knots.vertex_count(), p.point(0));
+            let interpolate: [Box<dyn Kind>; 1] = [Constraint::Interpolate.kind()];
             let (cert, mult) = certify(
-                &Stencil::new(&next_knots),
+                &next_knots,
                 &np,
                 &p,
                 &dv,
-                &Constraint::Interpolate,
+                &interpolate,
                 None,
-                ACTIVE_REL_TOL,
                 &[],
+                problem.derivative,
+                problem.options.active_rtol,
             );
             iterations.solves += 1;
             (np, mult, cert)
@@ -292,45 +260,56 @@ fn stage_loop(
             data_vertex,
             constraint,
             problem,
+            derivatives: stage == 0,
             stride,
             // Until the first knot update the knots are those of `split_knots`.
             uniform_spans: sol.is_none(),
             working_set: working_set.as_deref(),
+            options: &problem.options,
         };
         let s = dispatch(&fp)?;
-        if let (Constraint::Balls(_), Some(m)) = (constraint, &s.multipliers) {
-            working_set = Some(
-                m.iter()
-                    .map(|w| w.first().is_some_and(|&w| w > 0.0))
-                    .collect(),
-            );
+        // The data constraints active in this solution (a positive multiplier) start the next
+        // working set.
+        if matches!(constraint, Constraint::Balls(_) | Constraint::HalfSpaces(_)) {
+            if let Some(m) = &s.multipliers {
+                working_set = Some(m.iter().map(|w| w.iter().any(|&w| w > 0.0)).collect());
+            }
         }
         iterations.solves += 1;
         iterations.solver += s.iterations;
         sol = Some(s);
     }
     let s = sol.expect("at least one solve");
-    let stencil = s.stencil.unwrap_or_else(|| Stencil::new(knots));
     let tol = match problem.solver {
-        Solver::Exact => ACTIVE_REL_TOL,
-        Solver::Paper => PAPER_ACTIVE_REL_TOL,
+        Solver::Exact => problem.options.active_rtol,
+        Solver::Paper => problem.options.paper.active_rtol,
+    };
+    let fp = FixedProblem {
+        knots,
+        q,
+        data_vertex,
+        constraint,
+        problem,
+        derivatives: stage == 0,
+        stride,
+        uniform_spans: false,
+        working_set: None,
+        options: &problem.options,
     };
     // (The exact solver's certificate, when it computed one to accept the points, is this one.)
-    let (mut cert, mult) = match s.certificate {
+    let (cert, mult) = match s.certificate {
         Some(c) if problem.solver == Solver::Exact => c,
         _ => certify(
-            &stencil,
+            fp.knots,
             &s.points,
             q,
             data_vertex,
-            constraint,
+            &fp.kinds(),
             s.multipliers,
+            &s.derivative,
+            problem.derivative,
             tol,
-            &s.extra,
         ),
     };
-    if let Some(k) = s.solver_kkt {
-        cert.kkt_residual = cert.kkt_residual.max(k);
-    }
     Ok((s.points, mult, cert))
 }

@@ -2,80 +2,9 @@
 
 use divdiff::{DerivativeRule, Knots, Parametrization, Points, Topology};
 
+use crate::constraint::{Boundary, Constraint, Tangent};
+use crate::options::SolveOptions;
 use crate::Error;
-
-/// One half-space {x : normal · x ≤ offset}.
-#[derive(Clone, Debug, PartialEq)]
-pub struct HalfSpace {
-    /// The outward normal (any non-zero length).
-    pub normal: Vec<f64>,
-    /// The offset c in normal · x ≤ c.
-    pub offset: f64,
-}
-
-/// The constraint that ties the data vertices p_{i_k} to the data q_i (Kersey §3).
-#[derive(Clone, Debug, PartialEq, Default)]
-pub enum Constraint {
-    /// p_{i_k} = q_i (3.2).
-    #[default]
-    Interpolate,
-    /// |p_{i_k} − q_i| ≤ ε_i (3.4); one radius per data point, 0 interpolates that point.
-    Balls(Vec<f64>),
-    /// Minimize E + ½ Σ w_i |p_{i_k} − q_i|² (3.6); one weight w_i ≥ 0 per data point.
-    Smoothing(Vec<f64>),
-    /// p_{i_k} ∈ K_i = ∩_j {x : n_ij · x ≤ c_ij} (3.7); one (possibly empty) set per data point.
-    HalfSpaces(Vec<Vec<HalfSpace>>),
-}
-
-/// A constraint on the approximate derivative Df(t_{i_k}) at a data vertex (Kersey §3.5).
-#[derive(Clone, Debug, PartialEq)]
-pub enum Tangent {
-    /// |Df − center| ≤ radius (Fig. 3.5a).
-    Ball {
-        /// The prescribed vector v_i.
-        center: Vec<f64>,
-        /// The tolerance ε¹_i ≥ 0.
-        radius: f64,
-    },
-    /// The angle between Df and `direction` is at most `half_angle` (Fig. 3.5b).
-    Wedge {
-        /// The prescribed direction (non-zero).
-        direction: Vec<f64>,
-        /// Half the opening angle, in radians, in [0, π/2).
-        half_angle: f64,
-    },
-    /// |Df| ≤ radius (Fig. 3.5c, tension).
-    Tension {
-        /// The tolerance ε¹_i ≥ 0.
-        radius: f64,
-    },
-    /// Df satisfies every half-space.
-    HalfSpaces(Vec<HalfSpace>),
-}
-
-/// End conditions of an open curve (Kersey §3.6).
-#[derive(Clone, Debug, PartialEq, Default)]
-pub enum Boundary {
-    /// Natural ends: no end condition (an inactive end constraint gives Δ_{1,2} = 0).
-    #[default]
-    Natural,
-    /// Df(t_1) = start, Df(t_N) = end.
-    Clamped {
-        /// The start derivative v_1.
-        start: Vec<f64>,
-        /// The end derivative v_n.
-        end: Vec<f64>,
-    },
-    /// |Df(t_1) − start| ≤ radius, |Df(t_N) − end| ≤ radius.
-    NearClamped {
-        /// The start derivative v_1.
-        start: Vec<f64>,
-        /// The end derivative v_n.
-        end: Vec<f64>,
-        /// The tolerance ≥ 0.
-        radius: f64,
-    },
-}
 
 /// Which solver handles the fixed-knot problem of each stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -141,6 +70,8 @@ pub struct Problem {
     /// Multiplier updates per solve of the paper's iteration (default
     /// [`DEFAULT_PAPER_ITERATIONS`]).
     pub paper_iterations: usize,
+    /// The solvers' tuning (default [`SolveOptions::default`]).
+    pub options: SolveOptions,
 }
 
 impl Problem {
@@ -163,6 +94,7 @@ impl Problem {
             boundary: Boundary::Natural,
             solver: Solver::Exact,
             paper_iterations: DEFAULT_PAPER_ITERATIONS,
+            options: SolveOptions::default(),
         }
     }
 
@@ -220,6 +152,11 @@ impl Problem {
     /// Sets the solver.
     pub fn with_solver(mut self, s: Solver) -> Self {
         self.solver = s;
+        self
+    }
+    /// Sets the solvers' tuning ([`SolveOptions`], every field with a documented default).
+    pub fn with_options(mut self, options: SolveOptions) -> Self {
+        self.options = options;
         self
     }
 
@@ -314,99 +251,14 @@ impl Problem {
                 });
             }
         }
-        match &self.constraint {
-            Constraint::Interpolate => {}
-            Constraint::Balls(r) => {
-                check_len("radii", r.len(), n)?;
-                check_nonneg("radii", r)?;
-            }
-            Constraint::Smoothing(w) => {
-                check_len("weights", w.len(), n)?;
-                check_nonneg("weights", w)?;
-                let positive = w.iter().filter(|&&x| x > 0.0).count();
-                let needed = match self.topology {
-                    Topology::Open => 2,
-                    Topology::Closed => 1,
-                };
-                if positive < needed {
-                    return Err(Error::TooFewWeights {
-                        needed,
-                        got: positive,
-                    });
-                }
-            }
-            Constraint::HalfSpaces(sets) => {
-                check_len("sets", sets.len(), n)?;
-                for (i, set) in sets.iter().enumerate() {
-                    check_halfspaces("sets", i, set, d)?;
-                }
-            }
-        }
-        if let Some(t) = &self.tangents {
-            check_len("tangents", t.len(), n)?;
-            for (i, tan) in t.iter().enumerate() {
-                match tan {
-                    None => {}
-                    Some(Tangent::Ball { center, radius }) => {
-                        check_dim("tangents.center", i, center, d)?;
-                        check_nonneg_one("tangents.radius", i, *radius)?;
-                    }
-                    Some(Tangent::Wedge {
-                        direction,
-                        half_angle,
-                    }) => {
-                        check_dim("tangents.direction", i, direction, d)?;
-                        if direction.iter().all(|&x| x == 0.0) {
-                            return Err(Error::InvalidValue {
-                                field: "tangents.direction",
-                                index: i,
-                                value: 0.0,
-                                reason: "the direction must be non-zero",
-                            });
-                        }
-                        let a = *half_angle;
-                        if !(a.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&a)) {
-                            return Err(Error::InvalidValue {
-                                field: "tangents.half_angle",
-                                index: i,
-                                value: a,
-                                reason: "must be in [0, pi/2)",
-                            });
-                        }
-                    }
-                    Some(Tangent::Tension { radius }) => {
-                        check_nonneg_one("tangents.radius", i, *radius)?;
-                    }
-                    Some(Tangent::HalfSpaces(h)) => {
-                        check_halfspaces("tangents.halfspaces", i, h, d)?;
-                    }
-                }
-            }
-        }
-        match (&self.boundary, self.topology) {
-            (Boundary::Natural, _) => {}
-            (_, Topology::Closed) => {
-                return Err(Error::Unsupported {
-                    field: "boundary",
-                    reason: "end conditions apply to open curves only",
-                })
-            }
-            (Boundary::Clamped { start, end }, Topology::Open) => {
-                check_dim("boundary.start", 0, start, d)?;
-                check_dim("boundary.end", 0, end, d)?;
-            }
-            (Boundary::NearClamped { start, end, radius }, Topology::Open) => {
-                check_dim("boundary.start", 0, start, d)?;
-                check_dim("boundary.end", 0, end, d)?;
-                check_nonneg_one("boundary.radius", 0, *radius)?;
-            }
+        for kind in self.kinds() {
+            kind.validate(self)?;
         }
         // The general interior-point method (derivative constraints, half-spaces) costs O(N) per
         // iteration over tens of iterations on the first stage's N vertices; beyond this size
         // one solve takes minutes (4 points, k = 10⁶, tangent wedges: 8 minutes), so it is
         // refused up front.
-        let general = self.has_derivative_constraints()
-            || matches!(self.constraint, Constraint::HalfSpaces(_));
+        let general = self.kinds().iter().any(|k| k.may_need_full_vertex());
         if general && self.solver == Solver::Exact {
             let spans = if self.topology == Topology::Closed {
                 n
@@ -430,10 +282,7 @@ impl Problem {
     /// Whether any tangent constraint or an end condition other than natural is present (the
     /// constraints on Df that only the general interior-point method handles).
     pub(crate) fn has_derivative_constraints(&self) -> bool {
-        self.tangents
-            .as_ref()
-            .is_some_and(|t| t.iter().any(Option::is_some))
-            || self.boundary != Boundary::Natural
+        self.kinds().iter().any(|k| k.on_derivatives())
     }
 
     /// The number of refined vertices after one `k`-level split of `n` data points (3.1):
@@ -467,89 +316,4 @@ impl Problem {
                 }),
         }
     }
-}
-
-fn check_len(field: &'static str, got: usize, expected: usize) -> Result<(), Error> {
-    if got == expected {
-        Ok(())
-    } else {
-        Err(Error::WrongLength {
-            field,
-            expected,
-            got,
-        })
-    }
-}
-
-fn check_nonneg_one(field: &'static str, index: usize, value: f64) -> Result<(), Error> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            field,
-            index,
-            value,
-            reason: "must be finite and >= 0",
-        })
-    }
-}
-
-fn check_nonneg(field: &'static str, v: &[f64]) -> Result<(), Error> {
-    v.iter()
-        .enumerate()
-        .try_for_each(|(i, &x)| check_nonneg_one(field, i, x))
-}
-
-fn check_dim(field: &'static str, index: usize, v: &[f64], d: usize) -> Result<(), Error> {
-    if v.len() != d {
-        return Err(Error::WrongDimension {
-            field,
-            index,
-            expected: d,
-            got: v.len(),
-        });
-    }
-    if let Some(&x) = v.iter().find(|x| !x.is_finite()) {
-        return Err(Error::InvalidValue {
-            field,
-            index,
-            value: x,
-            reason: "not finite",
-        });
-    }
-    Ok(())
-}
-
-fn check_halfspaces(
-    field: &'static str,
-    point: usize,
-    set: &[HalfSpace],
-    d: usize,
-) -> Result<(), Error> {
-    for (j, h) in set.iter().enumerate() {
-        let bad = |reason| Error::InvalidHalfSpace {
-            field,
-            point,
-            index: j,
-            reason,
-        };
-        if h.normal.len() != d {
-            return Err(bad("the normal's dimension differs from the points'"));
-        }
-        if h.normal.iter().any(|x| !x.is_finite()) || !h.offset.is_finite() {
-            return Err(bad("not finite"));
-        }
-        if h.normal.iter().all(|&x| x == 0.0) {
-            return Err(bad("the normal must be non-zero"));
-        }
-        // The solvers divide by |n|² and |n| (projections, distances): both must be normal
-        // floating-point numbers, and so must the offset in units of |n|.
-        let nn: f64 = h.normal.iter().map(|x| x * x).sum();
-        if !(nn.is_normal() && (h.offset / nn.sqrt()).is_finite()) {
-            return Err(bad(
-                "the normal's length (squared) must be a normal floating-point number and offset/|normal| finite: rescale the half-space",
-            ));
-        }
-    }
-    Ok(())
 }

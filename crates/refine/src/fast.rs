@@ -24,7 +24,7 @@
 
 use divdiff::{Knots, Points};
 
-use super::operator::Stencil;
+use crate::operator::Stencil;
 use crate::Error;
 
 /// Tridiagonal LU of the span matrix B (sub `a`, diagonal `b`, super `c`, each of length k):
