@@ -1,11 +1,13 @@
-//! The seed's outer method: argmin's BFGS on Φ(z) with the analytic gradient
-//! ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)) (`Vec<f64>` parameters, argmin-math's "vec" backend).
+//! The seed's outer method, quasi-Newton on Φ(z) with the analytic gradient
+//! ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)): argmin's limited-memory BFGS (`Vec<f64>` parameters,
+//! argmin-math's "vec" backend). The seed's BFGS keeps a dense nv × nv inverse Hessian; the
+//! limited-memory form keeps [`HISTORY`] pairs, so memory and work per iteration stay O(nv).
 
 use std::cell::RefCell;
 
 use argmin::core::{CostFunction, Executor, Gradient, State, TerminationReason};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
-use argmin::solver::quasinewton::BFGS;
+use argmin::solver::quasinewton::LBFGS;
 
 use super::newton::DECREMENT_TOL;
 use super::phi::{Hints, Outer, OuterOut};
@@ -16,6 +18,9 @@ use crate::types::Options;
 /// Evaluations of Φ allowed per permitted iteration (argmin's Moré–Thuente line search has no
 /// iteration limit of its own; this bounds the whole solve).
 const EVALUATIONS_PER_ITERATION: usize = 100;
+
+/// Correction pairs kept by the limited-memory BFGS (Nocedal–Wright §7.2 suggest 3–20).
+pub(crate) const HISTORY: usize = 10;
 
 struct Phi<'a> {
     outer: &'a Outer,
@@ -119,22 +124,14 @@ pub(crate) fn bfgs(
     let mut out_of_iterations = false;
     if nv > 0 {
         let ls = MoreThuenteLineSearch::new();
-        let solver = BFGS::new(ls)
+        let solver = LBFGS::new(ls, HISTORY)
             .with_tolerance_grad(opts.gradient_tol * (1.0 + g0n))
             // stop when an iteration no longer changes Φ beyond rounding (the gradient can stall
             // above its tolerance along stiff directions; the line search would then loop)
             .and_then(|s| s.with_tolerance_cost(DECREMENT_TOL * (1.0 + f0.abs())))
             .map_err(|_| not_converged(opts.max_iterations))?;
-        let mut h0 = vec![vec![0.0; nv]; nv];
-        for (i, row) in h0.iter_mut().enumerate() {
-            row[i] = 1.0;
-        }
         let res = Executor::new(phi, solver)
-            .configure(|s| {
-                s.param(x0)
-                    .inv_hessian(h0)
-                    .max_iters(opts.max_iterations as u64)
-            })
+            .configure(|s| s.param(x0).max_iters(opts.max_iterations as u64))
             .run()
             .map_err(|_| not_converged(opts.max_iterations))?;
         if let Some(p) = res.state().get_best_param() {
