@@ -3,12 +3,14 @@
 //! * `cargo xtask verify`  — every identity, theorem and worked example of the seeds as a named case.
 //! * `cargo xtask figures [--out DIR]` — redraws the seeds' figures as SVG.
 //! * `cargo xtask bench [--quick]` — the benchmark tables (ratios measured in the same run).
-//! * `cargo xtask fuzz [--execs N]` — mutational fuzzing of the command line (parser + solvers).
+//! * `cargo xtask fuzz [--help]` — mutational fuzzing of the command line on stable, and the
+//!   coverage-guided cargo-fuzz targets of `fuzz/` (`fuzz libfuzzer`).
 //! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
 
 mod bench;
 mod figures;
 mod fuzz;
+mod libfuzzer;
 mod tidy;
 mod verify;
 
@@ -27,7 +29,7 @@ fn main() -> ExitCode {
         "tidy" => tidy::run(rest),
         "fuzz" => fuzz::run(rest),
         _ => {
-            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--execs N]>");
+            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--help]>");
             return if cmd == "help" || cmd == "--help" {
                 ExitCode::SUCCESS
             } else {
