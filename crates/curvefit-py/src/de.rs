@@ -32,7 +32,9 @@ use std::cell::Cell;
 use numpy::ndarray::{ArrayViewD, Ix0};
 use numpy::{Element, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyMapping, PySequence, PyString, PyTuple};
+use pyo3::types::{
+    PyBool, PyDict, PyFloat, PyInt, PyList, PyMapping, PySequence, PyString, PyTuple,
+};
 use serde::de::{self, DeserializeSeed, IntoDeserializer, Unexpected, Visitor};
 use serde_json::Error;
 
@@ -227,11 +229,7 @@ fn no_trailing(ctx: &Ctx<'_>, taken: usize, len: usize) -> Result<(), Error> {
     Ok(())
 }
 
-fn visit_items<'de, V: Visitor<'de>>(
-    seq: Seq<'_>,
-    ctx: &Ctx<'_>,
-    v: V,
-) -> Result<V::Value, Error> {
+fn visit_items<'de, V: Visitor<'de>>(seq: Seq<'_>, ctx: &Ctx<'_>, v: V) -> Result<V::Value, Error> {
     let len = match &seq {
         Seq::List(l) => l.len(),
         Seq::Tuple(t) => t.len(),
@@ -266,7 +264,10 @@ fn key_string(key: &Bound<'_, PyAny>) -> Result<String, Error> {
 
 impl<'de> de::MapAccess<'de> for Entries<'_, '_> {
     type Error = Error;
-    fn next_key_seed<K: DeserializeSeed<'de>>(&mut self, seed: K) -> Result<Option<K::Value>, Error> {
+    fn next_key_seed<K: DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, Error> {
         match self.items.next() {
             None => Ok(None),
             Some((k, v)) => {
@@ -306,7 +307,10 @@ struct VariantEntry<'a, 'py> {
 impl<'de, 'a, 'py> de::EnumAccess<'de> for VariantEntry<'a, 'py> {
     type Error = Error;
     type Variant = VariantValue<'a, 'py>;
-    fn variant_seed<V: DeserializeSeed<'de>>(self, seed: V) -> Result<(V::Value, Self::Variant), Error> {
+    fn variant_seed<V: DeserializeSeed<'de>>(
+        self,
+        seed: V,
+    ) -> Result<(V::Value, Self::Variant), Error> {
         let key: de::value::StringDeserializer<Error> = self.name.into_deserializer();
         let variant = seed.deserialize(key)?;
         Ok((

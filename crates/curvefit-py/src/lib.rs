@@ -95,14 +95,21 @@ fn parse<'py, P: serde::de::DeserializeOwned>(
         Err(e) => {
             let path = e.path().to_string();
             let path = if path == "." { String::new() } else { path };
-            let err = spec::path_error(e);
+            let mut err = spec::path_error(e);
+            // A key that is not a string has no name: the path ends at its dict (serde's
+            // tracker writes `?` for it).
+            if let Some(owner) = err.field.strip_suffix(".?") {
+                err = InputError::new(owner, err.message);
+            }
             // The command line reports these two at a line and column of the file; here there
             // is no file, so the field path says where.
             if err.field == "problem" && err.message.starts_with("malformed JSON") {
                 return Err(match ctx.trailing.get() {
                     Some((taken, len)) => InputError::new(
                         path,
-                        format!("must be an array of {taken} entries, not an array of {len} entries"),
+                        format!(
+                            "must be an array of {taken} entries, not an array of {len} entries"
+                        ),
                     ),
                     None => InputError::new(path, "is a value of the wrong kind"),
                 });
@@ -211,7 +218,11 @@ fn solve_many<'py>(
     check_subcommand(subcommand)?;
     let pool = match threads {
         None => None,
-        Some(0) => return Err(PyValueError::new_err("threads must be at least 1 (or None)")),
+        Some(0) => {
+            return Err(PyValueError::new_err(
+                "threads must be at least 1 (or None)",
+            ))
+        }
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)

@@ -108,7 +108,13 @@ pub fn strip<'py>(py: Python<'py>, s: spec::StripResult) -> PyResult<Bound<'py, 
     d.set_item("slopes", vector(py, slopes))?;
     let knots = PyList::empty(py);
     for k in extra_knots {
-        knots.append(PyTuple::new(py, [k.t.into_pyobject(py)?.into_any(), k.kind.into_pyobject(py)?.into_any()])?)?;
+        knots.append(PyTuple::new(
+            py,
+            [
+                k.t.into_pyobject(py)?.into_any(),
+                k.kind.into_pyobject(py)?.into_any(),
+            ],
+        )?)?;
     }
     d.set_item("extra_knots", knots)?;
     d.set_item("energy", energy)?;
