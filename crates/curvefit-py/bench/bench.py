@@ -14,7 +14,8 @@ median of R repetitions after one warm-up call. Data: a noisy star with jittered
    same (k + 1)·n parameters (every span cut into k + 1 equal sub-spans; u centripetal, the
    same data parameters). Also the default three knot updates (four solves).
 2. balls, closed, n = 10⁴, k = 3, knot_iterations = 0, radii in [0.2, 0.7] × the mean data
-   spacing: ``curvefit.refine(q, ..., radii=r)`` against Clarabel (Python) on the same
+   spacing, on the noisy star (most balls active at the optimum) and on xtask's smooth wavy
+   circle (most inactive): ``curvefit.refine(q, ..., radii=r)`` against Clarabel (Python) on the same
    second-order cone program, posed here from the formulas of docs/math.md §1–2 on the
    knots curvefit solved with: minimize ½‖z‖² s.t. z = (A ⊗ I_d) p (E = ½‖Ap‖², A's rows
    α_{i,1}, α_{i,2}, α_{i,3}), ‖p_{i_k} − q_i‖ ≤ r_i (the factored form: Clarabel stalls on
@@ -129,11 +130,19 @@ def energy_rows(knots, closed):
     return sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(len(i), nv))
 
 
-def balls(n, reps):
+def wavy_circle(n):
+    """xtask's balls data (xtask/src/bench/refine.rs): r(θ) = 1 + 0.3 sin 5θ + 0.1 cos 17θ at
+    θ_i = 2πi/n — smooth, so most balls are inactive at the optimum."""
+    th = 2 * np.pi * np.arange(n) / n
+    r = 1 + 0.3 * np.sin(5 * th) + 0.1 * np.cos(17 * th)
+    return np.column_stack([r * np.cos(th), r * np.sin(th)])
+
+
+def balls(n, reps, data="star"):
     import clarabel
     import scipy.sparse as sp
 
-    q = star(n)
+    q = star(n) if data == "star" else wavy_circle(n)
     rad = radii_for(q)
     k = 3
     tc, r = median_time(
@@ -179,7 +188,7 @@ def balls(n, reps):
     e_clarabel = 0.5 * np.sum((A @ p) ** 2)
     viol = max(0.0, float((np.linalg.norm(p[dv] - q, axis=1) - rad).max()))
     tt, ts = statistics.median(total), statistics.median(solve)
-    print(f"2. balls, closed, n = {n}, k = {k}, knot_iterations = 0: {nv} vertices, {int(r.active.sum())} of {n} balls active")
+    print(f"2. balls, closed, n = {n}, k = {k}, knot_iterations = 0, {data}: {nv} vertices, {int(r.active.sum())} of {n} balls active")
     print(f"   Clarabel (Python) setup + solve              {ms(tt)} ms   status {sol.status}, {sol.iterations} iterations")
     print(f"   Clarabel solve() alone                       {ms(ts)} ms")
     print(f"   curvefit.refine(radii=...)                   {ms(tc)} ms   ratio {tt / tc:6.1f}x (solve alone {ts / tc:6.1f}x)")
@@ -218,7 +227,8 @@ def main():
     print(f"curvefit {curvefit.__version__}, Python {platform.python_version()}, numpy {np.__version__}, "
           f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start")
     interpolation(10_000 if a.quick else 100_000, 7, reps)
-    balls(1_000 if a.quick else 10_000, max(1, min(reps, 3)))
+    balls(1_000 if a.quick else 10_000, max(1, min(reps, 3)), "star")
+    balls(1_000 if a.quick else 10_000, max(1, min(reps, 3)), "wavy circle")
     smoothing(10_000 if a.quick else 100_000, 7, reps)
     print(f"load average {os.getloadavg()[0]:.2f} at end")
 

@@ -29,7 +29,7 @@
 
 use std::cell::Cell;
 
-use numpy::ndarray::{ArrayViewD, Ix0};
+use numpy::ndarray::{ArrayView1, ArrayViewD, Ix0, Ix1, Ix2};
 use numpy::{Element, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{
@@ -127,17 +127,19 @@ enum Kind<'py> {
 }
 
 fn kind<'py>(obj: &Bound<'py, PyAny>, ctx: &Ctx<'py>) -> Result<Kind<'py>, Error> {
+    // Floats first: the coordinates of points given as lists are most of the values read.
+    if let Ok(f) = obj.cast::<PyFloat>() {
+        return Ok(Kind::Float(f.value()));
+    }
     if obj.is_none() {
         return Ok(Kind::Null);
     }
+    // bool before int: Python's bool is an int.
     if let Ok(b) = obj.cast::<PyBool>() {
         return Ok(Kind::Bool(b.is_true()));
     }
     if let Ok(i) = obj.cast::<PyInt>() {
         return Ok(Kind::Int(i.clone()));
-    }
-    if let Ok(f) = obj.cast::<PyFloat>() {
-        return Ok(Kind::Float(f.value()));
     }
     if let Ok(s) = obj.cast::<PyString>() {
         return Ok(Kind::Str(s.clone()));
@@ -489,31 +491,68 @@ impl PyDe<'_, '_> {
     }
 }
 
-/// An n-D array view (n ≥ 1) as an array of (n−1)-D arrays.
+/// An n-D array view (n ≥ 1) as an array of (n−1)-D arrays. One- and two-dimensional views
+/// (points, radii, cubics) are walked with static dimensions, contiguous rows as slices.
 fn visit_view<'de, T: Elem, V: Visitor<'de>>(
     view: ArrayViewD<'_, T>,
     ctx: &Ctx<'_>,
     v: V,
 ) -> Result<V::Value, Error> {
-    let len = view.shape()[0];
-    if view.ndim() == 1 {
-        let mut items = Scalars {
-            iter: view.iter(),
-            taken: 0,
-        };
-        let value = v.visit_seq(&mut items)?;
-        no_trailing(ctx, items.taken, len)?;
-        Ok(value)
-    } else {
-        let mut rows = Rows {
-            iter: view.outer_iter(),
-            taken: 0,
-            ctx,
-        };
-        let value = v.visit_seq(&mut rows)?;
-        no_trailing(ctx, rows.taken, len)?;
-        Ok(value)
+    let shape_error = |e: numpy::ndarray::ShapeError| -> Error { de::Error::custom(e.to_string()) };
+    match view.ndim() {
+        1 => visit_1d(view.into_dimensionality::<Ix1>().map_err(shape_error)?, ctx, v),
+        2 => {
+            let view = view.into_dimensionality::<Ix2>().map_err(shape_error)?;
+            let len = view.nrows();
+            let mut rows = Rows {
+                iter: view.outer_iter().map(View::One),
+                taken: 0,
+                ctx,
+            };
+            let value = v.visit_seq(&mut rows)?;
+            no_trailing(ctx, rows.taken, len)?;
+            Ok(value)
+        }
+        _ => {
+            let len = view.shape()[0];
+            let mut rows = Rows {
+                iter: view.outer_iter().map(View::Dyn),
+                taken: 0,
+                ctx,
+            };
+            let value = v.visit_seq(&mut rows)?;
+            no_trailing(ctx, rows.taken, len)?;
+            Ok(value)
+        }
     }
+}
+
+fn visit_1d<'de, T: Elem, V: Visitor<'de>>(
+    view: ArrayView1<'_, T>,
+    ctx: &Ctx<'_>,
+    v: V,
+) -> Result<V::Value, Error> {
+    let len = view.len();
+    let taken = match view.as_slice() {
+        Some(slice) => {
+            let mut items = Scalars {
+                iter: slice.iter(),
+                taken: 0,
+            };
+            let value = v.visit_seq(&mut items)?;
+            (value, items.taken)
+        }
+        None => {
+            let mut items = Scalars {
+                iter: view.iter(),
+                taken: 0,
+            };
+            let value = v.visit_seq(&mut items)?;
+            (value, items.taken)
+        }
+    };
+    no_trailing(ctx, taken.1, len)?;
+    Ok(taken.0)
 }
 
 struct Scalars<I> {
@@ -535,6 +574,15 @@ impl<'de, 'v, T: Elem + 'v, I: Iterator<Item = &'v T>> de::SeqAccess<'de> for Sc
             }
         }
     }
+    fn size_hint(&self) -> Option<usize> {
+        self.iter.size_hint().1
+    }
+}
+
+/// A sub-array: one-dimensional (the rows of a matrix) or of any dimension.
+enum View<'v, T> {
+    One(ArrayView1<'v, T>),
+    Dyn(ArrayViewD<'v, T>),
 }
 
 struct Rows<'a, 'py, I> {
@@ -545,7 +593,7 @@ struct Rows<'a, 'py, I> {
 
 impl<'de, 'v, T: Elem + 'v, I> de::SeqAccess<'de> for Rows<'_, '_, I>
 where
-    I: Iterator<Item = ArrayViewD<'v, T>>,
+    I: Iterator<Item = View<'v, T>>,
 {
     type Error = Error;
     fn next_element_seed<S: DeserializeSeed<'de>>(
@@ -563,6 +611,9 @@ where
                 .map(Some)
             }
         }
+    }
+    fn size_hint(&self) -> Option<usize> {
+        self.iter.size_hint().1
     }
 }
 
@@ -601,23 +652,25 @@ impl<'de, T: Elem> de::Deserializer<'de> for ScalarDe<T> {
     }
 }
 
-/// A sub-array (n ≥ 1 dimensions) of an array.
+/// A sub-array (n ≥ 0 dimensions) of an array.
 struct ViewDe<'a, 'v, 'py, T> {
-    view: ArrayViewD<'v, T>,
+    view: View<'v, T>,
     ctx: &'a Ctx<'py>,
 }
 
 impl<'de, T: Elem> de::Deserializer<'de> for ViewDe<'_, '_, '_, T> {
     type Error = Error;
     fn deserialize_any<V: Visitor<'de>>(self, v: V) -> Result<V::Value, Error> {
-        if self.view.ndim() == 0 {
-            let x = self
-                .view
-                .into_dimensionality::<Ix0>()
-                .map_err(|e| de::Error::custom(e.to_string()))?;
-            return x.into_scalar().visit(v);
+        match self.view {
+            View::One(view) => visit_1d(view, self.ctx, v),
+            View::Dyn(view) if view.ndim() == 0 => {
+                let x = view
+                    .into_dimensionality::<Ix0>()
+                    .map_err(|e| de::Error::custom(e.to_string()))?;
+                x.into_scalar().visit(v)
+            }
+            View::Dyn(view) => visit_view(view, self.ctx, v),
         }
-        visit_view(self.view, self.ctx, v)
     }
     fn deserialize_option<V: Visitor<'de>>(self, v: V) -> Result<V::Value, Error> {
         v.visit_some(self)
