@@ -55,19 +55,7 @@ pub fn run(_args: &[String]) -> anyhow::Result<bool> {
             src.is_dir(),
             "ARCHITECTURE.md names library {lib}, but {src:?} is missing"
         );
-        for path in rust_files(&src)? {
-            let text = std::fs::read_to_string(&path)?;
-            let file = match syn::parse_file(&text) {
-                Ok(f) => f,
-                Err(e) => {
-                    problems.push(format!("{}: does not parse: {e}", path.display()));
-                    continue;
-                }
-            };
-            let mut v = SourceCheck::new(&path);
-            v.visit_file(&file);
-            problems.extend(v.problems);
-        }
+        walk_modules(&src.join("lib.rs"), true, &mut problems)?;
         check_root(lib, &src.join("lib.rs"), &mut problems)?;
         check_duplicates(lib, &mut problems)?;
     }
@@ -570,6 +558,60 @@ fn square_nested_vec(m: &syn::Macro) -> Option<(String, String)> {
     let (_, inner) = inner_body.rsplit_once(';')?;
     let (inner, outer) = (inner.trim().to_string(), outer.trim().to_string());
     (inner == outer).then_some((inner, outer))
+}
+
+/// Checks one module file and, recursively, the files of the `mod x;` items it declares outside
+/// test code (a `#[cfg(test)] mod tests;` file is test code and is not visited).
+fn walk_modules(path: &Path, owns_dir: bool, problems: &mut Vec<String>) -> anyhow::Result<()> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let file = match syn::parse_file(&text) {
+        Ok(f) => f,
+        Err(e) => {
+            problems.push(format!("{}: does not parse: {e}", path.display()));
+            return Ok(());
+        }
+    };
+    let mut v = SourceCheck::new(path);
+    v.visit_file(&file);
+    problems.extend(v.problems);
+    // `lib.rs`/`mod.rs` own their directory; `foo.rs` owns `foo/`.
+    let dir = if owns_dir {
+        path.parent().expect("parent").to_path_buf()
+    } else {
+        path.with_extension("")
+    };
+    for item in &file.items {
+        let syn::Item::Mod(m) = item else { continue };
+        if m.content.is_some() || skipped(&m.attrs) {
+            continue;
+        }
+        let explicit = m
+            .attrs
+            .iter()
+            .find(|a| a.path().is_ident("path"))
+            .and_then(|a| match &a.meta {
+                syn::Meta::NameValue(syn::MetaNameValue {
+                    value:
+                        syn::Expr::Lit(syn::ExprLit {
+                            lit: syn::Lit::Str(s),
+                            ..
+                        }),
+                    ..
+                }) => Some(s.value()),
+                _ => None,
+            });
+        let name = m.ident.to_string();
+        let (child, child_owns) = match explicit {
+            Some(p) => (dir.join(p), false),
+            None if dir.join(format!("{name}.rs")).exists() => {
+                (dir.join(format!("{name}.rs")), false)
+            }
+            None => (dir.join(&name).join("mod.rs"), true),
+        };
+        walk_modules(&child, child_owns, problems)?;
+    }
+    Ok(())
 }
 
 fn rust_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {

@@ -40,10 +40,25 @@ pub enum Error {
         /// Another stencil vertex.
         second: usize,
     },
+    /// The banded linear algebra refused an argument (not expected: `energy` checks sizes,
+    /// indices and the band before it calls `banded`; reported rather than assumed).
+    #[error(transparent)]
+    Banded(banded::Error),
     /// A vertex is fixed twice.
     #[error("fixed vertex {index} is given twice")]
     DuplicateFixed {
         /// The vertex.
         index: usize,
     },
+}
+
+impl From<banded::Error> for Error {
+    /// A failing pivot names its vertex ([`Error::Singular`]); anything else is
+    /// [`Error::Banded`].
+    fn from(e: banded::Error) -> Self {
+        match e {
+            banded::Error::Singular { index } => Error::Singular { vertex: index },
+            other => Error::Banded(other),
+        }
+    }
 }

@@ -71,7 +71,7 @@ pub(crate) fn neighbours(knots: &Knots, i: usize) -> (usize, usize, usize) {
 pub fn energy_by_jumps(knots: &Knots, points: &Points) -> Result<f64, Error> {
     check_sizes(knots, points)?;
     let j = divdiff::jumps(knots, points)?;
-    Ok(crate::hessian::dot(points.coords(), j.coords()))
+    Ok(banded::vector::dot(points.coords(), j.coords()))
 }
 
 /// The second differences c_i = Δ_{i−1,2} f (zero at open ends) and the slopes s_j.
@@ -225,6 +225,6 @@ pub fn orthogonality_residuals(
     let hp = crate::Hessian::new(knots).try_apply(points)?;
     let df = divdiff::vertex_derivatives(knots, points, rule)?;
     Ok((0..knots.vertex_count())
-        .map(|i| crate::hessian::dot(df.point(i), hp.point(i)))
+        .map(|i| banded::vector::dot(df.point(i), hp.point(i)))
         .collect())
 }

@@ -3,6 +3,7 @@
 use divdiff::{Knots, Points, Topology};
 
 use crate::Error;
+use banded::vector::dot;
 
 /// The α coefficients of Kersey §2.1 (the rows of A), one row per vertex.
 ///
@@ -197,8 +198,4 @@ pub(crate) fn interior_rows(knots: &Knots) -> std::ops::Range<usize> {
         Topology::Closed => 0..n,
         Topology::Open => 1..n.saturating_sub(1),
     }
-}
-
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -6,7 +6,10 @@
 //! Theorem 2.1, Corollary 2.2, Lemmas 2.3–2.4, Corollary 2.7) and §3.6 (open curves), and relates
 //! it to Warren–Weimer, *Subdivision Methods for Geometric Design* §6.2 (seed
 //! `003_b8a6b4d8b36f17f8.txt`). Vertex indices are 0-based; knots, points and the divided
-//! differences come from [`divdiff`].
+//! differences come from [`divdiff`]; the O(N) factorizations from [`banded`]. The dense
+//! nalgebra exports (`alpha_matrix`, `second_difference_matrix`, `warren_weimer_matrix`,
+//! `Hessian::to_dense`) are behind the cargo feature `dense`, off by default: they serve tests
+//! and verification, the solve path never forms a dense matrix.
 //!
 //! # The math
 //!
@@ -22,7 +25,8 @@
 //!   printed shortcut α_{1,1} := α_{n,3} is right only for uniform knots); open curves have zero
 //!   first and last rows. H is symmetric positive semidefinite, (cyclic) pentadiagonal, with
 //!   kernel the constants (closed, dim 1) or the linear polynomials in t (open, dim 2). It is
-//!   stored as three bands and applied in O(N d); [`Hessian::to_dense`] is for tests only.
+//!   stored as three bands and applied in O(N d); `Hessian::to_dense` (cargo feature `dense`)
+//!   is for tests only.
 //!   (§3.6 writes E = pᵀHp for open curves; the ½ of (2.1) still applies.)
 //! - **Theorem 2.1** ([`energy_by_jumps`]): E = Σ p_i · jmp_i(D³f); **Corollary 2.2**: jmp = ½Hp;
 //!   **Lemma 2.3**: ∂E/∂p = Hp ([`Hessian::apply`]).
@@ -31,7 +35,11 @@
 //!   |Δ_{i,2} f|² − |Δ_{i−2,2} f|². The printed Lemma 2.4 ([`knot_gradient_printed`]) lacks the
 //!   factor 2 and the last two terms and fails a finite-difference check (`cargo xtask verify`
 //!   shows both). **Corollary 2.7** residuals Df(t_i)·(Hp)_i: [`orthogonality_residuals`].
-//! - **Warren–Weimer §6.2** ([`warren_weimer_matrix`]): E_k = 8^k D₂ᵀD₂ on the grid 2^{−k} Z.
+//! - **Solves** ([`System`], [`solve_interpolatory`]): K = H ⊗ I_d + weights + d×d blocks +
+//!   tangent stencils, fixed vertices eliminated, factored in O(N) by the `banded` crate (scalar
+//!   LDLᵀ shared by the d columns, or block Cholesky; closed curves bordered).
+//! - **Warren–Weimer §6.2** (`warren_weimer_matrix`, feature `dense`): E_k = 8^k D₂ᵀD₂ on the
+//!   grid 2^{−k} Z.
 //!   On uniform open knots of spacing h, α_i = h^{−3/2}(1, −2, 1), so H = h^{−3} D₂ᵀD₂; with
 //!   h = 2^{−k} that is **exactly E_k as a matrix**. The energies differ by ½: Kersey's
 //!   E = ½ pᵀHp approximates ½∫|f''|², Warren–Weimer's pᵀE_k p approximates ∫|f''|².
@@ -54,12 +62,14 @@
 //! assert!(j.coords().iter().zip(hp.coords()).all(|(a, b)| (a - 0.5 * b).abs() < 1e-12 * e));
 //! ```
 
+#[cfg(feature = "dense")]
 mod dense;
 mod error;
 mod functional;
 mod hessian;
-mod solve;
+mod system;
 
+#[cfg(feature = "dense")]
 pub use dense::{alpha_matrix, second_difference_matrix, warren_weimer_matrix};
 pub use error::Error;
 pub use functional::{
@@ -67,7 +77,4 @@ pub use functional::{
     vertex_knot_gradient,
 };
 pub use hessian::{alphas, Hessian};
-// `solve.rs` is written by the solver work (O(N) banded/cyclic solves); until it exports items
-// this glob import is empty, hence the allow.
-#[allow(unused_imports)]
-pub use solve::*;
+pub use system::{solve_interpolatory, Factor, System, PIVOT_RTOL};

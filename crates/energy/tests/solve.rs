@@ -417,8 +417,9 @@ fn large_closed_solve_has_small_residual() {
 }
 
 #[test]
-fn wide_dimensions_and_tiny_closed_curves_use_the_envelope_path() {
-    // d > 4 (and closed N ≤ 4) take the general block-envelope Cholesky.
+fn wide_dimensions_and_tiny_closed_curves_take_the_general_paths() {
+    // d > 4 takes banded's general block path (d at run time), closed N ≤ 4 an aliased band
+    // whose rows are all border.
     for top in [Topology::Open, Topology::Closed] {
         for n in [3, 4, 6, 9] {
             for d in [5, 6] {

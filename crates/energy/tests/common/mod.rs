@@ -47,5 +47,5 @@ pub fn max_abs(x: &[f64]) -> f64 {
 
 /// Σ x².
 pub fn norm2(x: &[f64]) -> f64 {
-    x.iter().map(|v| v * v).sum()
+    banded::vector::dot(x, x)
 }

@@ -1,41 +1,37 @@
-//! O(N) solves of (H ⊗ I_d + M) x = b: banded (open) and cyclic (closed).
+//! The linear systems of the refinement problems, (H ⊗ I_d + M) x = b, on top of `banded`.
 //!
 //! The matrix K = H ⊗ I_d + M is block-pentadiagonal (open curves) or cyclic block-pentadiagonal
 //! (closed curves) with d×d blocks: H is the scalar (cyclic) pentadiagonal Hessian of the energy,
 //! M collects what the refinement problems add — scalar weights at vertices (w I_d), symmetric
 //! d×d blocks at vertices, and stencil terms Lᵀ B L whose stencil L spans at most three cyclically
 //! consecutive vertices (tangent constraints). Vertices can be *fixed* (their value is prescribed
-//! and they are eliminated).
+//! and they are eliminated: their rows and columns become identity rows, and their couplings
+//! move to the right-hand side).
 //!
-//! Two factorizations, both O(N) in time and memory:
-//! - **scalar fast path** (no coupling blocks): one scalar pentadiagonal LDLᵀ shared by all d
-//!   coordinate columns. For closed curves the two last rows are a dense *border* (the wrap-around
-//!   couplings fill them in), stored as two length-N vectors.
-//! - **block band path** (coupling blocks, d ≤ 4): a block LDLᵀ with d×d blocks fixed at compile
-//!   time, rows with two block subdiagonals and, for closed curves, a two-block-row border.
-//! - **envelope path** (d > 4, or closed curves with N ≤ 4 where the bands alias and entries add
-//!   up): a block Cholesky factorization on the block *envelope* of K — rows 0..N−3 span their
-//!   band, the last two block rows of a closed curve span everything (border); for N ≤ 4 the
-//!   envelope is the whole lower triangle.
+//! K is stored as a [`banded::BlockBand`]`<2>`: the scalar part H + weights, and the coupling
+//! blocks once the first block or stencil is added. Two factorizations, both O(N):
+//! - **scalar** (no coupling blocks): one LDLᵀ of the scalar (cyclic) pentadiagonal part,
+//!   shared by the d coordinate columns ([`banded::SymBand`]);
+//! - **block** (coupling blocks): block Cholesky with d×d blocks ([`banded::BlockBand`]).
 //!
-//! A pivot is accepted only if it exceeds [`PIVOT_RTOL`] times the diagonal entry of the same row
-//! of K (the pivot of a positive semidefinite matrix never exceeds it), so the test is relative to
-//! the matrix scale, row by row; otherwise [`Error::Singular`] names the vertex.
-
-mod band;
-mod block;
-mod blockband;
+//! Closed curves are factored bordered (their last two vertices a border that decays), closed
+//! curves with N ≤ 4 alias (entries naming the same position add up); see `banded`'s docs.
+//! A pivot is accepted only if it exceeds [`PIVOT_RTOL`] times the diagonal entry of the same
+//! row of K (the pivot of a positive semidefinite matrix never exceeds it), so the test is
+//! relative to the matrix scale, row by row; otherwise [`Error::Singular`] names the vertex.
 
 use crate::{Error, Hessian};
+use banded::{BlockBand, BlockFactor, FactorOptions, SymBand, SymBandFactor};
 use divdiff::{Points, Topology};
 
-/// Relative pivot tolerance: a pivot `p` of row `i` is accepted only if `p > PIVOT_RTOL * K_ii`.
+/// Relative pivot tolerance: a pivot `p` of row `i` is accepted only if `p > PIVOT_RTOL * K_ii`
+/// (`banded`'s default, [`banded::PIVOT_RTOL`]).
 ///
 /// A singular K (e.g. H with no weights: ker H = constants or linear polynomials) produces
 /// pivots at rounding level, ~1e-16·K_ii times a modest growth factor; a genuinely positive
 /// definite K whose smallest pivot is below 1e-13·K_ii has a condition number beyond 1e13 and
 /// is treated as numerically singular.
-pub const PIVOT_RTOL: f64 = 1e-13;
+pub const PIVOT_RTOL: f64 = banded::PIVOT_RTOL;
 
 /// The linear system K = H ⊗ I_d + M on N vertices in R^d (see the module docs).
 ///
@@ -44,71 +40,16 @@ pub const PIVOT_RTOL: f64 = 1e-13;
 #[derive(Clone, Debug)]
 pub struct System {
     topology: Topology,
-    n: usize,
-    dim: usize,
-    /// Scalar bands of H + diag(weights): `diag[j]`, `off1[j]` couples (j, j+1), `off2[j]` (j, j+2).
-    diag: Vec<f64>,
-    off1: Vec<f64>,
-    off2: Vec<f64>,
-    /// Coupling blocks (block envelope storage), allocated on the first block or stencil.
-    blocks: Option<Vec<f64>>,
+    /// K: the scalar part H + diag(weights) and, once added, the coupling blocks.
+    band: BlockBand<2>,
     fixed: Vec<bool>,
 }
 
-/// The envelope pattern of the lower block triangle: row `i` holds columns `first(i)..=i`.
-/// Open: the band (first(i) = i − 2). Closed, N ≥ 5: the band, and the last two rows are full
-/// (the border). Closed, N ≤ 4: the whole lower triangle.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Envelope {
-    n: usize,
-    full: bool,
-    closed: bool,
-}
-
-impl Envelope {
-    pub(crate) fn new(topology: Topology, n: usize) -> Self {
-        let closed = topology == Topology::Closed;
-        Envelope {
-            n,
-            full: closed && n <= 4,
-            closed,
-        }
-    }
-
-    /// First column of row `i`.
-    #[inline]
-    pub(crate) fn first(&self, i: usize) -> usize {
-        if self.full || (self.closed && i + 2 >= self.n) {
-            0
-        } else {
-            i.saturating_sub(2)
-        }
-    }
-
-    /// Offset (in blocks) of row `i`.
-    #[inline]
-    pub(crate) fn offset(&self, i: usize) -> usize {
-        if self.full {
-            return i * (i + 1) / 2;
-        }
-        let band = |i: usize| if i < 2 { i * (i + 1) / 2 } else { 3 * i - 3 };
-        if self.closed && i == self.n - 1 {
-            band(self.n - 2) + (self.n - 1)
-        } else {
-            band(i)
-        }
-    }
-
-    /// Total number of blocks.
-    pub(crate) fn total(&self) -> usize {
-        self.offset(self.n - 1) + (self.n - 1 - self.first(self.n - 1)) + 1
-    }
-
-    /// Index (in blocks) of the lower entry (i, j), i ≥ j, which must lie in the envelope.
-    #[inline]
-    pub(crate) fn index(&self, i: usize, j: usize) -> usize {
-        debug_assert!(j <= i && j >= self.first(i));
-        self.offset(i) + (j - self.first(i))
+/// The `banded` topology of a curve's.
+fn cyclic(topology: Topology) -> banded::Topology {
+    match topology {
+        Topology::Open => banded::Topology::Open,
+        Topology::Closed => banded::Topology::Cyclic,
     }
 }
 
@@ -133,8 +74,8 @@ impl System {
     pub fn from_bands(
         topology: Topology,
         diag: Vec<f64>,
-        mut off1: Vec<f64>,
-        mut off2: Vec<f64>,
+        off1: Vec<f64>,
+        off2: Vec<f64>,
         dim: usize,
     ) -> Result<System, Error> {
         let n = diag.len();
@@ -162,38 +103,35 @@ impl System {
                 });
             }
         }
+        let mut off: Vec<[f64; 2]> = off1.iter().zip(&off2).map(|(&a, &b)| [a, b]).collect();
         if topology == Topology::Open {
-            off1[n - 1] = 0.0;
-            off2[n - 1] = 0.0;
+            // Entries past the end of an open curve are ignored (and kept zero).
+            off[n - 1] = [0.0; 2];
             if n >= 2 {
-                off2[n - 2] = 0.0;
+                off[n - 2][1] = 0.0;
             }
         }
+        let scalar = SymBand::from_bands(cyclic(topology), diag, off)?;
         Ok(System {
             topology,
-            n,
-            dim,
-            diag,
-            off1,
-            off2,
-            blocks: None,
+            band: BlockBand::from_scalar(scalar, dim)?,
             fixed: vec![false; n],
         })
     }
 
     /// Number of vertices N.
     pub fn len(&self) -> usize {
-        self.n
+        self.band.len()
     }
 
     /// Whether the system has no vertices (never true for a constructed system).
     pub fn is_empty(&self) -> bool {
-        self.n == 0
+        self.band.is_empty()
     }
 
     /// The dimension d.
     pub fn dim(&self) -> usize {
-        self.dim
+        self.band.dim()
     }
 
     /// Open or closed.
@@ -207,11 +145,11 @@ impl System {
     }
 
     fn check_vertex(&self, field: &'static str, vertex: usize) -> Result<(), Error> {
-        if vertex >= self.n {
+        if vertex >= self.len() {
             Err(Error::IndexOutOfRange {
                 field,
                 index: vertex,
-                len: self.n,
+                len: self.len(),
             })
         } else {
             Ok(())
@@ -224,13 +162,8 @@ impl System {
     /// [`Error::IndexOutOfRange`] for a vertex ≥ N.
     pub fn add_weight(&mut self, vertex: usize, w: f64) -> Result<(), Error> {
         self.check_vertex("vertex", vertex)?;
-        self.diag[vertex] += w;
+        self.band.scalar_mut().diag_mut()[vertex] += w;
         Ok(())
-    }
-
-    fn blocks_mut(&mut self) -> &mut Vec<f64> {
-        let total = Envelope::new(self.topology, self.n).total() * self.dim * self.dim;
-        self.blocks.get_or_insert_with(|| vec![0.0; total])
     }
 
     /// Adds the symmetric d×d `block` (row-major, d² entries) to the diagonal block of `vertex`.
@@ -252,7 +185,7 @@ impl System {
     /// not have d² entries or a stencil with more than three entries (field `"stencil"`),
     /// [`Error::StencilTooWide`] if two stencil vertices are more than two steps apart.
     pub fn add_stencil(&mut self, stencil: &[(usize, f64)], block: &[f64]) -> Result<(), Error> {
-        let d = self.dim;
+        let (n, d) = (self.len(), self.dim());
         if block.len() != d * d {
             return Err(Error::SizeMismatch {
                 field: "block",
@@ -270,19 +203,15 @@ impl System {
         for &(v, _) in stencil {
             self.check_vertex("stencil", v)?;
         }
-        let n = self.n;
-        let env = Envelope::new(self.topology, n);
         // Validate the pattern before touching the storage.
         for &(a, _) in stencil {
             for &(b, _) in stencil {
-                let (i, j) = if a >= b { (a, b) } else { (b, a) };
-                if j < env.first(i) || (self.topology == Topology::Open && i - j > 2) {
-                    return Err(Error::StencilTooWide {
-                        first: a,
-                        second: b,
-                    });
-                }
-                if self.topology == Topology::Closed && i - j > 2 && n - (i - j) > 2 {
+                let gap = a.abs_diff(b);
+                let too_wide = match self.topology {
+                    Topology::Open => gap > 2,
+                    Topology::Closed => gap > 2 && n - gap > 2,
+                };
+                if too_wide {
                     return Err(Error::StencilTooWide {
                         first: a,
                         second: b,
@@ -290,20 +219,27 @@ impl System {
                 }
             }
         }
-        let blocks = self.blocks_mut();
+        // The symmetric part of B, once (on the stack for d ≤ 4: this runs per constraint and
+        // interior-point iteration).
+        let mut stack = [0.0; 16];
+        let mut heap = Vec::new();
+        let sym: &mut [f64] = if d * d <= stack.len() {
+            &mut stack[..d * d]
+        } else {
+            heap.resize(d * d, 0.0);
+            &mut heap
+        };
+        for r in 0..d {
+            for c in 0..d {
+                sym[r * d + c] = 0.5 * (block[r * d + c] + block[c * d + r]);
+            }
+        }
         for &(a, ca) in stencil {
             for &(b, cb) in stencil {
-                // K_ab += ca cb B; store only the lower entry (a > b) and the diagonal (a == b).
-                if a < b {
-                    continue;
-                }
-                let base = env.index(a, b) * d * d;
-                let s = ca * cb;
-                for r in 0..d {
-                    for c in 0..d {
-                        let sym = 0.5 * (block[r * d + c] + block[c * d + r]);
-                        blocks[base + r * d + c] += s * sym;
-                    }
+                // K_ab += ca cb B for every ordered pair: `add_scaled` adds (a, b) and its
+                // transpose at once, so a pair of distinct vertices is visited once.
+                if a >= b {
+                    self.band.add_scaled(a, b, ca * cb, sym)?;
                 }
             }
         }
@@ -327,9 +263,9 @@ impl System {
     /// [`Error::SizeMismatch`] if `x` is not N points of dimension d.
     pub fn apply(&self, x: &Points) -> Result<Points, Error> {
         self.check_points("x", x)?;
-        let mut y = vec![0.0; self.n * self.dim];
-        self.apply_slice(x.coords(), &mut y);
-        Ok(Points::new(self.dim, y)?)
+        let mut y = vec![0.0; self.len() * self.dim()];
+        self.band.mul_add(x.coords(), &mut y, 1)?;
+        Ok(Points::new(self.dim(), y)?)
     }
 
     /// [`apply`](System::apply) on flat vertex-major slices of length N·d: y = K x (y is
@@ -338,7 +274,7 @@ impl System {
     /// # Errors
     /// [`Error::SizeMismatch`] if `x` or `y` does not have N·d entries.
     pub fn apply_flat(&self, x: &[f64], y: &mut [f64]) -> Result<(), Error> {
-        let len = self.n * self.dim;
+        let len = self.len() * self.dim();
         for (field, got) in [("x", x.len()), ("y", y.len())] {
             if got != len {
                 return Err(Error::SizeMismatch {
@@ -349,98 +285,27 @@ impl System {
             }
         }
         y.fill(0.0);
-        self.apply_slice(x, y);
-        Ok(())
-    }
-
-    /// y += K x on flat slices of length N·d (checked by the callers).
-    fn apply_slice(&self, xs: &[f64], y: &mut [f64]) {
-        match self.dim {
-            1 => self.apply_scalar::<1>(xs, y, 1),
-            2 => self.apply_scalar::<2>(xs, y, 2),
-            3 => self.apply_scalar::<3>(xs, y, 3),
-            4 => self.apply_scalar::<4>(xs, y, 4),
-            d => self.apply_scalar::<0>(xs, y, d),
-        }
-        self.apply_blocks(xs, y);
-    }
-
-    /// y += (H ⊗ I_d + weights) x with the dimension fixed at compile time (`D` = 0: `dyn_d`).
-    #[inline(always)]
-    fn apply_scalar<const D: usize>(&self, xs: &[f64], y: &mut [f64], dyn_d: usize) {
-        let d = if D == 0 { dyn_d } else { D };
-        let n = self.n;
-        for j in 0..n {
-            let dj = self.diag[j];
-            for c in 0..d {
-                y[j * d + c] += dj * xs[j * d + c];
-            }
-            for (band, step) in [(&self.off1, 1), (&self.off2, 2)] {
-                let v = band[j];
-                if v == 0.0 {
-                    continue;
-                }
-                let k = if j + step >= n {
-                    j + step - n
-                } else {
-                    j + step
-                };
-                for c in 0..d {
-                    y[j * d + c] += v * xs[k * d + c];
-                    y[k * d + c] += v * xs[j * d + c];
-                }
-            }
-        }
-    }
-
-    /// y += (coupling blocks and stencil terms) x.
-    fn apply_blocks(&self, xs: &[f64], y: &mut [f64]) {
-        let (n, d) = (self.n, self.dim);
-        if let Some(blocks) = &self.blocks {
-            let env = Envelope::new(self.topology, n);
-            // Envelope entries are stored row by row, columns first(i)..=i consecutively.
-            let mut blocks_iter = blocks.chunks_exact(d * d);
-            for i in 0..n {
-                for j in env.first(i)..=i {
-                    let Some(b) = blocks_iter.next() else {
-                        break;
-                    };
-                    if b.iter().all(|&v| v == 0.0) {
-                        continue;
-                    }
-                    for r in 0..d {
-                        for c in 0..d {
-                            y[i * d + r] += b[r * d + c] * xs[j * d + c];
-                            if i != j {
-                                y[j * d + c] += b[r * d + c] * xs[i * d + r];
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        Ok(self.band.mul_add(x, y, 1)?)
     }
 
     /// Removes every coupling block and stencil term (K = H ⊗ I_d + weights again, fixed vertices
     /// kept) but keeps their storage, so a system rebuilt every iteration does not reallocate.
     pub fn clear_blocks(&mut self) {
-        if let Some(b) = self.blocks.as_mut() {
-            b.fill(0.0);
-        }
+        self.band.clear_blocks();
     }
 
     fn check_points(&self, field: &'static str, x: &Points) -> Result<(), Error> {
-        if x.dim() != self.dim {
+        if x.dim() != self.dim() {
             return Err(Error::SizeMismatch {
                 field,
-                expected: self.dim,
+                expected: self.dim(),
                 got: x.dim(),
             });
         }
-        if x.len() != self.n {
+        if x.len() != self.len() {
             return Err(Error::SizeMismatch {
                 field,
-                expected: self.n,
+                expected: self.len(),
                 got: x.len(),
             });
         }
@@ -465,49 +330,60 @@ impl System {
     /// [`Error::Singular`] naming the vertex of the first pivot that is not above
     /// `pivot_rtol` times its diagonal entry (or not finite).
     pub fn factor_with_tolerance(&self, pivot_rtol: f64) -> Result<Factor, Error> {
-        let banded = self.topology == Topology::Open || self.n >= 5;
-        let parts = self.parts(pivot_rtol);
-        let inner = match (banded, self.blocks.is_some(), self.dim) {
-            (true, false, _) => Inner::Band(band::BandFactor::new(&parts)?),
-            (true, true, 1) => Inner::Bb1(blockband::BlockBand::new(&parts)?),
-            (true, true, 2) => Inner::Bb2(blockband::BlockBand::new(&parts)?),
-            (true, true, 3) => Inner::Bb3(blockband::BlockBand::new(&parts)?),
-            (true, true, 4) => Inner::Bb4(blockband::BlockBand::new(&parts)?),
-            _ => Inner::Block(block::BlockFactor::new(&parts)?),
+        let any_fixed = self.fixed.iter().any(|&f| f);
+        let mut options = FactorOptions::default().pivot_rtol(pivot_rtol);
+        if any_fixed {
+            options = options.eliminated(&self.fixed);
+        }
+        let inner = if self.band.has_blocks() {
+            Inner::Block(self.band.factor_with(&options)?)
+        } else {
+            Inner::Scalar(self.band.scalar().factor_with(&options)?)
         };
         Ok(Factor {
-            n: self.n,
-            dim: self.dim,
+            n: self.len(),
+            dim: self.dim(),
             inner,
+            fixed_couplings: if any_fixed {
+                self.fixed_couplings()
+            } else {
+                Vec::new()
+            },
         })
     }
 
-    pub(crate) fn parts(&self, rtol: f64) -> Parts<'_> {
-        Parts {
-            rtol,
-            topology: self.topology,
-            n: self.n,
-            dim: self.dim,
-            diag: &self.diag,
-            off1: &self.off1,
-            off2: &self.off2,
-            blocks: self.blocks.as_deref(),
-            fixed: &self.fixed,
+    /// The couplings K_{free, fixed} that the elimination moves to the right-hand side: per
+    /// free neighbour g (within two steps) of a fixed vertex f, the d×d block K_gf (row-major).
+    fn fixed_couplings(&self) -> Vec<(usize, usize, Vec<f64>)> {
+        let (n, d) = (self.len(), self.dim());
+        let closed = self.topology == Topology::Closed;
+        let mut out = Vec::new();
+        let mut blk = vec![0.0; d * d];
+        for f in (0..n).filter(|&f| self.fixed[f]) {
+            // The vertices within two steps of f; on a small closed curve several steps name
+            // the same vertex (and `get` sums the aliasing entries), so each is visited once.
+            let near: [Option<usize>; 4] = if closed {
+                [1, 2, n - 1, n - 2].map(|s| Some((f + s) % n))
+            } else {
+                [
+                    f.checked_sub(2),
+                    f.checked_sub(1),
+                    (f + 1 < n).then_some(f + 1),
+                    (f + 2 < n).then_some(f + 2),
+                ]
+            };
+            for (k, g) in near.iter().enumerate() {
+                let Some(g) = *g else { continue };
+                if g == f || self.fixed[g] || near[..k].contains(&Some(g)) {
+                    continue;
+                }
+                if self.band.get(g, f, &mut blk).is_ok() && blk.iter().any(|&v| v != 0.0) {
+                    out.push((g, f, blk.clone()));
+                }
+            }
         }
+        out
     }
-}
-
-/// Borrowed view of a system for the factorizations.
-pub(crate) struct Parts<'a> {
-    pub(crate) rtol: f64,
-    pub(crate) topology: Topology,
-    pub(crate) n: usize,
-    pub(crate) dim: usize,
-    pub(crate) diag: &'a [f64],
-    pub(crate) off1: &'a [f64],
-    pub(crate) off2: &'a [f64],
-    pub(crate) blocks: Option<&'a [f64]>,
-    pub(crate) fixed: &'a [bool],
 }
 
 /// A factorization of a [`System`], reusable for any number of right-hand sides.
@@ -516,16 +392,16 @@ pub struct Factor {
     n: usize,
     dim: usize,
     inner: Inner,
+    /// Couplings between a free and a fixed vertex: (free, fixed, K_free,fixed as d×d).
+    fixed_couplings: Vec<(usize, usize, Vec<f64>)>,
 }
 
 #[derive(Clone, Debug)]
 enum Inner {
-    Band(band::BandFactor),
-    Bb1(blockband::BlockBand<1>),
-    Bb2(blockband::BlockBand<2>),
-    Bb3(blockband::BlockBand<3>),
-    Bb4(blockband::BlockBand<4>),
-    Block(block::BlockFactor),
+    /// No coupling blocks: the scalar LDLᵀ, applied to the d columns at once.
+    Scalar(SymBandFactor<2>),
+    /// The block Cholesky factor.
+    Block(BlockFactor<2>),
 }
 
 impl Factor {
@@ -552,21 +428,7 @@ impl Factor {
                 got: x.len() * x.dim(),
             });
         }
-        self.solve_slice(x.coords_mut());
-        Ok(())
-    }
-
-    /// Solves in place on a flat vertex-major slice of length N·d (no size checks beyond debug).
-    pub(crate) fn solve_slice(&self, x: &mut [f64]) {
-        debug_assert_eq!(x.len(), self.n * self.dim);
-        match &self.inner {
-            Inner::Band(f) => f.solve(x),
-            Inner::Bb1(f) => f.solve(x),
-            Inner::Bb2(f) => f.solve(x),
-            Inner::Bb3(f) => f.solve(x),
-            Inner::Bb4(f) => f.solve(x),
-            Inner::Block(f) => f.solve(x),
-        }
+        self.solve_slice(x.coords_mut())
     }
 
     /// Solves K x = b for a flat vertex-major right-hand side of length N·d, in place.
@@ -581,7 +443,23 @@ impl Factor {
                 got: x.len(),
             });
         }
-        self.solve_slice(x);
+        self.solve_slice(x)
+    }
+
+    /// Solves in place on a flat vertex-major slice of length N·d (checked by the callers):
+    /// b_free −= K_free,fixed x_fixed, then the eliminated system.
+    fn solve_slice(&self, x: &mut [f64]) -> Result<(), Error> {
+        let d = self.dim;
+        for (g, f, k) in &self.fixed_couplings {
+            for r in 0..d {
+                let s: f64 = (0..d).map(|c| k[r * d + c] * x[f * d + c]).sum();
+                x[g * d + r] -= s;
+            }
+        }
+        match &self.inner {
+            Inner::Scalar(f) => f.solve_in_place(x, d)?,
+            Inner::Block(f) => f.solve_in_place(x, 1)?,
+        }
         Ok(())
     }
 }
