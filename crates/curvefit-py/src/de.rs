@@ -500,7 +500,11 @@ fn visit_view<'de, T: Elem, V: Visitor<'de>>(
 ) -> Result<V::Value, Error> {
     let shape_error = |e: numpy::ndarray::ShapeError| -> Error { de::Error::custom(e.to_string()) };
     match view.ndim() {
-        1 => visit_1d(view.into_dimensionality::<Ix1>().map_err(shape_error)?, ctx, v),
+        1 => visit_1d(
+            view.into_dimensionality::<Ix1>().map_err(shape_error)?,
+            ctx,
+            v,
+        ),
         2 => {
             let view = view.into_dimensionality::<Ix2>().map_err(shape_error)?;
             let len = view.nrows();

@@ -133,20 +133,11 @@ fn parse_problem<'py>(
     })
 }
 
-/// Solves without touching Python (callable with the GIL released); a panic becomes
-/// [`Failure::Panic`].
-fn solve_problem(p: &Problem) -> Result<Solution, Failure> {
-    let run = || -> Result<Solution, InputError> {
-        Ok(match p {
-            Problem::Refine(p) => Solution::Refine(spec::refine(p)?),
-            Problem::Strip(p) => Solution::Strip(spec::strip(p)?),
-            Problem::Scheme(p) => Solution::Scheme(spec::scheme(p)?),
-            Problem::Surface(p) => Solution::Surface(spec::surface(p)?),
-            Problem::Natural(p) => Solution::Natural(spec::natural(p)?),
-        })
-    };
-    match catch_unwind(AssertUnwindSafe(run)) {
-        Ok(r) => r.map_err(Failure::Input),
+/// Runs `f`, turning a panic into [`Failure::Panic`] with its message: nothing unwinds into
+/// Python (where PyO3 would raise a `BaseException`).
+fn guard<T>(f: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(r) => r,
         Err(payload) => {
             let msg = payload
                 .downcast_ref::<&str>()
@@ -156,6 +147,28 @@ fn solve_problem(p: &Problem) -> Result<Solution, Failure> {
             Err(Failure::Panic(msg))
         }
     }
+}
+
+/// Solves without touching Python (callable with the GIL released).
+fn solve_problem(p: &Problem) -> Result<Solution, Failure> {
+    guard(|| {
+        Ok(match p {
+            Problem::Refine(p) => Solution::Refine(spec::refine(p).map_err(Failure::Input)?),
+            Problem::Strip(p) => Solution::Strip(spec::strip(p).map_err(Failure::Input)?),
+            Problem::Scheme(p) => Solution::Scheme(spec::scheme(p).map_err(Failure::Input)?),
+            Problem::Surface(p) => Solution::Surface(spec::surface(p).map_err(Failure::Input)?),
+            Problem::Natural(p) => Solution::Natural(spec::natural(p).map_err(Failure::Input)?),
+        })
+    })
+}
+
+/// Reads one problem, a panic while reading included.
+fn read_problem<'py>(
+    subcommand: &str,
+    obj: &Bound<'py, PyAny>,
+    ctx: &de::Ctx<'py>,
+) -> Result<Problem, Failure> {
+    guard(|| parse_problem(subcommand, obj, ctx).map_err(Failure::Input))
 }
 
 fn to_python<'py>(py: Python<'py>, s: Solution) -> PyResult<Bound<'py, PyDict>> {
@@ -193,9 +206,9 @@ fn solve<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     check_subcommand(subcommand)?;
     let ctx = de::Ctx::new(py)?;
-    let parsed = match parse_problem(subcommand, problem, &ctx) {
+    let parsed = match read_problem(subcommand, problem, &ctx) {
         Ok(p) => p,
-        Err(e) => return Err(PyErr::from_value(exception(py, Failure::Input(e))?)),
+        Err(f) => return Err(PyErr::from_value(exception(py, f)?)),
     };
     match py.detach(|| solve_problem(&parsed)) {
         Ok(s) => to_python(py, s),
@@ -233,7 +246,7 @@ fn solve_many<'py>(
     let ctx = de::Ctx::new(py)?;
     let mut parsed = Vec::new();
     for item in problems.try_iter()? {
-        parsed.push(parse_problem(subcommand, &item?, &ctx));
+        parsed.push(read_problem(subcommand, &item?, &ctx));
     }
     let solved: Vec<Result<Solution, Failure>> = py.detach(|| {
         let run = || {
@@ -241,7 +254,8 @@ fn solve_many<'py>(
                 .par_iter()
                 .map(|p| match p {
                     Ok(p) => solve_problem(p),
-                    Err(e) => Err(Failure::Input(e.clone())),
+                    Err(Failure::Input(e)) => Err(Failure::Input(e.clone())),
+                    Err(Failure::Panic(m)) => Err(Failure::Panic(m.clone())),
                 })
                 .collect()
         };
@@ -270,11 +284,22 @@ fn schema(subcommand: &str) -> PyResult<String> {
     serde_json::to_string_pretty(&v).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
+/// `_panic_guard_check()`: raises what a panic inside the library raises (for the tests of
+/// that path: no input makes the library panic on purpose).
+#[pyfunction]
+fn _panic_guard_check(py: Python<'_>) -> PyResult<()> {
+    match guard(|| -> Result<(), Failure> { panic!("the guard's own check") }) {
+        Ok(()) => Ok(()),
+        Err(f) => Err(PyErr::from_value(exception(py, f)?)),
+    }
+}
+
 #[pymodule]
 fn _curvefit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_many, m)?)?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_guard_check, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

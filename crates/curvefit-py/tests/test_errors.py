@@ -189,3 +189,11 @@ def test_bad_subcommand_and_threads():
         curvefit._curvefit.solve("bogus", {})
     with pytest.raises(ValueError):
         curvefit.refine_many([], threads=0)
+
+
+def test_a_panic_becomes_an_internal_error():
+    """Every call runs the library under a panic guard; its check panics on purpose."""
+    with pytest.raises(curvefit.InternalError, match="internal error .a bug in curvefit") as e:
+        curvefit._curvefit._panic_guard_check()
+    assert "the guard's own check" in str(e.value)
+    assert isinstance(e.value, RuntimeError) and not isinstance(e.value, ValueError)

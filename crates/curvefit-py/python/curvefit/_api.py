@@ -9,12 +9,12 @@ raises :class:`curvefit.InputError` with the command line's field, index and mes
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _curvefit
-from ._errors import InputError
+from ._errors import InputError, InternalError
 from ._results import NaturalResult, RefineResult, SchemeResult, StripResult, SurfaceResult
 
 __all__ = ["refine", "refine_many", "strip", "scheme", "surface", "natural"]
@@ -48,7 +48,7 @@ def _renamed(e: InputError, renames: Mapping[str, str]) -> InputError:
     return e
 
 
-def _ends(bc_type: Any, field: str = "bc_type") -> List[Any]:
+def _ends(bc_type: Any, field: str = "bc_type") -> List[Tuple[Any, ...]]:
     """scipy's ``bc_type`` as [start, end], each ("natural",) or ("slope", value)."""
     if isinstance(bc_type, str):
         if bc_type == "natural":
@@ -78,7 +78,7 @@ def _ends(bc_type: Any, field: str = "bc_type") -> List[Any]:
             None,
             'must be "natural", "clamped" or a pair ((order, value), (order, value))',
         )
-    out = []
+    out: List[Tuple[Any, ...]] = []
     for i, end in enumerate(ends):
         try:
             order, value = end
@@ -252,7 +252,7 @@ def refine(
 
 def refine_many(
     problems: Sequence[Mapping[str, Any]], threads: Optional[int] = None
-) -> List[Union[RefineResult, InputError]]:
+) -> List[Union[RefineResult, InputError, InternalError]]:
     """Solves many refinement problems in parallel (Rust threads, the GIL released).
 
     Args:
@@ -263,7 +263,8 @@ def refine_many(
 
     Returns:
         One entry per problem, in order: its :class:`RefineResult`, or the
-        :class:`InputError` that :func:`refine` would raise for it (returned, not raised).
+        :class:`InputError` that :func:`refine` would raise for it (returned, not raised; an
+        :class:`InternalError` where the library panicked).
         ``refine_many(ps)[i]`` equals ``refine(**ps[i])`` field for field.
     """
     prepared: List[Any] = []
@@ -281,7 +282,7 @@ def refine_many(
             early[i] = e
             renames.append({})
         prepared.append(p)
-    out: List[Union[RefineResult, InputError]] = []
+    out: List[Union[RefineResult, InputError, InternalError]] = []
     for i, r in enumerate(_curvefit.solve_many("refine", prepared, threads)):
         if i in early:
             out.append(early[i])
@@ -289,8 +290,10 @@ def refine_many(
             out.append(RefineResult(**r))
         elif isinstance(r, InputError):
             out.append(_renamed(r, renames[i]))
-        else:
+        elif isinstance(r, InternalError):
             out.append(r)
+        else:  # pragma: no cover - the module returns nothing else
+            raise TypeError(f"unexpected entry {r!r}")
     return out
 
 

@@ -16,3 +16,6 @@ def solve_many(
 
 def schema(subcommand: str) -> str:
     """The JSON Schema of the subcommand's problem, as JSON text."""
+
+def _panic_guard_check() -> None:
+    """Raises what a panic inside the library raises (curvefit.InternalError); for the tests."""

@@ -8,7 +8,7 @@ compare by their fields' values with ``to_dict()``.
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, NamedTuple, Tuple
+from typing import Any, Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
@@ -248,6 +248,11 @@ class SchemeRule(_Result):
 
     _fields = ("floats", "offsets", "residue", "weights")
 
+    floats: np.ndarray
+    offsets: np.ndarray
+    residue: int
+    weights: List[str]
+
 
 class SurfaceRule(_Result):
     """One tensor-product rule (row-major in (a, b) and in (r, s)).
@@ -260,6 +265,11 @@ class SurfaceRule(_Result):
     """
 
     _fields = ("floats", "offsets", "residue", "weights")
+
+    floats: np.ndarray
+    offsets: np.ndarray
+    residue: Tuple[int, int]
+    weights: List[str]
 
 
 class PolygonResult(_Result):
@@ -274,6 +284,11 @@ class PolygonResult(_Result):
 
     _fields = ("closed", "input", "levels", "output")
 
+    closed: bool
+    input: np.ndarray
+    levels: int
+    output: np.ndarray
+
 
 class SchemeResult(_Result):
     """The result of :func:`curvefit.scheme`.
@@ -287,6 +302,12 @@ class SchemeResult(_Result):
     """
 
     _fields = ("arity", "points", "polygon", "rules", "surface_rules")
+
+    arity: int
+    points: int
+    polygon: Optional[PolygonResult]
+    rules: List[SchemeRule]
+    surface_rules: Optional[List[SurfaceRule]]
 
     def __init__(self, **fields: Any) -> None:
         if fields["polygon"] is not None:
@@ -315,6 +336,13 @@ class SurfaceResult(_Result):
 
     _fields = ("rows", "cols", "closed", "levels", "points", "quads")
 
+    rows: int
+    cols: int
+    closed: Tuple[bool, bool]
+    levels: int
+    points: np.ndarray
+    quads: np.ndarray
+
     @property
     def grid(self) -> np.ndarray:
         """``points`` as a ``(rows, cols, d)`` view."""
@@ -332,6 +360,10 @@ class NaturalLevel(_Result):
 
     _fields = ("level", "points", "energy")
 
+    level: int
+    points: np.ndarray
+    energy: float
+
 
 class NaturalResult(_Result):
     """The result of :func:`curvefit.natural`.
@@ -343,6 +375,9 @@ class NaturalResult(_Result):
     """
 
     _fields = ("levels", "limit_energy")
+
+    levels: List[NaturalLevel]
+    limit_energy: float
 
     def __init__(self, **fields: Any) -> None:
         fields["levels"] = [NaturalLevel(**lv) for lv in fields["levels"]]
