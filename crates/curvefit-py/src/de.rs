@@ -12,7 +12,7 @@
 //! | `int`, numpy integers | an integer | `visit_u64` (≥ 0) or `visit_i64`; beyond 64 bits `visit_f64`, as serde_json parses it |
 //! | `float`, numpy floats | a number | `visit_f64`; NaN and ±∞ (no JSON for them) are refused |
 //! | `str` | a string | `visit_str` |
-//! | `list`, `tuple`, other sequences, `numpy.ndarray` | an array | `visit_seq` (an n-D array is an array of (n−1)-D arrays) |
+//! | `list`, `tuple`, other sequences, `numpy.ndarray`, objects with `__array__` | an array | `visit_seq` (an n-D array is an array of (n−1)-D arrays) |
 //! | `dict`, other mappings | an object | `visit_map` |
 //!
 //! Arrays of float64, float32 and the integer and bool dtypes are read in place through their
@@ -33,7 +33,8 @@ use numpy::ndarray::{ArrayView1, ArrayViewD, Ix0, Ix1, Ix2};
 use numpy::{Element, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{
-    PyBool, PyDict, PyFloat, PyInt, PyList, PyMapping, PySequence, PyString, PyTuple,
+    PyBool, PyByteArray, PyBytes, PyDict, PyFloat, PyInt, PyList, PyMapping, PySequence, PyString,
+    PyTuple,
 };
 use serde::de::{self, DeserializeSeed, IntoDeserializer, Unexpected, Visitor};
 use serde_json::Error;
@@ -42,6 +43,8 @@ use serde_json::Error;
 pub struct Ctx<'py> {
     /// `numpy.generic`, the base class of numpy's scalars.
     generic: Bound<'py, PyAny>,
+    /// `numpy.asarray`.
+    asarray: Bound<'py, PyAny>,
     /// The lengths (taken, given) of the last array that had entries left over (see
     /// [`Ctx::trailing`]).
     pub trailing: Cell<Option<(usize, usize)>>,
@@ -50,8 +53,10 @@ pub struct Ctx<'py> {
 impl<'py> Ctx<'py> {
     /// A context for one problem.
     pub fn new(py: Python<'py>) -> PyResult<Self> {
+        let numpy = py.import("numpy")?;
         Ok(Ctx {
-            generic: py.import("numpy")?.getattr("generic")?,
+            generic: numpy.getattr("generic")?,
+            asarray: numpy.getattr("asarray")?,
             trailing: Cell::new(None),
         })
     }
@@ -167,6 +172,18 @@ fn kind<'py>(obj: &Bound<'py, PyAny>, ctx: &Ctx<'py>) -> Result<Kind<'py>, Error
             return kind(&item, ctx);
         }
     }
+    // Bytes are a sequence of small integers to Python, but no JSON value.
+    if obj.cast::<PyBytes>().is_ok() || obj.cast::<PyByteArray>().is_ok() {
+        return Ok(Kind::Other(type_name(obj)));
+    }
+    // Array-likes (pandas, xarray, array-API tensors on the CPU) as numpy sees them.
+    if obj.hasattr("__array__").unwrap_or(false) {
+        if let Ok(a) = ctx.asarray.call1((obj,)) {
+            if a.cast::<PyUntypedArray>().is_ok() {
+                return kind(&a, ctx);
+            }
+        }
+    }
     if obj.cast::<PyMapping>().is_ok() {
         let d = PyDict::new(obj.py());
         d.update(obj.cast::<PyMapping>().map_err(|e| py_err(e.into()))?)
@@ -178,12 +195,14 @@ fn kind<'py>(obj: &Bound<'py, PyAny>, ctx: &Ctx<'py>) -> Result<Kind<'py>, Error
             return Ok(Kind::List(l));
         }
     }
-    let name = obj
-        .get_type()
+    Ok(Kind::Other(type_name(obj)))
+}
+
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
         .name()
         .map(|n| n.to_string())
-        .unwrap_or_else(|_| "object".into());
-    Ok(Kind::Other(name))
+        .unwrap_or_else(|_| "object".into())
 }
 
 /// The entries of a list or tuple, one at a time.

@@ -98,3 +98,21 @@ def test_inputs_are_not_modified():
     np.testing.assert_array_equal(q, before)
     r.points[0, 0] = 99.0  # the result owns its arrays
     np.testing.assert_array_equal(q, before)
+
+
+def test_array_likes_and_refused_python_types():
+    class ArrayLike:
+        """An object numpy converts through __array__ (like pandas' and xarray's)."""
+
+        def __init__(self, a):
+            self.a = a
+
+        def __array__(self, dtype=None, copy=None):
+            return self.a
+
+    q = star(7, 2)
+    assert curvefit.refine(ArrayLike(q), closed=True).to_dict() == curvefit.refine(q, closed=True).to_dict()
+    for bad in (b"\x00\x01", bytearray(b"ab"), {1, 2}, object()):
+        with pytest.raises(curvefit.InputError) as e:
+            curvefit.refine(bad)
+        assert e.value.field == "points", bad
