@@ -114,7 +114,7 @@ fn messages_say_what_the_field_must_be() {
         (
             "strip",
             r#"{"t": [0, 1, 2], "y": [0, 1.34, 0], "upper": {"pieces": [[1, 0, 0, 0], [1, 0, 0, 0]]}}"#.to_string(),
-            "error: y[1]: lies outside the upper bound by 0.34 at an end of interval 1",
+            "error: y[1]: lies outside the upper bound by 0.34 at t = 1",
         ),
         (
             "strip",

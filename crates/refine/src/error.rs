@@ -8,6 +8,9 @@ pub enum Error {
     /// A linear-algebra failure (from `energy`).
     #[error(transparent)]
     Energy(#[from] energy::Error),
+    /// A failure of the cone solver (from `conic`) not mapped to a variant of this crate.
+    #[error(transparent)]
+    Conic(conic::Error),
     /// The requested result would exceed a documented size limit (or overflow `usize`).
     #[error("{field}: the result would exceed the limit of {limit}")]
     TooLarge {

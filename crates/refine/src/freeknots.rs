@@ -36,9 +36,17 @@
 //! started from the centripetal knots (the problem's parametrization; see [`FreeKnots`] for the
 //! exact start). At most [`FreeKnotOptions::max_iterations`] iterations; it stops when the
 //! relative stationarity residual (below) is at most [`FreeKnotOptions::tolerance`], when E is 0
-//! up to rounding ([`FREE_KNOT_ZERO_ENERGY`]), or when a line search finds no acceptable step
+//! up to rounding ([`FreeKnotOptions::zero_energy`]), or when a line search finds no acceptable step
 //! (then `converged` is false). Every accepted step lowers F (up to
-//! [`FREE_KNOT_ROUNDING_SLACK`] relative, for steps taken in F's rounding noise).
+//! [`FreeKnotOptions::rounding_slack`] relative, for steps taken in F's rounding noise).
+//!
+//! The iteration is written out here (the two-loop recursion and the line search, ~70 lines)
+//! rather than taken from argmin: argmin's L-BFGS stops on the 2-norm of the gradient or on
+//! the change of F, while this problem's test is the scale-free stationarity above (the
+//! θ-gradient H_i(G_i − Ḡ) shrinks with the spans), and near the optimum it must accept steps
+//! whose decrease is below F's rounding while the stationarity still falls — a line search that
+//! requires strict sufficient decrease stalls there (strip's argmin BFGS needed an evaluation
+//! budget for the same reason). So `refine` does not depend on argmin.
 //!
 //! # Residuals (Corollaries 2.5–2.7, Theorems 3.1–3.2, corrected)
 //!
@@ -61,42 +69,33 @@ use divdiff::{Knots, Points, Topology};
 
 use crate::{Boundary, Constraint, Error, Problem, Refinement, Solver};
 
-/// Default iteration limit of the free-knot L-BFGS ([`FreeKnotOptions::max_iterations`]).
-pub const DEFAULT_FREE_KNOT_ITERATIONS: usize = 300;
-/// Default stopping tolerance on the relative stationarity residual
-/// ([`FreeKnotOptions::tolerance`]). F is flat to second order near its minimum, so its
-/// decrease falls below rounding (≈ 1e−16 relative) once the residual is about 1e−8.
-pub const DEFAULT_FREE_KNOT_TOLERANCE: f64 = 1e-7;
-/// Default number of L-BFGS correction pairs ([`FreeKnotOptions::memory`]).
-pub const DEFAULT_FREE_KNOT_MEMORY: usize = 8;
-/// Backtracking halvings per line search before the iteration stops.
-pub const FREE_KNOT_LINE_SEARCH_STEPS: usize = 40;
-/// Armijo sufficient-decrease constant.
-pub const FREE_KNOT_ARMIJO: f64 = 1e-4;
-/// Largest change of any θ_j (log-span) in one step: spans change by at most a factor e^2.
-pub const FREE_KNOT_MAX_STEP: f64 = 2.0;
-/// Relative slack of the sufficient-decrease test for rounding in F: a step is also accepted
-/// when F rises by at most this times |F| (near the optimum F's decrease is below rounding
-/// while its gradient still decreases), so F may rise by rounding only.
-pub const FREE_KNOT_ROUNDING_SLACK: f64 = 1e-14;
-
-/// The iteration also stops (converged) once E has fallen to this fraction of the energy scale
-/// L²/T³ (L the length of the data polygon): E ≥ 0, so such knots are a global minimum up to
-/// rounding (collinear data on chordal knots), and the relative residuals, scaled by σ = 3E/T,
-/// are no longer meaningful there.
-pub const FREE_KNOT_ZERO_ENERGY: f64 = 1e-20;
-
 /// Options of [`optimize_knots`].
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct FreeKnotOptions {
-    /// Iteration limit (default [`DEFAULT_FREE_KNOT_ITERATIONS`]).
+    /// Iteration limit (default 300).
     pub max_iterations: usize,
-    /// Stop when the relative stationarity residual is at most this (default
-    /// [`DEFAULT_FREE_KNOT_TOLERANCE`]).
+    /// Stop when the relative stationarity residual is at most this (default 1e-7: F is flat
+    /// to second order near its minimum, so its decrease falls below rounding, ≈ 1e−16
+    /// relative, once the residual is about 1e−8).
     pub tolerance: f64,
-    /// L-BFGS correction pairs (default [`DEFAULT_FREE_KNOT_MEMORY`]).
+    /// L-BFGS correction pairs (default 8).
     pub memory: usize,
+    /// Backtracking halvings per line search before the iteration stops (default 40).
+    pub line_search_steps: usize,
+    /// Armijo's sufficient-decrease constant (default 1e-4).
+    pub armijo: f64,
+    /// Largest change of any θ_j (log-span) in one step (default 2: spans change by at most a
+    /// factor e²).
+    pub max_step: f64,
+    /// Relative slack of the sufficient-decrease test for rounding in F (default 1e-14): a step
+    /// is also accepted when F rises by at most this times |F| while the stationarity residual
+    /// falls (near the optimum F's decrease is below rounding while its gradient still
+    /// decreases), so F may rise by rounding only.
+    pub rounding_slack: f64,
+    /// E counts as 0 (a straight or constant optimum: every knot vector is optimal) below this
+    /// times L²/T³, L the data polygon's length (default 1e-20).
+    pub zero_energy: f64,
     /// The fixed total parameter length T; `None` (default) keeps the length of the starting
     /// (centripetal) knots, which are rescaled to T otherwise.
     pub total_length: Option<f64>,
@@ -132,9 +131,14 @@ pub enum FreeKnots {
 impl Default for FreeKnotOptions {
     fn default() -> Self {
         FreeKnotOptions {
-            max_iterations: DEFAULT_FREE_KNOT_ITERATIONS,
-            tolerance: DEFAULT_FREE_KNOT_TOLERANCE,
-            memory: DEFAULT_FREE_KNOT_MEMORY,
+            max_iterations: 300,
+            tolerance: 1e-7,
+            memory: 8,
+            line_search_steps: 40,
+            armijo: 1e-4,
+            max_step: 2.0,
+            rounding_slack: 1e-14,
+            zero_energy: 1e-20,
             total_length: None,
             free: FreeKnots::Data,
         }
@@ -221,7 +225,7 @@ pub struct FreeKnotResult {
     /// Fixed-knot solves (function evaluations) in the optimization.
     pub solves: usize,
     /// Whether `after.stationarity` ≤ the tolerance, or E is 0 up to rounding
-    /// ([`FREE_KNOT_ZERO_ENERGY`]).
+    /// ([`FreeKnotOptions::zero_energy`]).
     pub converged: bool,
 }
 
@@ -480,7 +484,7 @@ struct Eval {
 
 /// Solves the fixed-knot problem on `knots` and evaluates F and ∂F/∂h (envelope theorem).
 fn evaluate(problem: &Problem, knots: Knots) -> Result<Eval, Error> {
-    let (points, energy, kkt) = crate::kersey::solve_stage0_on(problem, &knots)?;
+    let (points, energy, kkt) = crate::solve::solve_stage0_on(problem, &knots)?;
     let gt = energy::knot_gradient(&knots, &points)?;
     let s = knots.span_count();
     let mut dh = Vec::with_capacity(s);
@@ -605,7 +609,7 @@ pub fn optimize_knots(
                 .sqrt()
         })
         .sum();
-    let zero = FREE_KNOT_ZERO_ENERGY * polygon * polygon / (total * total * total);
+    let zero = options.zero_energy * polygon * polygon / (total * total * total);
     if first.energy <= zero {
         // A straight or constant optimum: E = 0 for every knot vector, nothing to optimize.
         return Ok(FreeKnotResult {
@@ -640,20 +644,20 @@ pub fn optimize_knots(
         let limit = if pairs.is_empty() {
             0.5
         } else {
-            FREE_KNOT_MAX_STEP
+            options.max_step
         };
         let mut alpha = if big > limit { limit / big } else { 1.0 };
         let mut accepted = None;
-        for _ in 0..FREE_KNOT_LINE_SEARCH_STEPS {
+        for _ in 0..options.line_search_steps {
             let trial: Vec<f64> = theta.iter().zip(&dir).map(|(t, d)| t + alpha * d).collect();
             let ev = layout.knots(&trial).and_then(|k| evaluate(problem, k));
             solves += 1;
             // A failed fixed-knot solve (e.g. a span below rounding) counts as too long a step.
             if let Ok(ev) = ev {
-                let armijo = cur.objective + FREE_KNOT_ARMIJO * alpha * slope;
+                let armijo = cur.objective + options.armijo * alpha * slope;
                 let new_stat = layout.stationarity(&ev);
                 let within_rounding = ev.objective
-                    <= armijo + FREE_KNOT_ROUNDING_SLACK * cur.objective.abs()
+                    <= armijo + options.rounding_slack * cur.objective.abs()
                     && new_stat < stat;
                 if ev.objective <= armijo || within_rounding {
                     accepted = Some((trial, ev, new_stat));

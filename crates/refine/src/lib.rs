@@ -29,15 +29,36 @@
 //!   then a final solve, so the points always belong to the returned knots); part 2 is `levels`
 //!   further interpolatory `level_k`-level steps, each re-initialized from the previous result.
 //!
-//! Two fixed-knot solvers ([`Solver`]): **exact** (the default; linear solves for interpolation
-//! and smoothing; for balls alone an interior-point method on the n data vertices only, the free
-//! vertices eliminated exactly — E(y) = ½(Ky)ᵀT⁻¹(Ky) with T, K tridiagonal (cyclic) from the
-//! interpolation condensation — followed by an active-set polish, accepted when the certificate
-//! below is at most [`EXACT_KKT_TARGET`]; otherwise, and for half-space sets, derivative
-//! constraints and clamped ends, which become constraints L p ∈ K on stencils of at most three
-//! vertices, the full-vertex interior-point solver [`ConicProblem`]) and the **paper's
-//! multiplier iteration** (w_i := w_i |p_{i_k} − q_i| / ε_i
-//! from w_i = 1), kept to reproduce the seed's figures (balls only).
+//! # Layout
+//!
+//! - **Constraints** (`constraint/`): one module per kind behind one trait — interpolation,
+//!   balls, smoothing, half-space sets on data vertices; tangents (ball, wedge, tension,
+//!   half-spaces on Df) and end conditions (natural, clamped, near-clamped) on derivative
+//!   stencils. Each kind validates its field (naming it and the index), says which cone rows it
+//!   adds to the conic problem, which point sets it puts on data vertices (for the condensed
+//!   backend), its multipliers and its terms of the independent certificate, how it is
+//!   projected in the common-point test and how it moves under translation and scaling. A new
+//!   kind is one file and one enum arm.
+//! - **One fixed-knot stage** (`stage.rs`): the problem at one set of knots, defined at the
+//!   bottom and used by every solver above it.
+//! - **Two fixed-knot solvers** ([`Solver`]): **exact** (the default) and the **paper's
+//!   multiplier iteration** (w_i := w_i |p_{i_k} − q_i| / ε_i from w_i = 1), kept to reproduce
+//!   the seed's figures (balls only). The exact solver is an ordered, documented list of
+//!   strategies (`strategy.rs`): a linear solve for interpolation and smoothing; for sets on data
+//!   vertices alone (balls, half-space sets) the `conic` crate's interior-point method on the
+//!   **condensed** backend — the free vertices eliminated exactly, E(y) = ½(Ky)ᵀT⁻¹(Ky) with
+//!   T, K tridiagonal (cyclic) from the interpolation condensation — run on a growing working
+//!   set of the active sets; otherwise, and as their fallback, the same method on the
+//!   **full-vertex** backend ([`ConicProblem`]: constraints L p ∈ K on stencils of at most
+//!   three vertices). Both backends implement `conic::KktSystem`; with the `clarabel` feature
+//!   the full-vertex program can also be handed to Clarabel ([`ConicProblem::solve_clarabel`]),
+//!   which is slower on every class measured (`cargo xtask bench conic`).
+//! - **Tuning** in [`SolveOptions`] (set with [`Problem::with_options`]), every default
+//!   documented; only user-facing limits stay constants ([`MAX_CONIC_COORDS`],
+//!   [`EXACT_ACCEPT_KKT`], the problem fields' defaults).
+//! - **Exact means exact**: a fixed-knot result is accepted when its independent certificate
+//!   (below) is at most [`SolveOptions::accept_kkt`] = [`EXACT_ACCEPT_KKT`] = 1e-9; otherwise
+//!   the solve refuses with [`Error::NotConverged`] naming the best certificate reached.
 //!
 //! **Optimal free knots** (beyond the paper, [`optimize_knots`]): minimize F(t) = E(p*(t), t)
 //! over the data knots (each data span split into k + 1 equal sub-spans) with the total parameter
@@ -79,12 +100,40 @@
 //! assert!(s.energy <= i.energy && s.kkt_residual <= 1e-9);
 //! ```
 
-mod conic;
+mod algorithm;
+mod backend;
+mod certify;
+mod conic_problem;
+mod constraint;
+mod degenerate;
 mod error;
+mod fast;
 mod freeknots;
-mod kersey;
+mod linear;
+mod operator;
+mod options;
+mod paper;
+mod problem;
+mod slots;
+mod solve;
+mod split;
+mod stage;
+mod strategy;
+mod uniform;
 
-pub use conic::*;
+pub use algorithm::{Iterations, Refinement, Stage};
+pub use conic_problem::{ConicConstraint, ConicOptions, ConicProblem, ConicSolution, ConvexSet};
+pub use constraint::{Boundary, Constraint, HalfSpace, Tangent};
+pub use divdiff::{DerivativeRule, Parametrization};
 pub use error::Error;
-pub use freeknots::*;
-pub use kersey::*;
+pub use freeknots::{
+    optimize_knots, reduced_objective, FreeKnotOptions, FreeKnotResult, FreeKnots, KnotDiagnostics,
+};
+pub use options::{
+    CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
+};
+pub use problem::{
+    Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
+};
+pub use slots::halfplane_polygon;
+pub use split::{data_vertex, split};

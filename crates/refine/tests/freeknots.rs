@@ -171,7 +171,7 @@ fn optimum_is_below_centripetal_and_stationary() {
             "{name}: kkt {}",
             r.after.kkt_residual
         );
-        assert!(r.iterations <= refine::DEFAULT_FREE_KNOT_ITERATIONS);
+        assert!(r.iterations <= refine::FreeKnotOptions::default().max_iterations);
         // The knots keep their total length.
         let t = r.knots.values();
         assert!((t[t.len() - 1] - t[0] - r.total_length).abs() <= 1e-12 * r.total_length);

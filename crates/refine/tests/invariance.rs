@@ -33,21 +33,24 @@ use refine::{Boundary, Constraint, HalfSpace, Problem, Refinement, Tangent};
 const CASES: u32 = 64;
 
 /// Relative tolerance on transformed refined points (relative to the transformed data's extent
-/// plus the translation): the exact solver certifies a relative KKT residual ≤ 1e-9
-/// ([`refine::CONIC_ACCEPT`]), and linear solves are far more accurate; measured worst cases are
-/// ~1e-9 (conic) and ~1e-13 (linear).
-const POINT_RTOL: f64 = 1e-6;
-/// The same with wedge constraints on the derivative (measured worst ~2e-6 under knot scaling
-/// by 10: the wedge is handled as a second-order cone whose scaling the interior-point method
-/// does not reproduce exactly).
+/// plus the translation), without derivative constraints: measured worst 1.4e-11 over three
+/// runs of every property (192 cases each).
+const POINT_RTOL: f64 = 1e-9;
+/// The same with wedge constraints on the derivative (measured worst 2.4e-7 over three runs
+/// (earlier ~2e-6 under knot scaling by 10): the wedge is handled as a second-order cone whose
+/// scaling the interior-point method does not reproduce exactly). Not tightened.
 const POINT_RTOL_DERIVATIVES: f64 = 1e-5;
-/// Energy tolerance with wedge constraints (measured worst ~2.5e-6 with a knot update).
+/// Energy tolerance with wedge constraints (measured worst 3.4e-7 over three runs). Not
+/// tightened.
 const ENERGY_RTOL_DERIVATIVES: f64 = 1e-5;
-/// Relative tolerance on energies after applying the scaling law.
-const ENERGY_RTOL: f64 = 1e-6;
-/// Tolerance on multipliers, relative to the largest multiplier of the problem (a multiplier
-/// of an almost inactive constraint is determined only to the solver's accuracy).
-const MULT_RTOL: f64 = 1e-4;
+/// Relative tolerance on energies after applying the scaling law (measured worst 1.3e-10).
+const ENERGY_RTOL: f64 = 1e-9;
+/// Tolerance on multipliers, relative to the largest multiplier of the problem (measured worst
+/// 5.8e-11 without derivative constraints).
+const MULT_RTOL: f64 = 1e-9;
+/// The same with derivative constraints (measured worst 7.2e-7: a multiplier of an almost
+/// inactive constraint is determined only to the solver's accuracy). Not tightened.
+const MULT_RTOL_DERIVATIVES: f64 = 1e-4;
 
 /// The kind of constraint of a random problem.
 #[derive(Clone, Copy, Debug)]
@@ -403,13 +406,24 @@ fn max_mult(r: &Refinement) -> f64 {
         .fold(0.0f64, |a, x| a.max(x.abs()))
 }
 
-/// Largest certified relative KKT residual accepted here. The exact solver stops at
-/// [`refine::CONIC_ACCEPT`] in its own measure, but the refinement's independent certificate
-/// reads up to ~1e-5 on some ball problems (ROBUSTNESS.md, finding 3: the answer is then
-/// suboptimal by about that much, confirmed with Clarabel), and up to ~2e-4 since main's
-/// polish change (finding 11). Comparisons below are made to within the certified accuracy:
-/// tolerances grow with the residuals reported.
-const KKT_TOL: f64 = 1e-4;
+/// Largest certified relative KKT residual accepted for interpolation, smoothing, and balls
+/// without derivative constraints (measured worst over three runs: 5.4e-13, 1.1e-15, 3.1e-11).
+const KKT_TOL: f64 = 1e-9;
+/// The same for half-space sets and for balls with derivative constraints, which are NOT
+/// certified to [`KKT_TOL`] today (measured worst over three runs: half-spaces 4.4e-8, balls
+/// with derivative constraints 7.1e-9): only the level above which `Problem::solve` refuses
+/// with `NotConverged` is guaranteed. Comparisons below are made to within the certified
+/// accuracy: tolerances grow with the residuals reported.
+const KKT_TOL_GENERAL: f64 = refine::EXACT_ACCEPT_KKT;
+
+/// The KKT acceptance of a problem's kind (see [`KKT_TOL`], [`KKT_TOL_GENERAL`]).
+fn kkt_tol(p: &Problem) -> f64 {
+    match p.constraint {
+        Constraint::HalfSpaces(_) => KKT_TOL_GENERAL,
+        Constraint::Balls(_) if has_derivatives(p) => KKT_TOL_GENERAL,
+        _ => KKT_TOL,
+    }
+}
 /// Tolerances are at least this multiple of the larger certified KKT residual.
 const KKT_FACTOR: f64 = 100.0;
 
@@ -479,8 +493,8 @@ fn solve_pair(a: &Problem, b: &Problem) -> Result<Option<(Refinement, Refinement
             if zx {
                 return Ok(None);
             }
-            prop_assert!(x.kkt_residual <= KKT_TOL, "kkt {}", x.kkt_residual);
-            prop_assert!(y.kkt_residual <= KKT_TOL, "kkt {}", y.kkt_residual);
+            prop_assert!(x.kkt_residual <= kkt_tol(a), "kkt {}", x.kkt_residual);
+            prop_assert!(y.kkt_residual <= kkt_tol(b), "kkt {}", y.kkt_residual);
             Ok(Some((x, y)))
         }
         (Err(e), Err(f)) => {
@@ -584,7 +598,12 @@ fn check_mapped(
             ENERGY_RTOL
         }
         .max(slack),
-        MULT_RTOL.max(slack),
+        if has_derivatives(p) {
+            MULT_RTOL_DERIVATIVES
+        } else {
+            MULT_RTOL
+        }
+        .max(slack),
     );
     let ex = escale * x.energy;
     prop_assert!(

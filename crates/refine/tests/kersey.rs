@@ -408,6 +408,7 @@ fn levels_refine_further_and_keep_the_data() {
 #[test]
 fn exact_balls_match_clarabel_and_corollary_3_3() {
     let q = house();
+    let mut inactive = 0;
     for topo in [Topology::Closed, Topology::Open] {
         for radii in [
             vec![0.3, 0.05, 0.4, 0.1, 0.25],
@@ -444,11 +445,18 @@ fn exact_balls_match_clarabel_and_corollary_3_3() {
                     assert!(r.multipliers[i][0] >= 0.0);
                 }
             }
-            if let Some(j) = r.jmp_inactive() {
-                assert!(j <= 1e-9, "Corollary 3.3: relative jmp {j}");
-            }
+            let (count, j) = kersey_support::corollary_3_3(&q, &radii, &r);
+            inactive += count;
+            assert!(
+                j <= 1e-9,
+                "{topo:?} {radii:?}: Corollary 3.3: relative jmp {j}"
+            );
         }
     }
+    assert!(
+        inactive > 0,
+        "no inactive ball: Corollary 3.3 was not exercised"
+    );
 }
 
 /// Issue 4's constraint kinds through the same exact solver: half-space sets (3.7) against

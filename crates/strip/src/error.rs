@@ -1,26 +1,81 @@
-//! The typed errors of `strip`.
+//! The typed errors of `strip`, in the workspace's shared vocabulary: every variant that concerns
+//! the input names the user's field (`t`, `y`, `end_slopes`, `lower.pieces`, `upper.polyline`,
+//! `options.boundary_margin`, …) and the index into it.
 
-use crate::cell::Side;
+use crate::types::Side;
+
+/// Why a problem has no solution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Infeasibility {
+    /// The data value lies outside a bound at its site (condition (4) of the seed fails), by
+    /// `by` in the caller's units.
+    OutsideBound {
+        /// Which bound.
+        side: Side,
+        /// By how much.
+        by: f64,
+    },
+    /// The strip closes: e(t) ≥ d(t) at `at`, so no function fits between the bounds there.
+    Closed {
+        /// Where.
+        at: f64,
+    },
+    /// The data value lies on a bound at a kink that no C¹ function through it can follow
+    /// (a lower bound bending up, or an upper bound bending down, at the site: the slopes
+    /// allowed on the left and on the right do not overlap).
+    Kink {
+        /// Which bound.
+        side: Side,
+    },
+}
+
+impl std::fmt::Display for Infeasibility {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Infeasibility::OutsideBound { side, by } => {
+                let dir = if *side == Side::Lower {
+                    "below"
+                } else {
+                    "above"
+                };
+                write!(f, "the data value lies {by:e} {dir} the {side} bound")
+            }
+            Infeasibility::Closed { at } => write!(
+                f,
+                "the strip closes at t = {at}: the lower bound is not below the upper bound"
+            ),
+            Infeasibility::Kink { side } => write!(
+                f,
+                "the data value lies on a kink of the {side} bound that no smooth curve can pass"
+            ),
+        }
+    }
+}
 
 /// Everything that can go wrong when setting up or solving a strip problem.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// Fewer than two data points.
-    #[error("at least two data points are needed, got {len}")]
-    TooFewPoints {
-        /// Number of data points given.
-        len: usize,
+    /// Too few entries: fewer than two data points, or a polyline with fewer than two vertices.
+    #[error("{field} needs at least {minimum} entries, got {got}")]
+    TooFew {
+        /// The field (`t`, `lower.polyline`, …).
+        field: &'static str,
+        /// The minimum.
+        minimum: usize,
+        /// What was given.
+        got: usize,
     },
     /// An array has the wrong length.
-    #[error("{field} has length {found}, expected {expected}")]
-    LengthMismatch {
+    #[error("{field} has length {got}, expected {expected}")]
+    WrongLength {
         /// The field (`y`, `lower.pieces`, …).
         field: &'static str,
         /// Expected length.
         expected: usize,
         /// Actual length.
-        found: usize,
+        got: usize,
     },
     /// A NaN or infinite number.
     #[error("{field}[{index}] is not finite")]
@@ -32,27 +87,69 @@ pub enum Error {
     },
     /// A number whose magnitude exceeds [`crate::MAX_MAGNITUDE`] (its squares and products
     /// would overflow double precision).
-    #[error("{field}[{index}] exceeds {max:e} in magnitude")]
+    #[error("{field}[{index}] = {got:e} exceeds {limit:e} in magnitude")]
     TooLarge {
         /// The field.
         field: &'static str,
         /// Index of the entry.
         index: usize,
         /// The limit.
-        max: f64,
+        limit: f64,
+        /// The value.
+        got: f64,
     },
-    /// The computation overflowed (an intermediate or final value is not finite): the data are
-    /// too badly scaled for double precision. Rescale t and y.
-    #[error("numerical overflow: the data are too badly scaled (rescale t and y)")]
-    Overflow,
-    /// Newton's method ran out of iterations ([`crate::Options::max_iterations`]) without
-    /// converging; `gradient_norm` is the projected gradient norm of the best iterate.
-    #[error("not converged in {iterations} iterations (gradient norm {gradient_norm:e})")]
+    /// Abscissae not strictly increasing: `field[index]` ≤ `field[index − 1]` (for data sites
+    /// that are distinct, also: so close that t − t_1 rounds them to the same number at the
+    /// scale of the whole range t_n − t_1).
+    #[error("{field}[{index}] is not greater than {field}[{}]", index - 1)]
+    NonIncreasing {
+        /// The field (`t`, `lower.polyline`, …).
+        field: &'static str,
+        /// Index of the offending entry.
+        index: usize,
+    },
+    /// A value outside its domain: an option out of range, a polyline that does not cover
+    /// \[t_1, t_n\], or numbers too badly scaled for double precision (index 0 for scalars).
+    #[error("{field}[{index}]: {reason}")]
+    InvalidValue {
+        /// The field.
+        field: &'static str,
+        /// Index of the entry.
+        index: usize,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The problem has no solution: `field[index]` is where it fails.
+    #[error("{field}[{index}]: {reason}")]
+    Infeasible {
+        /// The field (`y` for a data point, the lower bound's field for a closed strip).
+        field: &'static str,
+        /// Index of the data point, or of the bound's piece or vertex.
+        index: usize,
+        /// Why.
+        reason: Infeasibility,
+    },
+    /// A cubic bound whose solution needs a contact structure outside Theorem 2.1's list (more
+    /// than two contacts in one interval, Remark 3.2): no enumerated candidate is feasible.
+    #[error("{field}[{index}]: {reason}")]
+    Unsupported {
+        /// The bound's field.
+        field: &'static str,
+        /// The data interval.
+        index: usize,
+        /// What is not supported.
+        reason: &'static str,
+    },
+    /// An iterative method stopped at its iteration limit without the accuracy asked for;
+    /// `residual` is the best iterate's relative optimality gap estimate.
+    #[error("{solver} did not converge in {iterations} iterations (residual {residual:e})")]
     NotConverged {
+        /// Which method.
+        solver: &'static str,
         /// Iterations performed.
         iterations: usize,
-        /// Projected gradient norm at the last iterate.
-        gradient_norm: f64,
+        /// The residual reached.
+        residual: f64,
     },
     /// The returned pieces leave the strip by more than the documented tolerance
     /// ([`crate::RESULT_FEASIBILITY_TOL`] times the value scale plus the rounding allowance
@@ -80,67 +177,21 @@ pub enum Error {
         /// The tolerance it exceeds.
         tolerance: f64,
     },
-    /// Data sites not strictly increasing: t\[index\] ≤ t\[index − 1\] (or, for sites that
-    /// are distinct, so close that t − t_1 rounds them to the same number at the scale of the
-    /// whole range t_n − t_1).
-    #[error("t[{index}] is not greater than t[{}]", index - 1)]
-    NonIncreasingSites {
-        /// Index of the offending site.
-        index: usize,
-    },
-    /// Polyline abscissae not strictly increasing.
-    #[error("{side} polyline vertex {index} does not increase in t")]
-    NonIncreasingPolyline {
-        /// Which bound.
-        side: Side,
-        /// Index of the offending vertex.
-        index: usize,
-    },
-    /// A polyline bound does not cover [t_1, t_n].
-    #[error("{side} polyline does not cover [t_1, t_n]")]
-    PolylineDoesNotCover {
-        /// Which bound.
-        side: Side,
-    },
-    /// Data point `index` lies outside its bound (condition (4) fails).
-    #[error(
-        "y[{index}] lies outside the {side} bound (by {by:e}) at an end of interval {interval}"
-    )]
-    DataOutsideBounds {
-        /// Index of the data point.
-        index: usize,
-        /// The interval whose bound it violates (0-based).
-        interval: usize,
-        /// Which bound.
-        side: Side,
-        /// By how much.
-        by: f64,
-    },
-    /// The strip is empty or has zero width somewhere: e(t) ≥ d(t) at `t` in `interval`.
-    #[error("lower bound is not below the upper bound in interval {interval} (at t = {t})")]
-    EmptyStrip {
-        /// The interval (0-based).
-        interval: usize,
-        /// Where.
-        t: f64,
-    },
-    /// No enumerated candidate is feasible in an interval: a structure outside Theorem 2.1's list
-    /// (possible only for cubic bounds, Remark 3.2).
-    #[error("no feasible candidate in interval {interval} (cubic bound with an unsupported contact structure)")]
-    NoFeasibleCandidate {
-        /// The interval (0-based, of the solver's grid).
-        interval: usize,
-    },
-    /// An option is out of range.
-    #[error("option {name} is out of range")]
-    BadOption {
-        /// The option.
-        name: &'static str,
-    },
-    /// The quasi-Newton solver (argmin) reported an error.
-    #[error("BFGS failed: {message}")]
-    Bfgs {
-        /// argmin's message.
-        message: String,
-    },
 }
+
+/// The field name of a bound of the given side and kind.
+pub(crate) fn bound_field(b: &crate::types::Bound, side: Side) -> &'static str {
+    use crate::types::Bound;
+    match (b, side) {
+        (Bound::Polyline(_), Side::Lower) => "lower.polyline",
+        (Bound::Polyline(_), Side::Upper) => "upper.polyline",
+        (Bound::Pieces(_), Side::Lower) => "lower.pieces",
+        (Bound::Pieces(_), Side::Upper) => "upper.pieces",
+        (Bound::None, Side::Lower) => "lower",
+        (Bound::None, Side::Upper) => "upper",
+    }
+}
+
+/// The reason given for numbers too badly scaled for double precision.
+pub(crate) const BADLY_SCALED: &str =
+    "too badly scaled for double precision (a normalized number overflows; rescale t and the values)";

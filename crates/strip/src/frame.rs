@@ -1,4 +1,4 @@
-//! The normalized frame in which [`crate::solve`] works (ROBUSTNESS.md, finding 7).
+//! The normalized frame in which [`crate::solve()`] works (ROBUSTNESS.md, finding 7).
 //!
 //! The strip problem is exactly equivariant: f solves (t, y, e, d) if and only if
 //! t ↦ ℓ(t) + c·f((t − t₀)/λ) solves the problem with sites t₀ + λt, values ℓ + c·y and bounds
@@ -21,8 +21,8 @@
 //! (sites) and the derived scales, so the answer is the same for every equivalent problem up to
 //! rounding.
 
-use crate::error::Error;
-use crate::solve::{Bound, Problem, MAX_MAGNITUDE};
+use crate::error::{bound_field, Error, BADLY_SCALED};
+use crate::types::{polyline_at, Bound, Problem, Side, MAX_MAGNITUDE};
 
 /// The change of frame t = t₀ + λ·u, value = ℓ(t) + c·ṽ with ℓ(t) = a + b·(t − t₀).
 #[derive(Clone, Copy, Debug)]
@@ -77,10 +77,19 @@ fn bound_points(b: &Bound, t: &[f64]) -> Vec<(f64, f64)> {
                 .map(|p| (p[0], p[1]))
                 .collect();
             for &x in [t[0], t[n - 1]].iter() {
-                out.push((x, crate::solve::polyline_at(v, x)));
+                out.push((x, polyline_at(v, x)));
             }
             out
         }
+    }
+}
+
+/// The error for `field[index]` when its normalized value overflows.
+pub(crate) fn scaled(field: &'static str, index: usize) -> Error {
+    Error::InvalidValue {
+        field,
+        index,
+        reason: BADLY_SCALED,
     }
 }
 
@@ -96,12 +105,12 @@ impl Frame {
         let t0 = p.t[0];
         let range = p.t[n - 1] - t0;
         if !(range.is_finite() && range > 0.0) {
-            return Err(Error::Overflow);
+            return Err(scaled("t", n - 1));
         }
         let a = p.y[0];
         let b = (p.y[n - 1] - p.y[0]) / range;
         if !b.is_finite() {
-            return Err(Error::Overflow);
+            return Err(scaled("y", n - 1));
         }
         let mut frame = Frame {
             t0,
@@ -113,10 +122,15 @@ impl Frame {
             magnitude: 0.0,
         };
         let l = |t: f64| frame.line(t);
-        let data =
-            p.t.iter()
-                .zip(&p.y)
-                .fold(0.0f64, |m, (t, y)| m.max((y - l(*t)).abs()));
+        // deviations within the rounding of y − ℓ(t) are none: data on a line (two points, say)
+        // must not get a value scale of 1e-16 (its bounds then normalize to 1e16); others count
+        // in full (subtracting the rounding from every deviation moved V = 1 to just below it,
+        // halved c, and Newton on a hair-thin cell then stalled where it had converged)
+        let data = p.t.iter().zip(&p.y).fold(0.0f64, |m, (t, y)| {
+            let rounding = 8.0 * f64::EPSILON * (y.abs() + a.abs() + (b * (t - t0)).abs());
+            let d = (y - l(*t)).abs();
+            m.max(if d <= rounding { 0.0 } else { d })
+        });
         let slopes = p
             .end_slopes
             .iter()
@@ -130,8 +144,8 @@ impl Frame {
             .chain(upper.iter().map(|(t, d)| l(*t) - d))
             .fold(0.0f64, f64::max);
         let mut v = data.max(slopes).max(forcing);
-        if v.is_nan() {
-            return Err(Error::Overflow);
+        if !v.is_finite() {
+            return Err(frame.blame(p));
         }
         if v <= 0.0 {
             v = lower
@@ -139,27 +153,52 @@ impl Frame {
                 .chain(&upper)
                 .fold(0.0f64, |m, (t, g)| m.max((g - l(*t)).abs()));
         }
-        if v.is_nan() {
-            return Err(Error::Overflow);
+        if !v.is_finite() {
+            return Err(frame.blame(p));
         }
         if v <= 0.0 {
             v = 1.0;
-        }
-        if !v.is_finite() {
-            return Err(Error::Overflow);
         }
         frame.scale = v;
         frame.c = pow2_at_or_below(v);
         frame.magnitude = p.y.iter().fold(0.0f64, |m, y| m.max(y.abs())) + b.abs() * range + v;
         if !frame.magnitude.is_finite() {
-            return Err(Error::Overflow);
+            return Err(scaled("y", 0));
         }
         Ok(frame)
     }
 
-    /// The normalized problem. Errors: `Overflow` when a normalized number is not finite or
-    /// exceeds [`MAX_MAGNITUDE`] (bounds enormous compared with V), `NonIncreasingSites` /
-    /// `NonIncreasingPolyline` when two abscissae closer than the rounding of t − t₁ merge.
+    /// The first input number whose distance from the line ℓ overflows (for the error).
+    fn blame(&self, p: &Problem) -> Error {
+        let l = |t: f64| self.line(t);
+        if let Some(i) = (0..p.t.len()).find(|&i| !(p.y[i] - l(p.t[i])).is_finite()) {
+            return scaled("y", i);
+        }
+        let range = p.t[p.t.len() - 1] - p.t[0];
+        if let Some(k) =
+            (0..2).find(|&k| p.end_slopes[k].is_some_and(|s| !(range * (s - self.b)).is_finite()))
+        {
+            return scaled("end_slopes", k);
+        }
+        for (side, b) in [(Side::Lower, &p.lower), (Side::Upper, &p.upper)] {
+            let index = match b {
+                Bound::None => None,
+                Bound::Pieces(pc) => (0..pc.len()).find(|&i| {
+                    !(pc[i][0] - l(p.t[i])).is_finite()
+                        || !(cubic(&pc[i], p.t[i + 1] - p.t[i]) - l(p.t[i + 1])).is_finite()
+                }),
+                Bound::Polyline(v) => v.iter().position(|q| !(q[1] - l(q[0])).is_finite()),
+            };
+            if let Some(index) = index {
+                return scaled(bound_field(b, side), index);
+            }
+        }
+        scaled("y", 0)
+    }
+
+    /// The normalized problem. Errors: `InvalidValue` (badly scaled) when a normalized number is not finite or
+    /// exceeds [`MAX_MAGNITUDE`] (bounds enormous compared with V), `NonIncreasing`
+    /// when two abscissae closer than the rounding of t − t₁ merge.
     pub fn forward(&self, p: &Problem) -> Result<Problem, Error> {
         let (lam, c) = (self.lam, self.c);
         let u = |t: f64| (t - self.t0) / lam;
@@ -191,18 +230,27 @@ impl Frame {
             end_slopes: p.end_slopes.map(|s| s.map(|s| (s - self.b) * lam / c)),
         };
         let ok = |x: &f64| x.is_finite() && x.abs() <= MAX_MAGNITUDE;
-        let bound_ok = |bd: &Bound| match bd {
-            Bound::None => true,
-            Bound::Pieces(pc) => pc.iter().flatten().all(ok),
-            Bound::Polyline(pl) => pl.iter().flatten().all(ok),
+        let bad_bound = |bd: &Bound| match bd {
+            Bound::None => None,
+            Bound::Pieces(pc) => pc.iter().position(|x| !x.iter().all(ok)),
+            Bound::Polyline(pl) => pl.iter().position(|x| !x.iter().all(ok)),
         };
-        if !(q.t.iter().all(ok)
-            && q.y.iter().all(ok)
-            && q.end_slopes.iter().flatten().all(ok)
-            && bound_ok(&q.lower)
-            && bound_ok(&q.upper))
-        {
-            return Err(Error::Overflow);
+        if let Some(i) = q.t.iter().position(|x| !ok(x)) {
+            return Err(scaled("t", i));
+        }
+        if let Some(i) = q.y.iter().position(|x| !ok(x)) {
+            return Err(scaled("y", i));
+        }
+        if let Some(k) = (0..2).find(|&k| q.end_slopes[k].is_some_and(|s| !ok(&s))) {
+            return Err(scaled("end_slopes", k));
+        }
+        for (side, b, bq) in [
+            (Side::Lower, &p.lower, &q.lower),
+            (Side::Upper, &p.upper, &q.upper),
+        ] {
+            if let Some(i) = bad_bound(bq) {
+                return Err(scaled(bound_field(b, side), i));
+            }
         }
         Ok(q)
     }

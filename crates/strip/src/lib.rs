@@ -15,13 +15,29 @@
 //! * **Outer problem** (5): Φ(z) = Σ φ_i(z_i, z_{i+1}) is convex with
 //!   ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)). [`Method::Newton`] (default) uses the banded Hessian
 //!   (per-interval Hessians by implicit differentiation of the contact equations) with a
-//!   backtracking line search: O(n) per iteration. [`Method::Bfgs`] is the seed's argmin BFGS.
-//!   Starting point: the natural (or clamped, with [`Problem::end_slopes`]) cubic spline.
-//! * **§4**: a [`Bound::Polyline`] (or [`Bound::from_fn`], the piecewise-linear approximation of
-//!   a continuous function) adds its vertices as grid points whose values s_j are unknowns
-//!   (problem (10)), kept ε inside the strip; the Newton step is then projected on those boxes.
-//! * **Remark 4.2**: data on a bound are moved inside by ε (reported in
-//!   [`Solution::shifted_data`]); the solution converges as ε → 0.
+//!   backtracking line search: O(n) per iteration. [`Method::Bfgs`] is the seed's argmin BFGS
+//!   (dense n×n inverse Hessian, for small n; it is what the seed ran). Starting point: the
+//!   natural (or clamped, with [`Problem::end_slopes`]) cubic spline. This is the method for
+//!   bounds given as cubic pieces.
+//! * **§4, polyline bounds** ([`Bound::Polyline`], or [`Bound::from_fn`], the piecewise-linear
+//!   approximation of a continuous function, any number M of vertices): solved exactly by a
+//!   dual active-set (Goldfarb–Idnani) exchange on point constraints — the spline through the data
+//!   and the points held on a bound, its multipliers the f''' jumps, each step a tridiagonal
+//!   solve — driven by exact O(M) sweeps of the strip. Its answer is a C² spline that interpolates,
+//!   leaves the strip nowhere by more than 10⁻¹² of the value scale, and is optimal for the points
+//!   it holds (so its energy is a lower bound on the optimum, within [`Solution::gap`] of it).
+//!   The seed's problem (10) — Newton on Φ over every vertex value and slope — is not used: its
+//!   Hessian has condition ~M⁴ and it stalls at vertex contacts (the measurements are in the
+//!   docs of the `strategy` module).
+//! * **Feasibility** is decided before any solve, in O(M + n): a strip that closes anywhere
+//!   (checked exactly between every pair of breakpoints), data outside the bounds, or data on a
+//!   kink no smooth curve can pass are refused with [`Error::Infeasible`] naming the field and
+//!   index. When Newton on Φ stops at its iteration limit, the exchange solves the problem, so a
+//!   feasible problem always ends in an answer; an answer whose gap estimate exceeds 1e-9 (seen
+//!   only on hair-thin strips, 1e-12 of the data) is refused with [`Error::NotConverged`] and its
+//!   gap.
+//! * **Remark 4.2**: data on a bound are moved inside by ε ([`Options::boundary_margin`] of the
+//!   strip width; reported in [`Solution::shifted_data`]); the solution converges as ε → 0.
 //!
 //! **Touching pairs.** With w = f − e (p, q its value and slope at t_i) and G = d − e, the pair
 //! (τ₁ on e, τ₂ on d) solves two polynomial equations: f'' continuous at τ₁ is a cubic in
@@ -35,7 +51,7 @@
 //!
 //! **Normalized frame.** The problem is exactly equivariant: adding a line ℓ to y, e and d,
 //! scaling values by c and mapping sites by t ↦ t₀ + λt map solutions to solutions (∫f''² scales
-//! by c²/λ³). [`solve`] therefore works on a normalized copy — sites from 0 over a unit-order
+//! by c²/λ³). [`solve()`] therefore works on a normalized copy — sites from 0 over a unit-order
 //! range, the line through the first and last data point subtracted, values divided by the value
 //! scale V (the largest deviation of the data, of the end slopes and of the bounds that push f
 //! off that line), all scalings powers of two — and maps the answer back exactly (data sites,
@@ -52,11 +68,10 @@
 //! checked; [`Solution::uncertified`] lists those where no candidate carried it.
 //!
 //! **Limitations.** For cubic bounds (Remark 3.2) only Theorem 2.1's shapes are enumerated; a
-//! solution needing more than two extra knots in an interval shows up as
-//! [`Error::NoFeasibleCandidate`] or in [`Solution::uncertified`]. Polyline vertices where f
-//! touches a bound are held ε·width inside (problem (10)); the result is the ε-problem's optimum
-//! (the verification suite measures the gap to Clarabel's lower bound: ~1e-7 relative for
-//! ε = 1e-7).
+//! cell needing more than two extra knots sends the problem to the exchange, whose answer lists
+//! its contacts as touching points ([`Solution::extra_knots`]; [`Solution::shapes`] then only
+//! says which intervals touch). Subarcs on a polyline bound likewise appear as runs of touching
+//! points, as many as the exchange needed to hold f on the segment to the tolerance.
 //!
 //! ```
 //! use strip::{solve, Bound, Options, Problem};
@@ -78,27 +93,28 @@
 // obscure them.
 #![allow(clippy::needless_range_loop)]
 
-mod banded;
-mod bfgs;
+mod assemble;
 mod cell;
+mod check;
 mod error;
-pub mod examples;
+mod exchange;
 mod frame;
+pub mod interval;
+mod linalg;
+mod outer;
+mod piece;
 mod poly;
-mod qp;
+mod prepare;
 mod solve;
+mod spline;
+mod strategy;
+mod types;
+mod validate;
 
-pub use cell::{Pruning, Shape, Side};
-pub use error::Error;
-pub use qp::{lower_bound_qp, LowerBoundQp};
-pub use solve::{
-    solve, Bound, ExtraKnot, KnotKind, Method, Options, Problem, Solution, CONTACT_TOL,
-    DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS, FEASIBILITY_TOL,
-    MAX_MAGNITUDE, RESULT_FEASIBILITY_TOL, ROUNDING_TOL,
+pub use error::{Error, Infeasibility};
+pub use solve::solve;
+pub use types::{
+    Bound, ExtraKnot, KnotKind, Method, Options, Problem, Pruning, Shape, Side, Solution,
+    CONTACT_TOL, DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL, DEFAULT_MAX_ITERATIONS,
+    FEASIBILITY_TOL, MAX_MAGNITUDE, RESULT_FEASIBILITY_TOL, ROUNDING_TOL,
 };
-
-#[doc(hidden)]
-pub mod internals {
-    //! Per-interval internals exposed for tests and benchmarks (not a stable API).
-    pub use crate::cell::internals::*;
-}

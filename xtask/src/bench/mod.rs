@@ -2,6 +2,7 @@
 //! a baseline measured in the same run; nothing here is asserted as a wall-clock limit.
 
 mod cli;
+mod conic;
 mod energy;
 mod refine;
 mod schemes;
@@ -44,6 +45,9 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     }
     if "refine".contains(filter) || filter.is_empty() {
         refine::run(opts)?;
+    }
+    if "conic".contains(filter) || filter.is_empty() {
+        conic::run(opts)?;
     }
     if "schemes".contains(filter) || filter.is_empty() {
         schemes::run(opts)?;

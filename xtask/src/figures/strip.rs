@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use curvefit::plot::{palette, Figure, Marker, Style};
-use strip::examples::{example_5_1, example_5_2, example_5_3};
 use strip::{solve, Bound, KnotKind, Options, Problem, Solution};
+use strip_testkit::examples::{example_5_1, example_5_2, example_5_3};
 
 /// Samples of the solution (24 per piece).
 fn curve(s: &Solution) -> Vec<[f64; 2]> {

@@ -4,7 +4,7 @@
 //! Problem: `t`, `y`, `lower`, `upper`, optional `end_slopes` \[s_start or null, s_end or null\].
 //! A bound is null (or absent), `{"pieces": [[c0, c1, c2, c3], …]}` — one cubic per interval
 //! \[t_i, t_{i+1}\] in s = t − t_i, so bounds may jump at data sites — or
-//! `{"polyline": [[t, v], …]}` (continuous, its own breakpoints, handled by §4's grid).
+//! `{"polyline": [[t, v], …]}` (continuous, its own breakpoints, solved exactly between them).
 //! Result: `breaks`, `coefficients` (\[c0, c1, c2, c3\] of the cubic on \[breaks_j, breaks_{j+1}\]
 //! in s = t − breaks_j), `slopes` (f' at the data sites), `extra_knots` \[{"t", "kind"}\] with kind
 //! one of `touch_lower`, `touch_upper`, `subarc_start_lower`, `subarc_end_lower`,
@@ -107,53 +107,77 @@ fn kind_name(k: strip::KnotKind) -> String {
     }
 }
 
-/// Maps the library's typed error to a field path.
+/// Maps the library's typed error to a field path (the library names the user's field and index
+/// in every input error) and a message in the user's words (numbers as written, see
+/// [`num`]; the field is not repeated: [`InputError`] prints it).
 fn input_error(p: &Problem, e: &strip::Error) -> InputError {
     use strip::Error as E;
-    let bound_field = |s: strip::Side| {
-        let b = if s == strip::Side::Lower {
-            &p.lower
-        } else {
-            &p.upper
-        };
-        match b {
-            Some(BoundSpec::Polyline(_)) => format!("{}.polyline", side_name(s)),
-            _ => format!("{}.pieces", side_name(s)),
-        }
+    use strip::Infeasibility as I;
+    let at = |field: &str, index: usize| format!("{field}[{index}]");
+    // where a data point is (the data-point errors name y[i])
+    let site = |index: usize| {
+        p.t.0
+            .get(index)
+            .map_or(String::new(), |t| format!(" at t = {}", num(*t)))
     };
     match e {
-        E::TooFewPoints { .. } => InputError::new("t", e),
-        E::LengthMismatch { field, .. } => InputError::new(*field, e),
-        E::NonFinite { field, index } => InputError::new(format!("{field}[{index}]"), e),
-        E::NonIncreasingSites { index } => InputError::new(format!("t[{index}]"), e),
-        E::NonIncreasingPolyline { side, index } => {
-            InputError::new(format!("{}.polyline[{index}]", side_name(*side)), e)
-        }
-        E::PolylineDoesNotCover { side } => {
-            InputError::new(format!("{}.polyline", side_name(*side)), e)
-        }
-        // The strip crate prints these numbers in exponent form; the user reads them as written.
-        E::DataOutsideBounds {
-            index,
-            interval,
-            side,
-            by,
+        E::TooFew {
+            field,
+            minimum,
+            got,
         } => InputError::new(
-            format!("y[{index}]"),
-            format!(
-                "lies outside the {side} bound by {} at an end of interval {interval}",
-                num(*by)
-            ),
+            *field,
+            format!("needs at least {minimum} entries, got {got}"),
         ),
-        E::TooLarge { field, index, max } => InputError::new(
-            format!("{field}[{index}]"),
-            format!("exceeds {} in magnitude", num(*max)),
+        E::WrongLength {
+            field,
+            expected,
+            got,
+        } => InputError::new(*field, format!("has length {got}, expected {expected}")),
+        E::NonFinite { field, index } => InputError::new(at(field, *index), "is not finite"),
+        E::TooLarge {
+            field,
+            index,
+            limit,
+            ..
+        } => InputError::new(
+            at(field, *index),
+            format!("exceeds {} in magnitude", num(*limit)),
         ),
-        E::NoFeasibleCandidate { interval } => InputError::new(
-            format!("lower.pieces[{interval}]"),
-            format!(
-                "{e} (cubic bounds with more than two contacts per interval are not supported)"
-            ),
+        E::NonIncreasing { field, index } => InputError::new(
+            at(field, *index),
+            format!("is not greater than {field}[{}]", index - 1),
+        ),
+        E::InvalidValue {
+            field,
+            index,
+            reason,
+        }
+        | E::Unsupported {
+            field,
+            index,
+            reason,
+        } => InputError::new(at(field, *index), reason),
+        E::Infeasible {
+            field,
+            index,
+            reason,
+        } => InputError::new(
+            at(field, *index),
+            match reason {
+                I::OutsideBound { side, by } => {
+                    format!("lies outside the {side} bound by {}{}", num(*by), site(*index))
+                }
+                I::Closed { at } => format!(
+                    "the lower bound is not below the upper bound at t = {}",
+                    num(*at)
+                ),
+                I::Kink { side } => format!(
+                    "lies on a kink of the {side} bound{} that no smooth curve can pass",
+                    site(*index)
+                ),
+                other => other.to_string(),
+            },
         ),
         E::StripViolated {
             side,
@@ -177,29 +201,15 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
                 num(*tolerance)
             ),
         ),
-        E::EmptyStrip { interval, t } => {
-            let f = bound_field(strip::Side::Lower);
-            let f = if f.ends_with("pieces") {
-                format!("{f}[{interval}]")
-            } else {
-                f
-            };
-            InputError::new(
-                f,
-                format!(
-                    "the lower bound is not below the upper bound in interval {interval} (at t = {})",
-                    num(*t)
-                ),
-            )
-        }
         E::NotConverged {
+            solver,
             iterations,
-            gradient_norm,
+            residual,
         } => InputError::new(
             "",
             format!(
-                "not converged in {iterations} iterations (gradient norm {})",
-                num(*gradient_norm)
+                "{solver} did not converge in {iterations} iterations (optimality gap {})",
+                num(*residual)
             ),
         ),
         _ => InputError::new("", e),

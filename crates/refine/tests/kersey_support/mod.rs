@@ -3,15 +3,18 @@
 //!
 //! minimize ½ xᵀ (H ⊗ I_d + W) x − (W q̃)ᵀx  s.t.  A x + s = b, s ∈ K, with x = p vertex-major:
 //! interpolation rows in the zero cone, balls as second-order cones (ε_i, q_i − p_{i_k}),
-//! half-spaces in the non-negative cone (c − n·p).
+//! half-spaces in the non-negative cone (c − n·p); with [`clarabel_problem_with_derivatives`] also
+//! the constraints of §3.5–3.6 on the approximate derivative Df(t_v) = Σ c_k p_{v_k} (the stencil
+//! of `divdiff::derivative_stencil`): balls and tension as second-order cones, wedges as the cone
+//! Df·u ≥ cos(a)|Df|, half-spaces in the non-negative cone, clamped ends in the zero cone.
 #![allow(dead_code)]
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
-use divdiff::{Knots, Points};
-use refine::Constraint;
+use divdiff::{derivative_stencil, DerivativeRule, Knots, Points};
+use refine::{Boundary, Constraint, Tangent};
 
 /// Clarabel's answer.
 pub struct Reference {
@@ -214,6 +217,47 @@ pub fn clarabel_problem(
     }
 }
 
+/// Corollary 3.3 checked independently of the solver's certificate: the data vertices strictly
+/// inside their ball (|p_{i_k} − q_i| < ε_i (1 − 1e-6), so weakly active balls do not count) and
+/// the largest |jmp| there relative to the largest |jmp| of the curve, jmp from
+/// `divdiff::jumps`. Returns (number of inactive data vertices, relative |jmp|). The scale is
+/// at least 1e9 times the rounding level of jmp = ½Hp evaluated from points of size |p|,
+/// 8 ε ‖H‖_∞ |p| (‖H‖_∞ ≤ 5 max|H_jk|): when E is 0 up to rounding, every jmp is rounding.
+pub fn corollary_3_3(q: &Points, radii: &[f64], r: &refine::Refinement) -> (usize, f64) {
+    let j = divdiff::jumps(&r.knots, &r.points).expect("one point per vertex");
+    let pmax = r.points.coords().iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let rounding = 8.0 * f64::EPSILON * 5.0 * energy::Hessian::new(&r.knots).max_abs() * pmax;
+    let scale = j
+        .coords()
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(rounding / 1e-9);
+    let (mut count, mut worst) = (0usize, 0.0f64);
+    for (i, &v) in r.data_vertex.iter().enumerate() {
+        let dist = r
+            .points
+            .point(v)
+            .iter()
+            .zip(q.point(i))
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        if dist < radii[i] * (1.0 - 1e-6) {
+            count += 1;
+            for x in j.point(v) {
+                let rel = x.abs() / scale.max(f64::MIN_POSITIVE);
+                // NaN is kept (a comparison with NaN would drop it).
+                worst = if rel.is_nan() {
+                    f64::NAN
+                } else {
+                    worst.max(rel)
+                };
+            }
+        }
+    }
+    (count, worst)
+}
+
 fn clarabel_solve_tol(
     knots: &Knots,
     q: &Points,
@@ -221,6 +265,130 @@ fn clarabel_solve_tol(
     constraint: &Constraint,
     tol: f64,
 ) -> Result<Reference, String> {
+    solve_socp_tol(
+        clarabel_problem(knots, q, data_vertex, constraint),
+        q.dim(),
+        tol,
+    )
+}
+
+/// Solves any conic program of this module (points of dimension `d`) with Clarabel, trying the
+/// tolerances of [`CLARABEL_LADDER`] in order and requiring status `Solved`.
+pub fn clarabel_solve_socp(data: &SocpData, d: usize) -> Result<Reference, String> {
+    let mut last = String::new();
+    for tol in CLARABEL_LADDER {
+        match solve_socp_tol(data.clone(), d, tol) {
+            Ok(r) => return Ok(r),
+            Err(e) => last = e,
+        }
+    }
+    Err(last)
+}
+
+/// The fixed-knot problem of [`clarabel_problem`] with the derivative constraints of Kersey
+/// §3.5 (one optional [`Tangent`] per data point, on Df(t_{i_k})) and the end conditions of §3.6
+/// (on Df(t_1) and Df(t_N) of an open curve), Df by `rule` through `divdiff::derivative_stencil`:
+/// - `Tangent::Ball { center, radius }`: |Df − center| ≤ radius (second-order cone);
+/// - `Tangent::Tension { radius }`: |Df| ≤ radius;
+/// - `Tangent::Wedge { direction, half_angle }`: cos(half_angle)·|Df| ≤ Df·direction/|direction|
+///   (the angle between Df and the direction is at most the half angle);
+/// - `Tangent::HalfSpaces(h)`: n·Df ≤ c for each half-space;
+/// - `Boundary::Clamped { start, end }`: Df(t_1) = start, Df(t_N) = end (zero cone);
+/// - `Boundary::NearClamped { start, end, radius }`: |Df − start| ≤ radius, |Df − end| ≤ radius.
+#[allow(clippy::too_many_arguments)]
+pub fn clarabel_problem_with_derivatives(
+    knots: &Knots,
+    q: &Points,
+    data_vertex: &[usize],
+    constraint: &Constraint,
+    tangents: Option<&[Option<Tangent>]>,
+    boundary: &Boundary,
+    rule: DerivativeRule,
+) -> Result<SocpData, String> {
+    let mut s = clarabel_problem(knots, q, data_vertex, constraint);
+    let d = q.dim();
+    let stencil = |v: usize| derivative_stencil(knots, v, rule).map_err(|e| e.to_string());
+    // Rows b − (coef·Df-stencil) for each coordinate c, scaled by `scale`: s = b − A x.
+    let push_df = |s: &mut SocpData, st: &[(usize, f64); 3], scale: &[f64], rhs: &[f64]| {
+        for (c, (&sc, &r)) in scale.iter().zip(rhs).enumerate() {
+            let row = s.b.len();
+            for &(v, coef) in st {
+                if coef != 0.0 && sc != 0.0 {
+                    s.a.rows.push(row);
+                    s.a.cols.push(v * d + c);
+                    s.a.vals.push(sc * coef);
+                }
+            }
+            s.b.push(r);
+        }
+    };
+    // A second-order cone (radius, center − Df).
+    let ball = |s: &mut SocpData, st: &[(usize, f64); 3], center: &[f64], radius: f64| {
+        s.b.push(radius);
+        push_df(s, st, &vec![1.0; d], center);
+        s.cones.push((ConeKind::SecondOrder, d + 1));
+    };
+    for (i, t) in tangents.unwrap_or(&[]).iter().enumerate() {
+        let Some(t) = t else { continue };
+        let st = stencil(data_vertex[i])?;
+        match t {
+            Tangent::Ball { center, radius } => ball(&mut s, &st, center, *radius),
+            Tangent::Tension { radius } => ball(&mut s, &st, &vec![0.0; d], *radius),
+            Tangent::Wedge {
+                direction,
+                half_angle,
+            } => {
+                // s = (Df·û, cos(a) Df): both rows are −(coefficients)·x with b = 0.
+                let len = direction.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let row = s.b.len();
+                for &(v, coef) in &st {
+                    for (c, u) in direction.iter().enumerate() {
+                        s.a.rows.push(row);
+                        s.a.cols.push(v * d + c);
+                        s.a.vals.push(-coef * u / len);
+                    }
+                }
+                s.b.push(0.0);
+                push_df(&mut s, &st, &vec![-half_angle.cos(); d], &vec![0.0; d]);
+                s.cones.push((ConeKind::SecondOrder, d + 1));
+            }
+            Tangent::HalfSpaces(hs) => {
+                for h in hs {
+                    let row = s.b.len();
+                    for &(v, coef) in &st {
+                        for (c, nc) in h.normal.iter().enumerate() {
+                            s.a.rows.push(row);
+                            s.a.cols.push(v * d + c);
+                            s.a.vals.push(coef * nc);
+                        }
+                    }
+                    s.b.push(h.offset);
+                }
+                if !hs.is_empty() {
+                    s.cones.push((ConeKind::Nonnegative, hs.len()));
+                }
+            }
+        }
+    }
+    let n = knots.vertex_count();
+    match boundary {
+        Boundary::Natural => {}
+        Boundary::Clamped { start, end } => {
+            for (v, want) in [(0, start), (n - 1, end)] {
+                push_df(&mut s, &stencil(v)?, &vec![1.0; d], want);
+                s.cones.push((ConeKind::Zero, d));
+            }
+        }
+        Boundary::NearClamped { start, end, radius } => {
+            for (v, want) in [(0, start), (n - 1, end)] {
+                ball(&mut s, &stencil(v)?, want, *radius);
+            }
+        }
+    }
+    Ok(s)
+}
+
+fn solve_socp_tol(data: SocpData, d: usize, tol: f64) -> Result<Reference, String> {
     let SocpData {
         n_vars: nx,
         p,
@@ -229,8 +397,7 @@ fn clarabel_solve_tol(
         b,
         cones,
         constant,
-    } = clarabel_problem(knots, q, data_vertex, constraint);
-    let d = q.dim();
+    } = data;
     let cones: Vec<SupportedConeT<f64>> = cones
         .into_iter()
         .map(|(kind, dim)| match kind {
@@ -271,3 +438,5 @@ fn clarabel_solve_tol(
         iterations: sol.iterations,
     })
 }
+
+pub mod cases;

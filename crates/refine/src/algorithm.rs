@@ -1,0 +1,315 @@
+//! Algorithm 4.1: the near-interpolatory k-level step with knot updates (part 1), then further
+//! interpolatory steps (part 2); and the result with its certificates.
+
+use divdiff::{Knots, Parametrization, Points};
+
+use crate::certify::{certify, Certificate};
+use crate::constraint::{Constraint, Kind};
+use crate::degenerate;
+use crate::problem::{Problem, Solver};
+use crate::stage::{FixedProblem, FixedSolution};
+use crate::Error;
+
+/// Iteration counts of a refinement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Iterations {
+    /// Fixed-knot solves over all stages ((knot_iterations + 1)(levels + 1) unless degenerate).
+    pub solves: usize,
+    /// Knot updates over all stages.
+    pub knot_updates: usize,
+    /// Inner iterations of the fixed-knot solver over all stages (multiplier updates of the
+    /// paper's iteration, interior-point steps of the exact conic solver; 1 per linear solve).
+    pub solver: usize,
+}
+
+/// The report of one stage of Algorithm 4.1 (stage 0 is part 1, stage l ≥ 1 is level l).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stage {
+    /// The split parameter of this stage (k for stage 0, level_k after).
+    pub k: usize,
+    /// The number of refined vertices.
+    pub vertices: usize,
+    /// E of the stage's final points on its final knots.
+    pub energy: f64,
+    /// The relative KKT residual of the stage's final fixed-knot solve.
+    pub kkt_residual: f64,
+    /// max over inactive data vertices of |jmp| relative to the certificate's force scale
+    /// (Corollary 3.3); `None` when no data vertex is inactive.
+    pub jmp_inactive: Option<f64>,
+}
+
+/// The result of a refinement: what `curvefit refine` reports.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Refinement {
+    /// The refined vertices p_1..p_N (a closed curve does not repeat p_1).
+    pub points: Points,
+    /// The knots those points were solved with: t_1..t_N open, t_1..t_{N+1} closed.
+    pub knots: Knots,
+    /// The 0-based index of the vertex attached to each data point q_i.
+    pub data_vertex: Vec<usize>,
+    /// E of (2.1) for `points` on `knots`.
+    pub energy: f64,
+    /// The multipliers of the constrained step (stage 0), per data point, in the convention of
+    /// the constraint:
+    /// - interpolation (and balls of radius 0): the d components of the reaction
+    ///   λ_i = −(Hp)_{i_k}, so that (Hp)_{i_k} + λ_i = 0;
+    /// - balls of radius ε_i > 0: `[w_i]`, Kersey's weight in (3.5), (Hp)_{i_k} + w_i(p_{i_k} − q_i) = 0;
+    /// - smoothing: `[w_i]`, the given weight;
+    /// - half-spaces: `[w_i1, …, w_im]`, (Hp)_{i_k} + Σ_j w_ij n_ij = 0 (3.8).
+    pub multipliers: Vec<Vec<f64>>,
+    /// Whether each data point's constraint is active in stage 0 (always for interpolation,
+    /// never for smoothing).
+    pub active: Vec<bool>,
+    /// The largest relative KKT residual over all stages (see the crate docs for its definition).
+    pub kkt_residual: f64,
+    /// Iteration counts.
+    pub iterations: Iterations,
+    /// Per-stage energies and certificates.
+    pub stages: Vec<Stage>,
+}
+
+impl Refinement {
+    /// max over inactive data vertices of the relative |jmp| in stage 0 (Corollary 3.3), or
+    /// `None` when every data vertex is active.
+    pub fn jmp_inactive(&self) -> Option<f64> {
+        self.stages.first().and_then(|s| s.jmp_inactive)
+    }
+}
+
+fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    match fp.problem.solver {
+        Solver::Exact => crate::strategy::exact(fp),
+        Solver::Paper => crate::paper::paper(fp),
+    }
+}
+
+/// Runs Algorithm 4.1 on a validated problem.
+pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
+    problem.validate()?;
+    let q = &problem.points;
+    let u = problem.data_knots_unvalidated()?;
+    let e = problem.parametrization;
+    let mut iterations = Iterations::default();
+    let mut stages = Vec::new();
+
+    // A common point of all constraint sets makes a constant curve optimal (E = 0).
+    let constant = degenerate::common_point(problem);
+
+    // Part 1: the near-interpolatory k-level step.
+    let k = problem.k;
+    let mut data_vertex: Vec<usize> = (0..q.len()).map(|i| (k + 1) * i).collect();
+    let mut knots = split_knots(&u, k)?;
+    let (mut p, multipliers, cert) = if let Some(c) = &constant {
+        // The constant curve on the split knots; no knot update is possible (zero spans).
+        let pts = constant_points(knots.vertex_count(), &c.point);
+        let (cert, mult) = certify(
+            &knots,
+            &pts,
+            q,
+            &data_vertex,
+            &problem.kinds(),
+            Some(c.multipliers.clone()),
+            &[],
+            problem.derivative,
+            problem.options.active_rtol,
+        );
+        iterations.solves += 1;
+        (pts, mult, cert)
+    } else {
+        stage_loop(
+            0,
+            &mut knots,
+            q,
+            &data_vertex,
+            &problem.constraint,
+            problem,
+            k + 1,
+            e,
+            &mut iterations,
+        )?
+    };
+    let active = cert.active.clone();
+    let mut energy = cert.energy;
+    stages.push(stage_report(k, p.len(), &cert));
+    let mut worst = cert.kkt_residual;
+
+    // Part 2: further interpolatory level_k-level steps, re-initialized from the previous result.
+    for level in 1..=problem.levels {
+        let lk = problem.level_k;
+        let mut next_knots = split_knots(&knots, lk)?;
+        let dv: Vec<usize> = (0..p.len()).map(|i| (lk + 1) * i).collect();
+        let (np, _, cert) = if constant.is_some() {
+            let np = constant_points(next_knots.vertex_count(), p.point(0));
+            let interpolate: [Box<dyn Kind>; 1] = [Constraint::Interpolate.kind()];
+            let (cert, mult) = certify(
+                &next_knots,
+                &np,
+                &p,
+                &dv,
+                &interpolate,
+                None,
+                &[],
+                problem.derivative,
+                problem.options.active_rtol,
+            );
+            iterations.solves += 1;
+            (np, mult, cert)
+        } else {
+            stage_loop(
+                level,
+                &mut next_knots,
+                &p,
+                &dv,
+                &Constraint::Interpolate,
+                problem,
+                lk + 1,
+                e,
+                &mut iterations,
+            )?
+        };
+        worst = worst.max(cert.kkt_residual);
+        energy = cert.energy;
+        stages.push(stage_report(lk, np.len(), &cert));
+        for v in &mut data_vertex {
+            *v *= lk + 1;
+        }
+        p = np;
+        knots = next_knots;
+    }
+    Ok(Refinement {
+        points: p,
+        knots,
+        data_vertex,
+        energy,
+        multipliers,
+        active,
+        kkt_residual: worst,
+        iterations,
+        stages,
+    })
+}
+
+/// The knots of the k-level split (3.1), without the points (interpolation does not need them).
+pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
+    let m = k + 1;
+    let v = u.values();
+    let spans = u.span_count();
+    // The same values as `split::split` computes ((1 − s)a + s b with s = j/m), with the
+    // fractions tabulated once.
+    let s: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
+    let mut t = Vec::with_capacity(m * spans + 1);
+    for i in 0..spans {
+        let (a, b) = (v[i], v[i + 1]);
+        t.extend(s.iter().map(|&s| (1.0 - s) * a + s * b));
+    }
+    t.push(v[spans]);
+    Ok(Knots::new(u.topology(), t)?)
+}
+
+fn stage_report(k: usize, vertices: usize, cert: &Certificate) -> Stage {
+    Stage {
+        k,
+        vertices,
+        energy: cert.energy,
+        kkt_residual: cert.kkt_residual,
+        jmp_inactive: cert.jmp_inactive,
+    }
+}
+
+fn constant_points(n: usize, c: &[f64]) -> Points {
+    let mut coords = Vec::with_capacity(n * c.len());
+    for _ in 0..n {
+        coords.extend_from_slice(c);
+    }
+    Points::new(c.len(), coords).expect("a finite common point")
+}
+
+/// Solve on the initial knots, then `knot_iterations` times: update the knots from the refined
+/// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e) and solve again — so the returned points are
+/// the solution for the returned knots.
+#[allow(clippy::too_many_arguments)]
+fn stage_loop(
+    stage: usize,
+    knots: &mut Knots,
+    q: &Points,
+    data_vertex: &[usize],
+    constraint: &Constraint,
+    problem: &Problem,
+    stride: usize,
+    param: Parametrization,
+    iterations: &mut Iterations,
+) -> Result<(Points, Vec<Vec<f64>>, Certificate), Error> {
+    let mut sol: Option<FixedSolution> = None;
+    // The balls active in the last solution (multiplier > 0) start the next working set.
+    let mut working_set: Option<Vec<bool>> = None;
+    for _ in 0..=problem.knot_iterations {
+        if let Some(FixedSolution { points, .. }) = &sol {
+            *knots =
+                divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {
+                    divdiff::Error::ZeroLengthSpan { index, next } => {
+                        Error::DegenerateRefinedSpan { stage, index, next }
+                    }
+                    e => Error::Divdiff(e),
+                })?;
+            iterations.knot_updates += 1;
+        }
+        let fp = FixedProblem {
+            knots,
+            q,
+            data_vertex,
+            constraint,
+            problem,
+            derivatives: stage == 0,
+            stride,
+            // Until the first knot update the knots are those of `split_knots`.
+            uniform_spans: sol.is_none(),
+            working_set: working_set.as_deref(),
+            options: &problem.options,
+        };
+        let s = dispatch(&fp)?;
+        // The data constraints active in this solution (a positive multiplier) start the next
+        // working set.
+        if matches!(constraint, Constraint::Balls(_) | Constraint::HalfSpaces(_)) {
+            if let Some(m) = &s.multipliers {
+                working_set = Some(m.iter().map(|w| w.iter().any(|&w| w > 0.0)).collect());
+            }
+        }
+        iterations.solves += 1;
+        iterations.solver += s.iterations;
+        sol = Some(s);
+    }
+    let s = sol.expect("at least one solve");
+    let tol = match problem.solver {
+        Solver::Exact => problem.options.active_rtol,
+        Solver::Paper => problem.options.paper.active_rtol,
+    };
+    let fp = FixedProblem {
+        knots,
+        q,
+        data_vertex,
+        constraint,
+        problem,
+        derivatives: stage == 0,
+        stride,
+        uniform_spans: false,
+        working_set: None,
+        options: &problem.options,
+    };
+    // (The exact solver's certificate, when it computed one to accept the points, is this one.)
+    let (cert, mult) = match s.certificate {
+        Some(c) if problem.solver == Solver::Exact => c,
+        _ => certify(
+            fp.knots,
+            &s.points,
+            q,
+            data_vertex,
+            &fp.kinds(),
+            s.multipliers,
+            &s.derivative,
+            problem.derivative,
+            tol,
+        ),
+    };
+    Ok((s.points, mult, cert))
+}

@@ -1,0 +1,978 @@
+//! The condensed backend: only data vertices carry constraints, so the free vertices are
+//! eliminated exactly and the variables are the constrained data vertices alone.
+//!
+//! # The conic program
+//!
+//! With the data vertices of a set W at y ([`Condensation`], taken onto W's vertices; the other
+//! data vertices are free vertices of longer spans), the energy minimized over the free
+//! vertices is E(y) = ½ Σ_coords (Ky)ᵀ T⁻¹ (Ky), T symmetric positive definite tridiagonal and K
+//! tridiagonal (both cyclic for a closed curve). The program is
+//!
+//!   minimize ½ yᵀ Q y,  Q = Kᵀ T⁻¹ K ⊗ I_d,  s.t. each point's rows s_j = b_j − A_j y_j ∈ K_j,
+//!
+//! over the points of W that are not interpolated (an interpolated point, radius 0, keeps
+//! y_j = q_j and folds into the linear term): a ball |y − q| ≤ ε is (ε, q − y) ∈ Q^{d+1}
+//! (A_j = (0; −I)… with b = (ε, q): s = (ε, q − y)); a polytope ∩{n̂_k·y ≤ ĉ_k} (unit normals) is
+//! ĉ − N̂ y ≥ 0. Q is dense but applied in O(|W| d) (one tridiagonal solve).
+//!
+//! # The Newton systems
+//!
+//! P + AᵀΘA = Q + D with D block diagonal, D_j = A_jᵀΘ_jA_j (d × d per point), is solved
+//! through the augmented form [[D, Kᵀ], [K, −T]]: (T + K D⁻¹ Kᵀ) w = K D⁻¹ r, then
+//! Δy = D⁻¹(r − Kᵀ w) — a block pentadiagonal (cyclic) positive definite system of |W| blocks of
+//! size d ([`Banded`]). D vanishes along inactive constraints, where D⁻¹ would make
+//! T + K D⁻¹ Kᵀ as ill-conditioned as D⁻¹ is large (K annihilates constants), so D + ρI is
+//! inverted (ρ = [`REGULARIZATION`] × max Q_jj, grown by [`REGULARIZATION_GROWTH`] while the
+//! matrix does not factor) and the method's iterative refinement against Q + D removes ρ
+//! ([`conic::KktSystem::factor_is_exact`] is false). D + ρI is inverted without cancellation
+//! from its structure: for a ball's Nesterov–Todd weight D = η⁻²(I + 2 w̄₁w̄₁ᵀ) per eigenspace;
+//! for a polytope D = Σ θ_k n̂_k n̂_kᵀ in an orthonormal basis built from the normals in order of
+//! decreasing θ (each large θ_k then enters one new diagonal entry and no Schur complement
+//! subtracts it from a small one).
+//!
+//! The active-set polish's weights (curvature and penalties, [`conic::polish`]) may leave D
+//! singular, so its systems take the full-vertex elimination instead: H ⊗ I_d + D at W's data
+//! vertices, whose Schur complement on them is Q + D, factored by [`energy::System`] in O(N)
+//! with no D⁻¹.
+
+// The per-point kernels index several small arrays by the same row/column.
+#![allow(clippy::needless_range_loop)]
+
+use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
+use divdiff::{Knots, Points};
+use energy::{Factor, System};
+
+use super::banded::Banded;
+use crate::fast::Condensation;
+use crate::operator::Stencil;
+use crate::Error;
+
+/// ρ of the module docs, relative to the largest diagonal entry of Q.
+pub(crate) const REGULARIZATION: f64 = 1e-13;
+/// Factor by which ρ grows when T + K (D + ρI)⁻¹ Kᵀ does not factor (a pivot lost to the
+/// cancellation).
+pub(crate) const REGULARIZATION_GROWTH: f64 = 100.0;
+/// Largest ρ tried, relative to the largest diagonal entry of Q.
+pub(crate) const MAX_REGULARIZATION: f64 = 1e-7;
+
+/// One face n̂·y ≤ ĉ of a polytope, with unit normal and the original normal's length (the
+/// multipliers of (3.8) are for the original normals).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Face {
+    /// n̂ = n / |n|.
+    pub normal: Vec<f64>,
+    /// ĉ = c / |n|.
+    pub offset: f64,
+    /// |n|.
+    pub norm: f64,
+}
+
+/// The set a data point must lie in.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum PointSet {
+    /// p = q (interpolation, a ball of radius 0).
+    Fixed,
+    /// |p − q| ≤ radius, radius > 0.
+    Ball(f64),
+    /// Every face (a nonempty list).
+    Faces(Vec<Face>),
+}
+
+/// How the last factorization eliminated the free vertices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Route {
+    /// T + K (D + ρI)⁻¹ Kᵀ.
+    Condensed,
+    /// H ⊗ I + D on all vertices.
+    Full,
+}
+
+/// The condensed backend (module docs) for the points of one working set.
+pub(crate) struct Condensed<'a> {
+    cond: &'a Condensation,
+    knots: &'a Knots,
+    d: usize,
+    /// The sets of the condensed points (index j = position in `cond.vertices`).
+    sets: Vec<PointSet>,
+    /// The data of the condensed points (cond.n × d).
+    q: Vec<f64>,
+    /// The condensed point of each variable.
+    var_point: Vec<usize>,
+    /// The row offset of each variable's block (one block per variable).
+    cones: Cones,
+    b: Vec<f64>,
+    row_start: Vec<usize>,
+    /// Q's machinery: T's factor and buffers.
+    t: Banded,
+    u: Vec<f64>,
+    s: Vec<f64>,
+    y: Vec<f64>,
+    g: Vec<f64>,
+    /// The Newton system T + K D⁻¹ Kᵀ, and the rows of K touching each point.
+    sm: Banded,
+    touching: Vec<[(usize, f64); 3]>,
+    ntouch: Vec<usize>,
+    /// (D + ρI)⁻¹ and D per variable (d × d).
+    dinv: Vec<f64>,
+    dmat: Vec<f64>,
+    route: Route,
+    /// Every factorization takes the full-vertex route (after [`KktSystem::escalate`]).
+    exact: bool,
+    full: Option<(System, Option<Factor>)>,
+    rhs_full: Vec<f64>,
+    /// Q_jj estimates per condensed point, their largest, and ρ.
+    qdiag: Vec<f64>,
+    qmax: f64,
+    rho: f64,
+    scales: Scales,
+    /// Work vectors (cond.n × d).
+    wy: Vec<f64>,
+    wk: Vec<f64>,
+    wkt: Vec<f64>,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// (D + ρ I)⁻¹ for D = a I + b w wᵀ, inverted per eigenspace: 1/(a + ρ + b|w|²) along w,
+/// 1/(a + ρ) across.
+pub(crate) fn ball_inverse(a: f64, b: f64, w: &[f64], rho: f64, out: &mut [f64]) {
+    let d = w.len();
+    let w2 = dot(w, w);
+    let ar = a + rho;
+    let (across, along) = (1.0 / ar, 1.0 / (ar + b * w2));
+    let wn = w2.sqrt();
+    for i in 0..d {
+        for j in 0..d {
+            let id = if i == j { 1.0 } else { 0.0 };
+            let uu = if wn > 0.0 {
+                (w[i] / wn) * (w[j] / wn)
+            } else {
+                0.0
+            };
+            out[i * d + j] = across * (id - uu) + along * uu;
+        }
+    }
+}
+
+/// (ρ I + Σ_k θ_k n̂_k n̂_kᵀ)⁻¹ for unit normals, in the orthonormal basis U built by
+/// Gram–Schmidt from the normals in order of decreasing θ (module docs): C = UᵀDU has each
+/// generating normal's large θ on its own diagonal entry and nothing beyond it, so its
+/// Cholesky factorization (largest first) subtracts no large term from a small one.
+pub(crate) fn faces_inverse(
+    normals: &[&[f64]],
+    theta: &[f64],
+    rho: f64,
+    d: usize,
+    out: &mut [f64],
+) {
+    let mut order: Vec<usize> = (0..normals.len()).collect();
+    order.sort_by(|&a, &b| theta[b].total_cmp(&theta[a]));
+    // Orthonormal basis (rows of u) and, per face, its coordinates in that basis.
+    let mut u: Vec<Vec<f64>> = Vec::with_capacity(d);
+    let mut coords: Vec<Vec<f64>> = vec![vec![0.0; d]; normals.len()];
+    for &k in &order {
+        let n = normals[k];
+        let mut c = vec![0.0; d];
+        let mut r = n.to_vec();
+        for (i, ui) in u.iter().enumerate() {
+            let p = dot(ui, &r);
+            c[i] = p;
+            for (x, y) in r.iter_mut().zip(ui) {
+                *x -= p * y;
+            }
+        }
+        let rn = dot(&r, &r).sqrt();
+        // A normal independent of those before (beyond rounding) opens a new direction, on
+        // which it is its basis vector exactly.
+        if u.len() < d && rn > 1e-8 {
+            c[u.len()] = rn;
+            u.push(r.iter().map(|x| x / rn).collect());
+        }
+        coords[k] = c;
+    }
+    // Complete the basis with unit vectors.
+    for e in 0..d {
+        if u.len() == d {
+            break;
+        }
+        let mut r = vec![0.0; d];
+        r[e] = 1.0;
+        for ui in &u {
+            let p = ui[e];
+            for (x, y) in r.iter_mut().zip(ui) {
+                *x -= p * y;
+            }
+        }
+        let rn = dot(&r, &r).sqrt();
+        if rn > 0.5 {
+            u.push(r.iter().map(|x| x / rn).collect());
+        }
+    }
+    // C = ρ I + Σ θ c cᵀ, Cholesky, and C⁻¹ column by column.
+    let mut cm = vec![0.0; d * d];
+    for i in 0..d {
+        cm[i * d + i] = rho;
+    }
+    for (k, c) in coords.iter().enumerate() {
+        for i in 0..d {
+            if c[i] == 0.0 {
+                continue;
+            }
+            for j in 0..d {
+                cm[i * d + j] += theta[k] * c[i] * c[j];
+            }
+        }
+    }
+    let mut l = cm.clone();
+    for j in 0..d {
+        let mut v = l[j * d + j];
+        for t in 0..j {
+            v -= l[j * d + t] * l[j * d + t];
+        }
+        let piv = v.max(f64::MIN_POSITIVE).sqrt();
+        l[j * d + j] = piv;
+        for i in j + 1..d {
+            let mut w = l[i * d + j];
+            for t in 0..j {
+                w -= l[i * d + t] * l[j * d + t];
+            }
+            l[i * d + j] = w / piv;
+        }
+    }
+    let mut cinv = vec![0.0; d * d];
+    let mut col = vec![0.0; d];
+    for e in 0..d {
+        col.fill(0.0);
+        col[e] = 1.0;
+        for i in 0..d {
+            let mut v = col[i];
+            for t in 0..i {
+                v -= l[i * d + t] * col[t];
+            }
+            col[i] = v / l[i * d + i];
+        }
+        for i in (0..d).rev() {
+            let mut v = col[i];
+            for t in i + 1..d {
+                v -= l[t * d + i] * col[t];
+            }
+            col[i] = v / l[i * d + i];
+        }
+        for i in 0..d {
+            cinv[i * d + e] = col[i];
+        }
+    }
+    // D⁻¹ = Uᵀ C⁻¹ U (rows of `u` are the basis vectors).
+    for a in 0..d {
+        for b in 0..d {
+            let mut acc = 0.0;
+            for i in 0..d {
+                for j in 0..d {
+                    acc += u[i][a] * cinv[i * d + j] * u[j][b];
+                }
+            }
+            out[a * d + b] = acc;
+        }
+    }
+}
+
+impl<'a> Condensed<'a> {
+    /// The backend for the condensed points of `cond` (on `knots`), with data `q` (cond.n × d)
+    /// and `sets` (one per condensed point; no point may have an empty polytope).
+    ///
+    /// # Errors
+    /// [`Error::Energy`] (`Singular`) naming a vertex if T does not factor (impossible for
+    /// valid knots; reported rather than assumed).
+    pub(crate) fn new(
+        cond: &'a Condensation,
+        knots: &'a Knots,
+        q: Vec<f64>,
+        sets: Vec<PointSet>,
+        d: usize,
+    ) -> Result<Self, Error> {
+        let n = cond.n;
+        let size = cond.len();
+        let closed = cond.closed;
+        let singular = |j: usize| {
+            Error::from(energy::Error::Singular {
+                vertex: cond.vertices[j.min(n - 1)],
+            })
+        };
+        let mut t = Banded::new(size, 1, 1, closed, d);
+        for j in 0..size {
+            t.add_identity(j, j, cond.diag[j]);
+            if closed || j + 1 < size {
+                t.add_identity(j, (j + 1) % size, cond.off[j]);
+            }
+        }
+        t.factor().map_err(|j| singular(cond.first + j))?;
+        let mut touching: Vec<[(usize, f64); 3]> = vec![[(usize::MAX, 0.0); 3]; n];
+        let mut ntouch = vec![0usize; n];
+        for (j, kr) in cond.krows.iter().enumerate() {
+            for (tt, &kv) in kr.iter().enumerate() {
+                let c = cond.col(j, tt);
+                touching[c][ntouch[c]] = (j, kv);
+                ntouch[c] += 1;
+            }
+        }
+        // Q_jj = Σ_r K_rj² (T⁻¹)_rr, estimated with 1/T_rr.
+        let mut qdiag = vec![0.0; n];
+        for (j, kr) in cond.krows.iter().enumerate() {
+            for (tt, &kv) in kr.iter().enumerate() {
+                qdiag[cond.col(j, tt)] += kv * kv / cond.diag[j];
+            }
+        }
+        let qmax = qdiag
+            .iter()
+            .fold(0.0f64, |a, &v| a.max(v))
+            .max(f64::MIN_POSITIVE);
+        let mut var_point = Vec::new();
+        let mut cone_list = Vec::new();
+        let mut b = Vec::new();
+        let mut row_start = Vec::new();
+        for (j, set) in sets.iter().enumerate() {
+            match set {
+                PointSet::Fixed => continue,
+                PointSet::Ball(r) => {
+                    row_start.push(b.len());
+                    b.push(*r);
+                    b.extend_from_slice(&q[j * d..(j + 1) * d]);
+                    cone_list.push(Cone::SecondOrder(d + 1));
+                }
+                PointSet::Faces(faces) => {
+                    row_start.push(b.len());
+                    b.extend(faces.iter().map(|f| f.offset));
+                    cone_list.push(Cone::Nonnegative(faces.len()));
+                }
+            }
+            var_point.push(j);
+        }
+        let cones = Cones::new(cone_list).map_err(|_| Error::InvalidConstraint {
+            constraint: 0,
+            reason: "a data point with an empty set in the working set",
+        })?;
+        // Scales: forces ‖Q‖ δ (δ the largest coordinate step between consecutive condensed
+        // points: Qy is computed from such differences), lengths the data's extent about
+        // their centroid.
+        let mut step: f64 = 0.0;
+        let mut centroid = vec![0.0; d];
+        for j in 0..n {
+            for c in 0..d {
+                centroid[c] += q[j * d + c] / n as f64;
+            }
+            let k = if j + 1 == n { 0 } else { j + 1 };
+            if k > j || closed {
+                for c in 0..d {
+                    step = step.max((q[k * d + c] - q[j * d + c]).abs());
+                }
+            }
+        }
+        let mut length: f64 = 0.0;
+        for j in 0..n {
+            for c in 0..d {
+                length = length.max((q[j * d + c] - centroid[c]).abs());
+            }
+        }
+        let nv = var_point.len();
+        Ok(Condensed {
+            cond,
+            knots,
+            d,
+            sets,
+            q,
+            var_point,
+            cones,
+            b,
+            row_start,
+            t,
+            u: vec![0.0; size * d],
+            s: vec![0.0; size * d],
+            y: vec![0.0; n * d],
+            g: vec![0.0; n * d],
+            sm: Banded::new(size, d, 2, closed, 1),
+            touching,
+            ntouch,
+            dinv: vec![0.0; nv * d * d],
+            dmat: vec![0.0; nv * d * d],
+            route: Route::Condensed,
+            exact: false,
+            full: None,
+            rhs_full: Vec::new(),
+            qdiag,
+            qmax,
+            rho: REGULARIZATION * qmax,
+            scales: Scales {
+                force: qmax * step.max(f64::MIN_POSITIVE),
+                length,
+            },
+            wy: vec![0.0; n * d],
+            wk: vec![0.0; size * d],
+            wkt: vec![0.0; n * d],
+        })
+    }
+
+    /// The rows of variable `v`'s block.
+    pub(crate) fn rows(&self, v: usize) -> std::ops::Range<usize> {
+        self.row_start[v]..self.row_start[v] + self.cones.blocks()[v].dim()
+    }
+
+    /// The start of the method for balls alone: y = q, s = (ε, 0) (the centre of each cone),
+    /// z = (F, 0) with F the largest force |Qq| (or ‖Q‖δ): strictly feasible and centred. `None`
+    /// when a polytope is present (its data point need not lie inside it).
+    pub(crate) fn ball_start(&mut self) -> Option<conic::Start> {
+        let d = self.d;
+        if self
+            .var_point
+            .iter()
+            .any(|&j| !matches!(self.sets[j], PointSet::Ball(_)))
+        {
+            return None;
+        }
+        let x: Vec<f64> = self
+            .var_point
+            .iter()
+            .flat_map(|&j| self.q[j * d..(j + 1) * d].to_vec())
+            .collect();
+        let mut g = vec![0.0; x.len()];
+        self.gradient(&x, &mut g);
+        let f0 = self.g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let f = if f0 > 0.0 { f0 } else { self.scales.force };
+        let m = self.cones.rows();
+        let (mut s, mut z) = (vec![0.0; m], vec![0.0; m]);
+        for v in 0..self.var_point.len() {
+            let r = self.rows(v);
+            s[r.start] = self.b[r.start];
+            z[r.start] = f;
+        }
+        Some(conic::Start {
+            x,
+            sz: Some((s, z)),
+        })
+    }
+
+    /// Scatters the variables into the condensed y (fixed points at their data).
+    fn scatter(&mut self, x: &[f64], with_fixed: bool) {
+        let d = self.d;
+        if with_fixed {
+            for (j, set) in self.sets.iter().enumerate() {
+                if *set == PointSet::Fixed {
+                    self.y[j * d..(j + 1) * d].copy_from_slice(&self.q[j * d..(j + 1) * d]);
+                }
+            }
+        } else {
+            self.y.fill(0.0);
+        }
+        for (v, &j) in self.var_point.iter().enumerate() {
+            self.y[j * d..(j + 1) * d].copy_from_slice(&x[v * d..(v + 1) * d]);
+        }
+    }
+
+    /// g = Q y (all condensed points) and E(y) = ½ yᵀQy; afterwards `self.s` = T⁻¹ K y.
+    fn apply_q(&mut self) -> f64 {
+        let d = self.d;
+        self.cond.apply_k(&self.y, d, &mut self.u);
+        self.s.copy_from_slice(&self.u);
+        self.t.solve(&mut self.s, d);
+        self.cond.apply_kt(&self.s, d, &mut self.g);
+        0.5 * dot(&self.u, &self.s)
+    }
+
+    /// The refined curve for the variables x (data vertices of W at y, free vertices by the
+    /// second pass of the condensation), and Q y at every condensed point (the reactions of
+    /// the fixed ones are −(Qy)_j).
+    pub(crate) fn curve(
+        &mut self,
+        x: &[f64],
+        stencil: &Stencil,
+    ) -> Result<(Points, Vec<f64>), Error> {
+        self.scatter(x, true);
+        self.apply_q();
+        let p = self
+            .cond
+            .reconstruct(self.knots, stencil, &self.y, &self.s, self.d)?;
+        Ok((p, self.g.clone()))
+    }
+
+    /// D_j = A_jᵀΘ_jA_j (d × d) of variable v from its block's weight, dense.
+    fn d_block(&self, weights: &Weights, v: usize, out: &mut [f64]) {
+        let d = self.d;
+        let j = self.var_point[v];
+        out.fill(0.0);
+        let m = self.cones.blocks()[v].dim();
+        let mut col = vec![0.0; m];
+        // Column c of A_j: ball rows (0; I) → e_{1+c}; faces → (n̂_k[c])_k.
+        for c in 0..d {
+            match &self.sets[j] {
+                PointSet::Ball(_) => {
+                    col.fill(0.0);
+                    col[1 + c] = 1.0;
+                }
+                PointSet::Faces(faces) => {
+                    for (k, f) in faces.iter().enumerate() {
+                        col[k] = f.normal[c];
+                    }
+                }
+                PointSet::Fixed => return,
+            }
+            weights.apply(v, &mut col);
+            for r in 0..d {
+                out[r * d + c] = match &self.sets[j] {
+                    PointSet::Ball(_) => col[1 + r],
+                    PointSet::Faces(faces) => {
+                        faces.iter().zip(&col).map(|(f, x)| f.normal[r] * x).sum()
+                    }
+                    PointSet::Fixed => 0.0,
+                };
+            }
+        }
+    }
+
+    /// The condensed route: (D + ρI)⁻¹ per variable from the NT weights, S = T + K D⁻¹ Kᵀ.
+    fn factor_condensed(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
+        let d = self.d;
+        let size = self.cond.len();
+        let closed = self.cond.closed;
+        loop {
+            self.sm.clear();
+            for j in 0..size {
+                self.sm.add_identity(j, j, self.cond.diag[j]);
+                if closed || j + 1 < size {
+                    self.sm.add_identity(j, (j + 1) % size, self.cond.off[j]);
+                }
+            }
+            for v in 0..self.var_point.len() {
+                let j = self.var_point[v];
+                let shift = self.rho + sigma * self.qdiag[j];
+                let di = &mut self.dinv[v * d * d..(v + 1) * d * d];
+                let dm = &mut self.dmat[v * d * d..(v + 1) * d * d];
+                match (weights.block(v), &self.sets[j]) {
+                    (BlockWeight::Nt { scaling, .. }, PointSet::Ball(_)) => {
+                        // V⁻² lower-right block: η⁻²(I + 2 w̄₁w̄₁ᵀ).
+                        let eta2 = scaling[0] * scaling[0];
+                        let w1 = &scaling[2..];
+                        ball_inverse(1.0 / eta2, 2.0 / eta2, w1, shift, di);
+                        for a in 0..d {
+                            for b in 0..d {
+                                let id = if a == b { 1.0 } else { 0.0 };
+                                dm[a * d + b] = (id + 2.0 * w1[a] * w1[b]) / eta2;
+                            }
+                        }
+                    }
+                    (BlockWeight::Nt { scaling, .. }, PointSet::Faces(faces)) => {
+                        let theta: Vec<f64> = scaling.iter().map(|v| 1.0 / (v * v)).collect();
+                        let normals: Vec<&[f64]> =
+                            faces.iter().map(|f| f.normal.as_slice()).collect();
+                        faces_inverse(&normals, &theta, shift, d, di);
+                        for a in 0..d {
+                            for b in 0..d {
+                                dm[a * d + b] = faces
+                                    .iter()
+                                    .zip(&theta)
+                                    .map(|(f, t)| t * f.normal[a] * f.normal[b])
+                                    .sum::<f64>();
+                            }
+                        }
+                    }
+                    _ => {
+                        return Err(conic::Error::Singular {
+                            index: self.cond.vertices[j],
+                        })
+                    }
+                }
+                let di = &self.dinv[v * d * d..(v + 1) * d * d];
+                let nt = self.ntouch[j];
+                for x in 0..nt {
+                    let (jx, kx) = self.touching[j][x];
+                    self.sm.add(jx, jx, kx * kx, di);
+                    for &(jy, ky) in &self.touching[j][x + 1..nt] {
+                        // A row touching the point twice (a closed curve of two condensed
+                        // points) meets itself: both (jx, jy) and (jy, jx) are its diagonal.
+                        let f = if jx == jy { 2.0 * kx * ky } else { kx * ky };
+                        self.sm.add(jx, jy, f, di);
+                    }
+                }
+            }
+            match self.sm.factor() {
+                Ok(()) => return Ok(()),
+                Err(j) => {
+                    if self.rho >= MAX_REGULARIZATION * self.qmax {
+                        return Err(conic::Error::Singular {
+                            index: self.cond.vertices[(self.cond.first + j).min(self.cond.n - 1)],
+                        });
+                    }
+                    self.rho *= REGULARIZATION_GROWTH;
+                }
+            }
+        }
+    }
+
+    /// The full-vertex route: H ⊗ I + D at W's data vertices.
+    fn factor_full(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
+        let d = self.d;
+        if self.full.is_none() {
+            let h = energy::Hessian::new(self.knots);
+            let mut sys = System::new(&h, d).map_err(|_| conic::Error::Singular { index: 0 })?;
+            for (j, set) in self.sets.iter().enumerate() {
+                if *set == PointSet::Fixed {
+                    sys.fix(self.cond.vertices[j])
+                        .map_err(|_| conic::Error::Singular { index: 0 })?;
+                }
+            }
+            self.full = Some((sys, None));
+            self.rhs_full = vec![0.0; self.knots.vertex_count() * d];
+        }
+        let mut blocks = vec![0.0; self.var_point.len() * d * d];
+        for v in 0..self.var_point.len() {
+            let j = self.var_point[v];
+            self.d_block(weights, v, &mut blocks[v * d * d..(v + 1) * d * d]);
+            for c in 0..d {
+                blocks[v * d * d + c * d + c] += sigma * self.qdiag[j];
+            }
+        }
+        let (sys, factor) = self.full.as_mut().expect("built above");
+        sys.clear_blocks();
+        *factor = None;
+        for (v, &j) in self.var_point.iter().enumerate() {
+            sys.add_block(self.cond.vertices[j], &blocks[v * d * d..(v + 1) * d * d])
+                .map_err(|_| conic::Error::Singular {
+                    index: self.cond.vertices[j],
+                })?;
+        }
+        match sys.factor_with_tolerance(super::full::NEWTON_PIVOT_RTOL) {
+            Ok(f) => {
+                *factor = Some(f);
+                Ok(())
+            }
+            Err(energy::Error::Singular { vertex }) => {
+                Err(conic::Error::Singular { index: vertex })
+            }
+            Err(_) => Err(conic::Error::Singular { index: 0 }),
+        }
+    }
+}
+
+impl KktSystem for Condensed<'_> {
+    fn num_vars(&self) -> usize {
+        self.var_point.len() * self.d
+    }
+
+    fn cones(&self) -> &Cones {
+        &self.cones
+    }
+
+    fn b(&self) -> &[f64] {
+        &self.b
+    }
+
+    fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> f64 {
+        let d = self.d;
+        self.scatter(x, true);
+        let e = self.apply_q();
+        for (v, &j) in self.var_point.iter().enumerate() {
+            g[v * d..(v + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
+        }
+        e
+    }
+
+    fn apply_p(&mut self, v: &[f64], y: &mut [f64]) {
+        let d = self.d;
+        self.scatter(v, false);
+        self.apply_q();
+        for (k, &j) in self.var_point.iter().enumerate() {
+            y[k * d..(k + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
+        }
+    }
+
+    fn apply_a(&self, x: &[f64], out: &mut [f64]) {
+        let d = self.d;
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let r = self.row_start[v];
+            let xv = &x[v * d..(v + 1) * d];
+            match &self.sets[j] {
+                PointSet::Ball(_) => {
+                    // s = (ε, q − y): A = (0; I).
+                    out[r] = 0.0;
+                    out[r + 1..r + 1 + d].copy_from_slice(xv);
+                }
+                PointSet::Faces(faces) => {
+                    for (k, f) in faces.iter().enumerate() {
+                        out[r + k] = dot(&f.normal, xv);
+                    }
+                }
+                PointSet::Fixed => {}
+            }
+        }
+    }
+
+    fn apply_at(&self, z: &[f64], out: &mut [f64]) {
+        let d = self.d;
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let r = self.row_start[v];
+            let o = &mut out[v * d..(v + 1) * d];
+            match &self.sets[j] {
+                PointSet::Ball(_) => o.copy_from_slice(&z[r + 1..r + 1 + d]),
+                PointSet::Faces(faces) => {
+                    o.fill(0.0);
+                    for (k, f) in faces.iter().enumerate() {
+                        for c in 0..d {
+                            o[c] += f.normal[c] * z[r + k];
+                        }
+                    }
+                }
+                PointSet::Fixed => o.fill(0.0),
+            }
+        }
+    }
+
+    fn diagonal_scale(&self, block: usize) -> f64 {
+        self.qdiag[self.var_point[block]].max(f64::MIN_POSITIVE)
+    }
+
+    fn scales(&self) -> Scales {
+        self.scales
+    }
+
+    fn factor(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
+        let nt = !self.exact
+            && (0..self.var_point.len())
+                .all(|v| matches!(weights.block(v), BlockWeight::Nt { .. }));
+        if nt {
+            self.route = Route::Condensed;
+            self.factor_condensed(weights, sigma)
+        } else {
+            self.route = Route::Full;
+            self.factor_full(weights, sigma)
+        }
+    }
+
+    fn factor_is_exact(&self) -> bool {
+        self.route == Route::Full
+    }
+
+    fn escalate(&mut self) -> bool {
+        // The regularized elimination did not give this direction (D + ρI too far from D where
+        // Q + D has directions of size ρ or less): the rest of the solve takes the full-vertex
+        // route, exact at O(N) per factorization.
+        let switched = !self.exact && self.route == Route::Condensed;
+        self.exact = true;
+        switched
+    }
+
+    fn apply_newton(&mut self, v: &[f64], out: &mut [f64]) -> bool {
+        if self.route != Route::Condensed {
+            return false;
+        }
+        // (Q + D) v with the D of the last factorization.
+        let d = self.d;
+        self.apply_p(v, out);
+        for k in 0..self.var_point.len() {
+            let dm = &self.dmat[k * d * d..(k + 1) * d * d];
+            for a in 0..d {
+                out[k * d + a] += (0..d).map(|b| dm[a * d + b] * v[k * d + b]).sum::<f64>();
+            }
+        }
+        true
+    }
+
+    fn solve(&mut self, r: &mut [f64]) {
+        let d = self.d;
+        match self.route {
+            Route::Condensed => {
+                // dy ← D⁻¹ r (temporarily, in condensed y-space), w = K D⁻¹ r, w ← S⁻¹ w,
+                // dy = D⁻¹(r − Kᵀ w).
+                self.wy.fill(0.0);
+                for (v, &j) in self.var_point.iter().enumerate() {
+                    let di = &self.dinv[v * d * d..(v + 1) * d * d];
+                    for a in 0..d {
+                        self.wy[j * d + a] = (0..d).map(|b| di[a * d + b] * r[v * d + b]).sum();
+                    }
+                }
+                self.cond.apply_k(&self.wy, d, &mut self.wk);
+                self.sm.solve(&mut self.wk, 1);
+                self.cond.apply_kt(&self.wk, d, &mut self.wkt);
+                for (v, &j) in self.var_point.iter().enumerate() {
+                    let di = &self.dinv[v * d * d..(v + 1) * d * d];
+                    let mut out = [0.0; 16];
+                    let mut heap = Vec::new();
+                    let o: &mut [f64] = if d <= 16 {
+                        &mut out[..d]
+                    } else {
+                        heap.resize(d, 0.0);
+                        &mut heap
+                    };
+                    for a in 0..d {
+                        o[a] = (0..d)
+                            .map(|b| di[a * d + b] * (r[v * d + b] - self.wkt[j * d + b]))
+                            .sum();
+                    }
+                    r[v * d..(v + 1) * d].copy_from_slice(o);
+                }
+            }
+            Route::Full => {
+                let Some((_, Some(f))) = &self.full else {
+                    return;
+                };
+                self.rhs_full.fill(0.0);
+                for (v, &j) in self.var_point.iter().enumerate() {
+                    let vx = self.cond.vertices[j];
+                    self.rhs_full[vx * d..(vx + 1) * d].copy_from_slice(&r[v * d..(v + 1) * d]);
+                }
+                // (Fixed data vertices get value 0 in the right-hand side: a direction.)
+                let _ = f.solve_flat(&mut self.rhs_full);
+                for (v, &j) in self.var_point.iter().enumerate() {
+                    let vx = self.cond.vertices[j];
+                    r[v * d..(v + 1) * d].copy_from_slice(&self.rhs_full[vx * d..(vx + 1) * d]);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ball_inverse, faces_inverse};
+
+    fn matmul(a: &[f64], b: &[f64], d: usize) -> Vec<f64> {
+        let mut c = vec![0.0; d * d];
+        for i in 0..d {
+            for j in 0..d {
+                c[i * d + j] = (0..d).map(|k| a[i * d + k] * b[k * d + j]).sum();
+            }
+        }
+        c
+    }
+
+    /// The structured inverses invert: (D + ρI) · inverse = I on well-conditioned cases.
+    #[test]
+    fn structured_inverses_invert() {
+        let d = 3;
+        let w = [0.3, -0.4, 0.5];
+        let mut inv = vec![0.0; 9];
+        ball_inverse(2.0, 4.0, &w, 0.1, &mut inv);
+        let mut m = vec![0.0; 9];
+        for i in 0..d {
+            for j in 0..d {
+                m[i * d + j] = 4.0 * w[i] * w[j] + if i == j { 2.1 } else { 0.0 };
+            }
+        }
+        let id = matmul(&m, &inv, d);
+        for i in 0..d {
+            for j in 0..d {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((id[i * d + j] - want).abs() < 1e-12, "{id:?}");
+            }
+        }
+        let n1 = [0.6, 0.8, 0.0];
+        let n2 = [0.0, 0.6, 0.8];
+        let theta = [3.0, 0.5];
+        faces_inverse(&[&n1, &n2], &theta, 0.2, d, &mut inv);
+        for i in 0..d {
+            for j in 0..d {
+                m[i * d + j] = theta[0] * n1[i] * n1[j]
+                    + theta[1] * n2[i] * n2[j]
+                    + if i == j { 0.2 } else { 0.0 };
+            }
+        }
+        let id = matmul(&m, &inv, d);
+        for i in 0..d {
+            for j in 0..d {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((id[i * d + j] - want).abs() < 1e-12, "{id:?}");
+            }
+        }
+    }
+
+    /// With one face stiff (θ = 1e20) and ρ = 1e-13 the inverse across that face is 1/ρ-scale
+    /// and exact to rounding (a dense inverse loses it completely: the determinant cancels).
+    #[test]
+    fn a_stiff_face_does_not_swamp_the_small_directions() {
+        let d = 2;
+        let s = 0.5f64.sqrt();
+        let n1 = [s, s];
+        let n2 = [s, -s];
+        let mut inv = vec![0.0; 4];
+        faces_inverse(&[&n1, &n2], &[1e20, 1e-3], 1e-13, d, &mut inv);
+        // Across n1 (along n2): 1/(1e-13 + 1e-3); along n1: 1/(1e20 + 1e-13).
+        let along_n2: f64 = (0..d)
+            .map(|i| (0..d).map(|j| n2[i] * inv[i * d + j] * n2[j]).sum::<f64>())
+            .sum();
+        let want = 1.0 / (1e-13 + 1e-3);
+        assert!(
+            (along_n2 - want).abs() <= 1e-12 * want,
+            "{along_n2} vs {want}"
+        );
+        let along_n1: f64 = (0..d)
+            .map(|i| (0..d).map(|j| n1[i] * inv[i * d + j] * n1[j]).sum::<f64>())
+            .sum();
+        assert!(
+            (along_n1 - 1e-20).abs() <= 1e-3 * 1e-20 + 1e-16 * want,
+            "{along_n1}"
+        );
+    }
+}
+
+#[cfg(test)]
+mod route_tests {
+    use super::{Condensed, Face, PointSet};
+    use crate::fast::Condensation;
+    use crate::operator::Stencil;
+    use conic::{KktSystem, Weights};
+    use divdiff::{Knots, Topology};
+
+    /// The condensed elimination and the full-vertex one solve the same Newton system
+    /// (Q + D)Δy = r for polytopes with orthant NT weights of widely spread size.
+    #[test]
+    fn both_routes_solve_the_same_system() {
+        let (n, m, d) = (6usize, 3usize, 2usize);
+        let t: Vec<f64> = (0..=n * m)
+            .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
+            .collect();
+        let kn = Knots::new(Topology::Closed, t).unwrap();
+        let stencil = Stencil::new(&kn);
+        let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
+        let q: Vec<f64> = (0..n * d)
+            .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
+            .collect();
+        let face = |nx: f64, ny: f64, c: f64| {
+            let l = (nx * nx + ny * ny).sqrt();
+            Face {
+                normal: vec![nx / l, ny / l],
+                offset: c / l,
+                norm: l,
+            }
+        };
+        let sets: Vec<PointSet> = (0..n)
+            .map(|i| {
+                PointSet::Faces(vec![
+                    face(1.0, 0.0, 1.0 + i as f64),
+                    face(-1.0, 0.2, 1.0),
+                    face(0.3, -1.0, 2.0),
+                ])
+            })
+            .collect();
+        let mut be = Condensed::new(&cond, &kn, q, sets, d).unwrap();
+        let cones = be.cones().clone();
+        // NT weights with θ spread over 1e-8 … 1e8.
+        let mut w = Weights::zero(&cones);
+        for b in 0..cones.len() {
+            let v: Vec<f64> = (0..3)
+                .map(|k| 10f64.powf(((b * 3 + k) % 9) as f64 - 4.0))
+                .collect();
+            w.set_nt(b, conic::Kind::Nonnegative, &v);
+        }
+        let r: Vec<f64> = (0..n * d).map(|k| ((k * 5) % 11) as f64 - 5.0).collect();
+        be.factor(&w, 0.0).unwrap();
+        let mut a = r.clone();
+        be.solve(&mut a);
+        be.route = super::Route::Full;
+        be.factor_full(&w, 0.0).unwrap();
+        let mut b = r.clone();
+        be.solve(&mut b);
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-6 * scale, "{a:?}\n{b:?}");
+        }
+    }
+}

@@ -1,0 +1,849 @@
+//! The working set: the one method with the condensed backend, run on a growing set W of data
+//! constraints.
+//!
+//! At the optimum most data constraints are usually inactive (the bench's closed curves: 3.6 %
+//! of the balls at n = 10⁴, 0.9 % at n = 10⁵), and a constraint that is inactive at the
+//! optimum can be dropped without changing it. So the method runs on a working set W: the
+//! condensation is taken onto the data vertices of W only
+//! ([`Condensation::at_vertices_reusing`]; the other data vertices become free vertices of longer
+//! spans), and the optimum of the relaxed problem is accepted when its curve respects every
+//! constraint outside W with a margin ([`WorkingSetOptions::margin`], measured by each kind's
+//! [`PointSet::closeness`]) — then it is feasible for all constraints and optimal among a
+//! superset of curves, so optimal. Otherwise constraints join W and the round repeats: all the
+//! violated (and nearly violated, [`WorkingSetOptions::near`]) ones when they are few, else the
+//! local maxima of the closeness ([`WorkingSetOptions::window`]). W only grows, so this ends (at
+//! worst with every constraint, taken at once after [`WorkingSetOptions::max_rounds`], or from
+//! round [`WorkingSetOptions::dense_round`] when most constraints outside W are violated,
+//! [`WorkingSetOptions::dense`]); it starts from the interpolated points, the ends of an open
+//! curve and every [`WorkingSetOptions::start_step`]-th constraint (and, in Algorithm 4.1, the
+//! constraints active in the previous knot iteration). A round is judged as soon as its residual
+//! reaches [`WorkingSetOptions::round_tolerance`] (the method is stopped there and resumed from
+//! the same iterate if the round is accepted), and judged again at its end. Each round's
+//! condensation reuses the spans of the previous one that no new point splits. The multipliers
+//! of the constraints outside W are 0.
+
+use conic::{Start, Status};
+use divdiff::{Knots, Points};
+
+use super::condensed::{Condensed, PointSet};
+use crate::fast::Condensation;
+use crate::operator::Stencil;
+use crate::Error;
+
+/// Tuning of the working set, with documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkingSetOptions {
+    /// The working set runs with at least this many data points (fewer: one round on all;
+    /// default 64).
+    pub min_points: usize,
+    /// …and with at most this many vertices per span, k + 1 (more: the O(N) passes of each
+    /// round outweigh the interior-point work saved; default 32).
+    pub max_stride: usize,
+    /// W starts with about this many constraints (every n/this-th; default 4)…
+    pub start_points: usize,
+    /// …and at least every this-many-th (default 64).
+    pub start_step: usize,
+    /// A constraint outside W whose closeness is at least 1 − this counts as violated: the round
+    /// is not accepted (default 1e-9).
+    pub margin: f64,
+    /// Constraints outside W within this of their boundary are "near" and join with the
+    /// violated ones when those are few (default 0.02).
+    pub near: f64,
+    /// When the near constraints number at most 1/this of W, all of them join; otherwise only
+    /// the local maxima of the closeness within [`WorkingSetOptions::window`] points
+    /// (default 2).
+    pub add_all: usize,
+    /// After this many rounds W becomes every constraint (one more round ends the method;
+    /// default 16).
+    pub max_rounds: usize,
+    /// From round [`WorkingSetOptions::dense_round`] on, when more than this fraction of the
+    /// constraints outside W are (nearly) violated, the next round takes all: most are active and
+    /// the rounds would add them a few at a time. A start set holding more than this fraction
+    /// also means one round on all (default 0.5).
+    pub dense: f64,
+    /// The round from which [`WorkingSetOptions::dense`] applies (earlier rounds, from a small
+    /// start, leave most constraints violated whether or not most are active; default 4).
+    pub dense_round: usize,
+    /// Half-width, in data points, of the window of the local-maximum rule (default 16).
+    pub window: usize,
+    /// A round is judged when its residual first reaches this (default 1e-6): only an accepted
+    /// round goes on to the full tolerance.
+    pub round_tolerance: f64,
+}
+
+impl Default for WorkingSetOptions {
+    fn default() -> Self {
+        WorkingSetOptions {
+            min_points: 64,
+            max_stride: 32,
+            start_points: 4,
+            start_step: 64,
+            margin: 1e-9,
+            near: 0.02,
+            add_all: 2,
+            max_rounds: 16,
+            dense: 0.5,
+            dense_round: 4,
+            window: 16,
+            round_tolerance: 1e-6,
+        }
+    }
+}
+
+impl PointSet {
+    /// How close p is to leaving the set, relative to the set's size: 0 at its centre (the
+    /// data point, for a ball), 1 on its boundary, above 1 outside. A ball: |p − q|/ε; a
+    /// polytope: 1 + max_k (n̂_k·p − ĉ_k)/ℓ with ℓ the depth of q inside it (or `spacing`, the
+    /// local data spacing, when q is not inside); an interpolated point: 0.
+    pub(crate) fn closeness(&self, p: &[f64], q: &[f64], spacing: f64) -> f64 {
+        match self {
+            PointSet::Fixed => 0.0,
+            PointSet::Ball(r) => {
+                p.iter()
+                    .zip(q)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
+                    / r
+            }
+            PointSet::Faces(faces) => {
+                let depth = faces
+                    .iter()
+                    .map(|f| f.offset - dot(&f.normal, q))
+                    .fold(f64::INFINITY, f64::min);
+                let scale = if depth > 0.0 { depth } else { spacing };
+                let worst = faces
+                    .iter()
+                    .map(|f| dot(&f.normal, p) - f.offset)
+                    .fold(f64::NEG_INFINITY, f64::max);
+                1.0 + worst / scale.max(f64::MIN_POSITIVE)
+            }
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The result of the working-set method.
+pub(crate) struct WorkingSetSolution<C> {
+    /// The refined vertices.
+    pub points: Points,
+    /// Per data point, in the conventions of [`crate::Refinement::multipliers`].
+    pub multipliers: Vec<Vec<f64>>,
+    /// Interior-point iterations over all rounds.
+    pub iterations: usize,
+    /// The caller's certificate of the returned curve and multipliers.
+    pub certificate: C,
+}
+
+/// The caller's independent certificate of a curve and the multipliers of every data point:
+/// its relative KKT residual and whatever the caller keeps of it.
+pub(crate) type Certify<'c, C> = &'c mut dyn FnMut(&Points, &[Vec<f64>]) -> (f64, C);
+
+/// The round's judge: whether a curve respects every constraint outside W with the margin
+/// (filling in the near and violated ones).
+type Judge<'j> = &'j mut dyn FnMut(&Points, &mut Vec<(usize, f64)>) -> bool;
+
+/// Solves the data-vertex problem (each data point i in `sets[i]`, `None` for no constraint)
+/// at the data vertices 0, stride, 2·stride, … of `knots` by the working-set method. An
+/// accepted round whose curve `certify` puts above `target` is polished
+/// ([`conic::polish::polish_solution`]) and judged again; the better of the two is returned.
+///
+/// # Errors
+/// [`Error::Energy`] if a factorization fails; [`Error::NotConverged`] with the best certificate
+/// when the last round (all constraints) does not reach `conic.tolerance`'s neighbourhood
+/// (its certificate above 1e-6: the caller certifies anything better independently).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve<C>(
+    knots: &Knots,
+    stencil: &Stencil,
+    q: &Points,
+    sets: &[Option<PointSet>],
+    stride: usize,
+    conic: &conic::Options,
+    options: &WorkingSetOptions,
+    start: Option<&[bool]>,
+    certify: Certify<'_, C>,
+    target: f64,
+) -> Result<WorkingSetSolution<C>, Error> {
+    let n = q.len();
+    let constrained = sets.iter().filter(|s| s.is_some()).count();
+    let dense_start = start.is_some_and(|s| {
+        s.iter().filter(|&&a| a).count() as f64 > options.dense * constrained as f64
+    });
+    let step = if n < options.min_points || stride > options.max_stride || dense_start {
+        1
+    } else {
+        (n / options.start_points).clamp(1, options.start_step)
+    };
+    solve_from(
+        knots, stencil, q, sets, stride, conic, options, step, start, certify, target,
+    )
+}
+
+/// [`solve`] with W started from every `step`-th constraint (1: all, a single round) and the
+/// ones marked in `start`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve_from<C>(
+    knots: &Knots,
+    stencil: &Stencil,
+    q: &Points,
+    sets: &[Option<PointSet>],
+    stride: usize,
+    conic_opts: &conic::Options,
+    options: &WorkingSetOptions,
+    step: usize,
+    start: Option<&[bool]>,
+    certify: Certify<'_, C>,
+    target: f64,
+) -> Result<WorkingSetSolution<C>, Error> {
+    let n = q.len();
+    let d = q.dim();
+    let closed = knots.is_closed();
+    // The local data spacing (the closeness scale of a polytope its point is not inside).
+    let spacing: Vec<f64> = (0..n)
+        .map(|i| {
+            let j = if i + 1 < n {
+                i + 1
+            } else if closed {
+                0
+            } else {
+                i - 1
+            };
+            dot_dist(q.point(i), q.point(j))
+        })
+        .collect();
+    // The interpolated points and the ends of an open curve are always in W (the condensation
+    // needs the first data vertex, and the last of an open curve); of the others, every
+    // `step`-th to start with.
+    let mut work: Vec<bool> = (0..n)
+        .map(|i| {
+            matches!(sets[i], Some(PointSet::Fixed))
+                || i == 0
+                || (!closed && i + 1 == n)
+                || (sets[i].is_some()
+                    && (i % step == 0 || start.is_some_and(|s| s.get(i) == Some(&true))))
+        })
+        .collect();
+    // The condensation needs data rows (see `fixed::condensed_sets`): the first constrained
+    // interior points join until it has them.
+    let need = if closed { 2 } else { 3 };
+    for i in 1..n {
+        if work.iter().filter(|&&w| w).count() >= need {
+            break;
+        }
+        if sets[i].is_some() {
+            work[i] = true;
+        }
+    }
+    if work.iter().filter(|&&w| w).count() < need || sets[0].is_none() {
+        return Err(Error::Unsupported {
+            field: "constraint",
+            reason: "the condensed method needs the first data point (and the last of an open curve) constrained, and two (closed) or three (open) constraints in all",
+        });
+    }
+    let mut iterations = 0;
+    let mut near: Vec<(usize, f64)> = Vec::new();
+    let mut ratio = vec![0.0; n];
+    let mut prev: Option<Condensation> = None;
+    let mut rounds = 0;
+    loop {
+        let idx: Vec<usize> = (0..n).filter(|&i| work[i]).collect();
+        let everything = idx.iter().filter(|&&i| sets[i].is_some()).count()
+            == sets.iter().filter(|s| s.is_some()).count();
+        let vertices: Vec<usize> = idx.iter().map(|&i| i * stride).collect();
+        let cond = Condensation::at_vertices_reusing(knots, stencil, vertices, prev.take())?;
+        let mut qw = Vec::with_capacity(idx.len() * d);
+        for &i in &idx {
+            qw.extend_from_slice(q.point(i));
+        }
+        let wsets: Vec<PointSet> = idx
+            .iter()
+            .map(|&i| sets[i].clone().unwrap_or(PointSet::Fixed))
+            .collect();
+        // The judge: the curve respects every constraint outside W with the margin.
+        let mut judge = |p: &Points, near: &mut Vec<(usize, f64)>| {
+            near.clear();
+            for i in (0..n).filter(|&i| !work[i]) {
+                let Some(set) = &sets[i] else { continue };
+                let r = set.closeness(p.point(i * stride), q.point(i), spacing[i]);
+                if r >= 1.0 - options.near {
+                    near.push((i, r));
+                }
+            }
+            !near.iter().any(|v| v.1 >= 1.0 - options.margin)
+        };
+        let round = run_round(
+            &cond,
+            knots,
+            stencil,
+            qw,
+            wsets,
+            d,
+            conic_opts,
+            options,
+            &mut judge,
+            &mut near,
+            &mut |p: &Points, wmult: &[Vec<f64>]| {
+                // The multipliers of all data points for the caller's certificate.
+                let mut all = empty_multipliers(sets, d);
+                for (m, &i) in wmult.iter().zip(&idx) {
+                    all[i].clone_from(m);
+                }
+                let (k, c) = certify(p, &all);
+                (k, (c, all))
+            },
+            target,
+        );
+        prev = Some(cond);
+        let round = match round {
+            Ok(r) => r,
+            // A round that fails on a subset is repeated on every constraint.
+            Err(_) if !everything => {
+                for i in 0..n {
+                    work[i] = work[i] || sets[i].is_some();
+                }
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        iterations += round.iterations;
+        if let Some((points, (certificate, multipliers))) = round.accepted {
+            return Ok(WorkingSetSolution {
+                points,
+                multipliers,
+                iterations,
+                certificate,
+            });
+        }
+        rounds += 1;
+        let outside = (0..n).filter(|&i| !work[i] && sets[i].is_some()).count();
+        if rounds >= options.max_rounds
+            || (rounds >= options.dense_round && near.len() as f64 > options.dense * outside as f64)
+        {
+            // (A bound on the work: the next round takes every constraint. So does a later
+            // round that still leaves most constraints outside W violated: most are active.)
+            for i in 0..n {
+                work[i] = work[i] || sets[i].is_some();
+            }
+        } else if near.len() * options.add_all <= idx.len() {
+            // Few left: all of them (and the near ones) join.
+            for &(i, _) in &near {
+                work[i] = true;
+            }
+        } else {
+            // Many: only those leaving their sets farthest within the window on either side (the
+            // curve moves near them, which settles most of the others).
+            for &(i, r) in &near {
+                ratio[i] = r;
+            }
+            for &(i, r) in &near {
+                let top = r >= 1.0 - options.margin
+                    && (1..=options.window.min(n / 2)).all(|o| {
+                        let right = (closed || i + o < n).then(|| (i + o) % n);
+                        let left = (closed || i >= o).then(|| (i + n - o) % n);
+                        [right, left]
+                            .into_iter()
+                            .flatten()
+                            .all(|j| match ratio[j].total_cmp(&r) {
+                                std::cmp::Ordering::Less => true,
+                                std::cmp::Ordering::Equal => j > i,
+                                std::cmp::Ordering::Greater => false,
+                            })
+                    });
+                if top {
+                    work[i] = true;
+                }
+            }
+            for &(i, _) in &near {
+                ratio[i] = 0.0;
+            }
+        }
+    }
+}
+
+/// Zero multipliers of every data point, in the shapes of [`crate::Refinement::multipliers`].
+fn empty_multipliers(sets: &[Option<PointSet>], d: usize) -> Vec<Vec<f64>> {
+    sets.iter()
+        .map(|s| match s {
+            Some(PointSet::Faces(f)) => vec![0.0; f.len()],
+            Some(PointSet::Fixed) => vec![0.0; d],
+            None => Vec::new(),
+            Some(PointSet::Ball(_)) => vec![0.0],
+        })
+        .collect()
+}
+
+fn dot_dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// One round's outcome: the curve and its certificate if the judge accepted it.
+struct Round<C> {
+    accepted: Option<(Points, C)>,
+    iterations: usize,
+}
+
+/// One round: the method on W, judged at the round tolerance and at the end, and polished when
+/// the caller's certificate asks for it.
+#[allow(clippy::too_many_arguments)]
+fn run_round<C>(
+    cond: &Condensation,
+    knots: &Knots,
+    stencil: &Stencil,
+    qw: Vec<f64>,
+    wsets: Vec<PointSet>,
+    d: usize,
+    conic_opts: &conic::Options,
+    options: &WorkingSetOptions,
+    judge: Judge<'_>,
+    near: &mut Vec<(usize, f64)>,
+    certify: Certify<'_, C>,
+    target: f64,
+) -> Result<Round<C>, Error> {
+    let mut be = Condensed::new(cond, knots, qw, wsets.clone(), d)?;
+    let mut start = be.ball_start();
+    let mut iterations = 0;
+    // The polish runs on demand below, not inside the method: the condensed iterations are
+    // cheap, the polish's systems are O(N).
+    let ipm_opts = conic::Options {
+        polish: None,
+        ..conic_opts.clone()
+    };
+    // Stop once at the round tolerance to judge.
+    let mut judged = false;
+    let sol = loop {
+        let tol = options.round_tolerance;
+        let mut monitor = |it: &conic::Iterate<'_>| judged || it.residuals.total > tol;
+        let sol = conic::solve_with(&mut be, &ipm_opts, start.take(), &mut monitor)?;
+        iterations += sol.iterations;
+        if sol.status != Status::Stopped {
+            break sol;
+        }
+        judged = true;
+        let (points, _) = be.curve(&sol.x, stencil)?;
+        if !judge(&points, near) {
+            return Ok(Round {
+                accepted: None,
+                iterations,
+            });
+        }
+        start = Some(Start {
+            x: sol.x,
+            sz: Some((sol.s, sol.z)),
+        });
+    };
+    // (NaN is not converged either.)
+    if sol.residuals.total.is_nan() || sol.residuals.total > 1e-6 {
+        return Err(Error::NotConverged {
+            solver: "condensed interior-point method",
+            iterations,
+            residual: sol.residuals.total,
+        });
+    }
+    let (points, g) = be.curve(&sol.x, stencil)?;
+    if !judge(&points, near) {
+        return Ok(Round {
+            accepted: None,
+            iterations,
+        });
+    }
+    let mult = multipliers(&be, &wsets, &sol.z, &g, d);
+    let (k, cert) = certify(&points, &mult);
+    if k <= target || conic_opts.polish.is_none() {
+        return Ok(Round {
+            accepted: Some((points, cert)),
+            iterations,
+        });
+    }
+    // Polish; the polished curve is judged again (it moves a little) and kept if better.
+    if let Some(p) = conic::polish::polish_solution(&mut be, &sol, conic_opts) {
+        let (pp, pg) = be.curve(&p.x, stencil)?;
+        if !judge(&pp, near) {
+            return Ok(Round {
+                accepted: None,
+                iterations,
+            });
+        }
+        let pm = multipliers(&be, &wsets, &p.z, &pg, d);
+        let (kp, pcert) = certify(&pp, &pm);
+        if kp < k {
+            return Ok(Round {
+                accepted: Some((pp, pcert)),
+                iterations,
+            });
+        }
+    }
+    Ok(Round {
+        accepted: Some((points, cert)),
+        iterations,
+    })
+}
+
+/// Multipliers of W's points: balls w = z₀/ε (Kersey (3.5)); faces w_k = z_k/|n_k| ((3.8) for
+/// the original normals); interpolated points the reaction −(Hp)_v = −(Qy)_j (`g`).
+fn multipliers(
+    be: &Condensed<'_>,
+    wsets: &[PointSet],
+    z: &[f64],
+    g: &[f64],
+    d: usize,
+) -> Vec<Vec<f64>> {
+    let mut var = 0;
+    let mut mult = Vec::with_capacity(wsets.len());
+    for (j, set) in wsets.iter().enumerate() {
+        match set {
+            PointSet::Fixed => mult.push(g[j * d..(j + 1) * d].iter().map(|v| -v).collect()),
+            PointSet::Ball(r) => {
+                let rows = be.rows(var);
+                mult.push(vec![z[rows.start] / r]);
+                var += 1;
+            }
+            PointSet::Faces(faces) => {
+                let rows = be.rows(var);
+                mult.push(
+                    faces
+                        .iter()
+                        .zip(&z[rows])
+                        .map(|(f, z)| z / f.norm)
+                        .collect(),
+                );
+                var += 1;
+            }
+        }
+    }
+    mult
+}
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+mod tests {
+    use divdiff::{Knots, Points, Topology};
+    use proptest::prelude::*;
+
+    use super::super::condensed::{Face, PointSet};
+    use super::{solve_from, WorkingSetOptions};
+    use crate::certify::{certify, Certificate};
+    use crate::conic_problem::{ConicProblem, ConvexSet};
+    use crate::fast::{interpolate, Condensation};
+    use crate::operator::Stencil;
+    use crate::{Constraint, HalfSpace};
+
+    /// The exact acceptance level of the refinement (the independent certificate).
+    const EXACT: f64 = 1e-9;
+    /// Energies below this times the interpolation energy count as E* = 0.
+    const ZERO_ENERGY_RTOL: f64 = 1e-12;
+
+    /// Knots with spacings `h` (closed: one span per vertex; open: one fewer).
+    fn knots(h: &[f64], topo: Topology) -> Knots {
+        let mut t = vec![0.0];
+        for x in h {
+            t.push(t.last().unwrap() + x);
+        }
+        Knots::new(topo, t).unwrap()
+    }
+
+    /// (knots, n, stride, data, dimension) with n data points, k free vertices per span.
+    fn case() -> impl Strategy<Value = (Knots, usize, usize, Vec<f64>, usize)> {
+        (3usize..9, 1usize..5, 1usize..4, any::<bool>()).prop_flat_map(|(n, k, d, closed)| {
+            let m = k + 1;
+            let topo = if closed {
+                Topology::Closed
+            } else {
+                Topology::Open
+            };
+            let spans = if closed { m * n } else { m * (n - 1) };
+            (
+                proptest::collection::vec(0.2f64..2.0, spans),
+                proptest::collection::vec(-1.0f64..1.0, n * d),
+            )
+                .prop_map(move |(h, y)| (knots(&h, topo), n, m, y, d))
+        })
+    }
+
+    /// The working-set method on `sets` (W started from every `step`-th point), certified
+    /// independently.
+    fn run(
+        kn: &Knots,
+        q: &Points,
+        sets: &[Option<PointSet>],
+        constraint: &Constraint,
+        m: usize,
+        step: usize,
+        start: Option<&[bool]>,
+    ) -> (Points, Certificate) {
+        let stencil = Stencil::new(kn);
+        let dv: Vec<usize> = (0..q.len()).map(|i| i * m).collect();
+        let kinds = [constraint.kind()];
+        let mut judge = |p: &Points, mult: &[Vec<f64>]| {
+            let (c, _) = certify(
+                kn,
+                p,
+                q,
+                &dv,
+                &kinds,
+                Some(mult.to_vec()),
+                &[],
+                divdiff::DerivativeRule::Bessel,
+                1e-7,
+            );
+            (c.kkt_residual, c)
+        };
+        let sol = solve_from(
+            kn,
+            &stencil,
+            q,
+            sets,
+            m,
+            &conic::Options::default(),
+            &WorkingSetOptions::default(),
+            step,
+            start,
+            &mut judge,
+            EXACT,
+        )
+        .unwrap();
+        (sol.points, sol.certificate)
+    }
+
+    fn ball_sets(radii: &[f64]) -> Vec<Option<PointSet>> {
+        radii
+            .iter()
+            .map(|&r| {
+                Some(if r == 0.0 {
+                    PointSet::Fixed
+                } else {
+                    PointSet::Ball(r)
+                })
+            })
+            .collect()
+    }
+
+    /// The full-vertex optimum of the same problem (the reference backend).
+    fn full_vertex(kn: &Knots, q: &Points, m: usize, set: impl Fn(usize) -> ConvexSet) -> f64 {
+        let mut cp = ConicProblem::new(kn, q.dim()).unwrap();
+        for i in 0..q.len() {
+            cp.add_constraint(&[(i * m, 1.0)], set(i)).unwrap();
+        }
+        cp.solve(&crate::ConicOptions::default()).unwrap().energy
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// E(y) = ½ (Ky)ᵀ T⁻¹ (Ky) is the energy (2.1) of the reconstructed curve (computed
+        /// by `energy::energy`), that curve is stationary at its free vertices, and Kᵀs is
+        /// its gradient (Hp) at the data vertices.
+        #[test]
+        fn condensed_energy_is_the_minimal_energy((kn, n, m, y, d) in case()) {
+            let stencil = Stencil::new(&kn);
+            let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
+            let q = Points::new(d, y.clone()).unwrap();
+            let mut be = super::super::condensed::Condensed::new(
+                &cond, &kn, y.clone(), vec![PointSet::Ball(1.0); n], d,
+            ).unwrap();
+            let mut g = vec![0.0; n * d];
+            use conic::KktSystem;
+            let e = be.gradient(&y, &mut g);
+            let (p, _) = be.curve(&y, &stencil).unwrap();
+            let e_full = energy::energy(&kn, &p).unwrap();
+            prop_assert!((e - e_full).abs() <= 1e-11 * e_full.max(1.0), "{e} vs {e_full}");
+            let (hp, _) = stencil.apply_h(&p);
+            let scale = hp.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+            for v in 0..p.len() {
+                for c in 0..d {
+                    let want = if v % m == 0 { g[(v / m) * d + c] } else { 0.0 };
+                    prop_assert!((hp[v * d + c] - want).abs() <= 1e-10 * scale,
+                        "vertex {v}: Hp {} vs {want}", hp[v * d + c]);
+                }
+            }
+            let _ = q;
+        }
+
+        /// The condensed optimum of balls (radius-0 points mixed in) is certified at the exact
+        /// level and agrees with the full-vertex backend's optimum (energies to 1e-8 relative).
+        #[test]
+        fn condensed_balls_match_the_full_vertex_backend(
+            (kn, n, m, y, d) in case(),
+            r in proptest::collection::vec(0.0f64..0.6, 9),
+            fixed in proptest::collection::vec(any::<bool>(), 9),
+        ) {
+            let q = Points::new(d, y).unwrap();
+            let radii: Vec<f64> = (0..n).map(|i| if fixed[i] { 0.0 } else { r[i] + 0.01 }).collect();
+            prop_assume!(radii.iter().any(|&e| e > 0.0));
+            // Valid problems have distinct consecutive data points (Problem::validate).
+            prop_assume!((0..n - 1).all(|i| super::dot_dist(q.point(i), q.point(i + 1)) > 0.05));
+            let c = Constraint::Balls(radii.clone());
+            let (p, cert) = run(&kn, &q, &ball_sets(&radii), &c, m, 1, None);
+            let stencil = Stencil::new(&kn);
+            let e_interp = energy::energy(&kn, &interpolate(&kn, &stencil, &q, m).unwrap()).unwrap();
+            let e_full = full_vertex(&kn, &q, m, |i| ConvexSet::Ball { center: q.point(i).to_vec(), radius: radii[i] });
+            let e = energy::energy(&kn, &p).unwrap();
+            if e_full <= ZERO_ENERGY_RTOL * e_interp {
+                // E* = 0 (data within reach of a straight open curve): both at rounding level.
+                prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp, "condensed {e} vs full {e_full} (E* = 0)");
+            } else {
+                prop_assert!(cert.kkt_residual <= EXACT, "kkt {:e}", cert.kkt_residual);
+                prop_assert!((e - e_full).abs() <= 1e-8 * e_full, "condensed {e} vs full {e_full}");
+            }
+        }
+
+        /// Half-space sets (boxes with an oblique cut, some points without a set) condensed onto
+        /// the data vertices agree with the full-vertex backend (energies to 1e-8) and certify.
+        #[test]
+        fn condensed_half_spaces_match_the_full_vertex_backend(
+            (kn, n, m, y, d) in case(),
+            w in proptest::collection::vec(0.02f64..0.4, 9),
+            cut in proptest::collection::vec(-1.0f64..1.0, 9),
+            empty in proptest::collection::vec(0.0f64..1.0, 9),
+        ) {
+            let q = Points::new(d, y).unwrap();
+            prop_assume!((0..n - 1).all(|i| super::dot_dist(q.point(i), q.point(i + 1)) > 0.05));
+            // A box of half-width w_i about q_i, shifted by a fraction of w along an oblique
+            // normal (so q_i need not be inside), and no set at a few interior points.
+            let closed = kn.is_closed();
+            let sets: Vec<Vec<HalfSpace>> = (0..n).map(|i| {
+                let interior = i > 0 && (closed || i + 1 < n);
+                if interior && empty[i] < 0.2 {
+                    return Vec::new();
+                }
+                let qi = q.point(i);
+                let mut hs = Vec::new();
+                for c in 0..d {
+                    let mut e = vec![0.0; d];
+                    e[c] = 1.0;
+                    hs.push(HalfSpace { normal: e.clone(), offset: qi[c] + w[i] });
+                    e[c] = -2.0;
+                    hs.push(HalfSpace { normal: e, offset: -2.0 * (qi[c] - w[i]) });
+                }
+                let nrm: Vec<f64> = (0..d).map(|c| if c == 0 { 1.0 } else { cut[i] }).collect();
+                let off = nrm.iter().zip(qi).map(|(a, b)| a * b).sum::<f64>() + 0.5 * cut[i] * w[i];
+                hs.push(HalfSpace { normal: nrm, offset: off });
+                hs
+            }).collect();
+            let psets: Vec<Option<PointSet>> = sets.iter().map(|s| (!s.is_empty()).then(|| {
+                PointSet::Faces(s.iter().map(|h| {
+                    let norm = h.normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+                    Face { normal: h.normal.iter().map(|x| x / norm).collect(), offset: h.offset / norm, norm }
+                }).collect())
+            })).collect();
+            // (The condensed method needs enough constrained points: `fixed::condensed_sets`.)
+            prop_assume!(psets.iter().filter(|s| s.is_some()).count() >= if closed { 2 } else { 3 });
+            let c = Constraint::HalfSpaces(sets.clone());
+            let (p, cert) = run(&kn, &q, &psets, &c, m, 1, None);
+            let mut cp = ConicProblem::new(&kn, d).unwrap();
+            for (i, s) in sets.iter().enumerate() {
+                if !s.is_empty() {
+                    cp.add_constraint(&[(i * m, 1.0)], ConvexSet::HalfSpaces(
+                        s.iter().map(|h| (h.normal.clone(), h.offset)).collect())).unwrap();
+                }
+            }
+            let Ok(full) = cp.solve(&crate::ConicOptions::default()) else {
+                // The reference could not certify this instance: nothing to compare with.
+                return Ok(());
+            };
+            let e = energy::energy(&kn, &p).unwrap();
+            let e_interp = energy::energy(&kn, &interpolate(&kn, &Stencil::new(&kn), &q, m).unwrap()).unwrap();
+            if full.energy <= ZERO_ENERGY_RTOL * e_interp {
+                prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp, "condensed {e} vs full {} (E* = 0)", full.energy);
+            } else {
+                prop_assert!(cert.kkt_residual <= EXACT, "kkt {:e}", cert.kkt_residual);
+                prop_assert!((e - full.energy).abs() <= 1e-8 * full.energy, "condensed {e} vs full {}", full.energy);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// The working set (started from every 2nd…9th ball, and also with a random start set)
+        /// reaches the optimum of the single round on all balls: energies to 1e-9 relative, all
+        /// certified at the exact level, every ball respected.
+        #[test]
+        fn the_working_set_reaches_the_optimum_of_all_balls(
+            n in 8usize..40,
+            k in 1usize..4,
+            d in 1usize..4,
+            closed in any::<bool>(),
+            step in 2usize..10,
+            seed in any::<u64>(),
+        ) {
+            let m = k + 1;
+            let spans = if closed { m * n } else { m * (n - 1) };
+            let mut state = seed | 1;
+            let mut uniform = move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            };
+            let h: Vec<f64> = (0..spans).map(|_| 0.2 + 1.8 * uniform()).collect();
+            let topo = if closed { Topology::Closed } else { Topology::Open };
+            let kn = knots(&h, topo);
+            // A wiggly curve with noise, so some balls are active and most are not.
+            let mut y = Vec::with_capacity(n * d);
+            for i in 0..n {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                for c in 0..d {
+                    let v = if c % 2 == 0 { a.cos() } else { a.sin() };
+                    y.push(v * (1.0 + 0.2 * (3.0 * a).sin()) + 0.1 * (uniform() - 0.5));
+                }
+            }
+            let q = Points::new(d, y).unwrap();
+            prop_assume!((0..n - 1).all(|i| super::dot_dist(q.point(i), q.point(i + 1)) > 1e-3));
+            let radii: Vec<f64> = (0..n)
+                .map(|i| if i % 11 == 5 { 0.0 } else { (0.02 + 0.3 * uniform()) * std::f64::consts::TAU / n as f64 })
+                .collect();
+            let c = Constraint::Balls(radii.clone());
+            let sets = ball_sets(&radii);
+            let (_, ca) = run(&kn, &q, &sets, &c, m, 1, None);
+            let (pw, cw) = run(&kn, &q, &sets, &c, m, step, None);
+            prop_assert!(ca.kkt_residual <= EXACT, "all: kkt {:e}", ca.kkt_residual);
+            prop_assert!(cw.kkt_residual <= EXACT, "working set: kkt {:e}", cw.kkt_residual);
+            prop_assert!((ca.energy - cw.energy).abs() <= 1e-9 * ca.energy,
+                "all {} vs working set {}", ca.energy, cw.energy);
+            // A start set (as the previous knot iteration's active balls give it): any set works.
+            let start: Vec<bool> = (0..n).map(|_| uniform() < 0.2).collect();
+            let (_, ch) = run(&kn, &q, &sets, &c, m, step, Some(&start));
+            prop_assert!(ch.kkt_residual <= EXACT, "started: kkt {:e}", ch.kkt_residual);
+            prop_assert!((ca.energy - ch.energy).abs() <= 1e-9 * ca.energy,
+                "all {} vs started working set {}", ca.energy, ch.energy);
+            // Every ball respected to the certificate's primal level: 1e-9 of the data's extent
+            // L (the certificate's length scale; here L ≤ 1.2).
+            let l = (0..n).flat_map(|i| q.point(i).iter().map(|v| v.abs())).fold(0.0f64, f64::max);
+            for i in 0..n {
+                let g = super::dot_dist(pw.point(i * m), q.point(i));
+                prop_assert!(g <= radii[i] + 1e-9 * l, "ball {i}: {g} > {}", radii[i]);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// All radii 0: no cone, and the interpolating curve of `fast::interpolate`; radii far
+        /// larger than the data: a constant curve is feasible, so E* = 0 and the optimum found has
+        /// E at the rounding level of the interpolation energy.
+        #[test]
+        fn zero_radii_interpolate_and_huge_radii_give_zero_energy((kn, n, m, y, d) in case()) {
+            let q = Points::new(d, y).unwrap();
+            let stencil = Stencil::new(&kn);
+            let (fixed, _) = run(&kn, &q, &ball_sets(&vec![0.0; n]), &Constraint::Balls(vec![0.0; n]), m, 1, None);
+            let interp = interpolate(&kn, &stencil, &q, m).unwrap();
+            let scale = interp.coords().iter().fold(1.0f64, |a, v| a.max(v.abs()));
+            for (a, b) in fixed.coords().iter().zip(interp.coords()) {
+                prop_assert!((a - b).abs() <= 1e-13 * scale, "{a} vs {b}");
+            }
+            let e_interp = energy::energy(&kn, &interp).unwrap();
+            let (p, _) = run(&kn, &q, &ball_sets(&vec![10.0; n]), &Constraint::Balls(vec![10.0; n]), m, 1, None);
+            let e = energy::energy(&kn, &p).unwrap();
+            prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp.max(f64::MIN_POSITIVE), "E = {e} (interpolation {e_interp})");
+        }
+    }
+}

@@ -1,0 +1,680 @@
+//! The fixed-knot convex refinement problem as a conic program on banded stencils, solved by
+//! the full-vertex backend of [`conic`].
+//!
+//! # Problem
+//!
+//! For a curve p_0..p_{N−1} in R^d on knots t with the energy Hessian H = AᵀA
+//! ([`energy::Hessian`]):
+//!
+//! minimize ½ pᵀ(H ⊗ I_d)p + ½ Σ_s w_s |p_{v_s} − t_s|²  (smoothing terms, Kersey (3.6))
+//!
+//! subject to fixed vertices p_v = a_v (interpolation, (3.2)) and constraints
+//! L_c p := Σ_k c_k p_{v_k} ∈ K_c, where the stencil L_c spans at most three cyclically
+//! consecutive vertices (the vertex itself, or a derivative rule Df) and K_c is a
+//! [`ConvexSet`]: a ball (3.4), a polytope (3.7), a direction wedge (Fig. 3.5b) or a point.
+//!
+//! The constraint kinds of a [`crate::Problem`] add their rows here
+//! ([`crate::constraint`]), and both backends read them: the full-vertex backend
+//! (`backend::full`, every vertex a variable) and the condensed one (`backend::condensed`, only
+//! data vertices, when every constraint acts on a data vertex alone).
+//!
+//! # Certificate
+//!
+//! The solution reports the relative KKT residual of [`conic::Residuals`] for the returned
+//! point and forces: stationarity over the force scale, primal infeasibility over the length
+//! scale, the dual-cone violation, and the duality gap relative to the objective.
+
+// Per-vertex kernels index several small arrays by the same row/column.
+#![allow(clippy::needless_range_loop)]
+
+use conic::{Cone, Residuals, Start};
+use divdiff::{Knots, Points, Topology};
+use energy::{Hessian, System};
+
+use crate::backend::full::{merge_stencil, set_scale, FullVertex};
+use crate::operator::Stencil;
+use crate::Error;
+
+/// A convex set in R^d that L_c p must lie in.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ConvexSet {
+    /// The closed ball |x − center| ≤ radius (radius ≥ 0; radius 0 is an equality).
+    Ball {
+        /// The center.
+        center: Vec<f64>,
+        /// The radius, ≥ 0.
+        radius: f64,
+    },
+    /// The polytope ∩_i {x : normal_i · x ≤ offset_i} (normals nonzero).
+    HalfSpaces(Vec<(Vec<f64>, f64)>),
+    /// The direction wedge {v : v · axis ≥ |v| cos(half_angle)} (axis a unit vector,
+    /// half_angle ∈ [0, π/2)); only the direction of v is constrained.
+    Cone {
+        /// The axis (unit vector).
+        axis: Vec<f64>,
+        /// The half opening angle in radians, in [0, π/2).
+        half_angle: f64,
+    },
+    /// The single point x = value (an equality, e.g. a clamped end derivative).
+    Point(Vec<f64>),
+}
+
+/// A constraint L p ∈ K on a stencil L = Σ_k c_k e_{v_k}ᵀ.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConicConstraint {
+    /// The stencil [(v_k, c_k)]: at most three vertices within two steps of each other
+    /// (cyclically for closed curves).
+    pub stencil: Vec<(usize, f64)>,
+    /// The set.
+    pub set: ConvexSet,
+}
+
+/// Options of [`ConicProblem::solve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConicOptions {
+    /// The method's options (tolerance, iteration limit, polish; [`conic::Options`]).
+    pub conic: conic::Options,
+    /// A result whose certificate is at most this is returned even when the method stopped
+    /// short of its tolerance (default 1e-9); above it the solve fails (diagnosed as
+    /// [`Error::Infeasible`] or [`Error::NotConverged`]).
+    pub accept: f64,
+    /// Optional starting curve (e.g. the previous solution in Algorithm 4.1's alternation).
+    pub warm_start: Option<Points>,
+    /// A constraint is reported active ([`ConicSolution::active`]) when its slack (distance of
+    /// L_c p to the boundary of K_c, inside) is at most this times the constraint's scale
+    /// (radius, |L_c p|, offsets) (default 1e-7).
+    pub active_rtol: f64,
+}
+
+impl Default for ConicOptions {
+    fn default() -> Self {
+        ConicOptions {
+            conic: conic::Options::default(),
+            accept: 1e-9,
+            warm_start: None,
+            active_rtol: 1e-7,
+        }
+    }
+}
+
+impl ConicOptions {
+    /// Sets the iteration limit of the interior-point method.
+    pub fn with_max_iterations(mut self, n: usize) -> Self {
+        self.conic.max_iterations = n;
+        self
+    }
+    /// Sets the method's tolerance.
+    pub fn with_tolerance(mut self, tol: f64) -> Self {
+        self.conic.tolerance = tol;
+        self
+    }
+    /// Sets the warm start.
+    pub fn with_warm_start(mut self, p: Points) -> Self {
+        self.warm_start = Some(p);
+        self
+    }
+}
+
+/// The optimum of a [`ConicProblem`] with its certificate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConicSolution {
+    /// The optimal curve.
+    pub points: Points,
+    /// Per constraint: the force z_c ∈ R^d with (H⊗I)p + W(p − t) + Σ_c L_cᵀ z_c = 0 at the free
+    /// vertices (for constraints that fix a vertex: the reaction force there).
+    pub forces: Vec<Vec<f64>>,
+    /// Per constraint: for a ball of positive radius the scalar w_c ≥ 0 with
+    /// z_c = w_c (L_c p − center) (Kersey (3.5)); `None` otherwise.
+    pub ball_weights: Vec<Option<f64>>,
+    /// Per constraint: the dual of its cone blocks (ball / wedge: the second-order-cone dual;
+    /// half-spaces: one multiplier ≥ 0 per half-space, for the unit normal).
+    pub cone_duals: Vec<Vec<f64>>,
+    /// Per constraint: whether it is active (slack ≤ [`ConicOptions::active_rtol`] × scale;
+    /// points always).
+    pub active: Vec<bool>,
+    /// E = ½ pᵀ(H⊗I)p.
+    pub energy: f64,
+    /// E plus the smoothing terms.
+    pub objective: f64,
+    /// The relative KKT residual ([`conic::Residuals`]).
+    pub kkt: Residuals,
+    /// Interior-point iterations.
+    pub iterations: usize,
+    /// Whether the active-set polish produced this result. Then z_c = w_c (L_c p − center)
+    /// holds exactly for balls; otherwise the forces are the interior-point duals, which satisfy
+    /// it only up to O(√gap).
+    pub polished: bool,
+}
+
+/// A fixed-knot convex refinement problem (see the module docs).
+#[derive(Clone, Debug)]
+pub struct ConicProblem {
+    knots: Knots,
+    hessian: Hessian,
+    dim: usize,
+    pub(crate) fixed: Vec<Option<Vec<f64>>>,
+    pub(crate) smoothing: Vec<(usize, f64, Vec<f64>)>,
+    pub(crate) constraints: Vec<ConicConstraint>,
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn inf_norm(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+impl ConicProblem {
+    /// A problem on `knots` in R^dim, with no constraints yet.
+    ///
+    /// # Errors
+    /// [`Error::Energy`] for `dim` = 0 or a closed curve with fewer than 3 vertices.
+    pub fn new(knots: &Knots, dim: usize) -> Result<Self, Error> {
+        let hessian = Hessian::new(knots);
+        // Validate through System (same conventions).
+        let s = System::new(&hessian, dim)?;
+        let n = s.len();
+        Ok(ConicProblem {
+            knots: knots.clone(),
+            hessian,
+            dim,
+            fixed: vec![None; n],
+            smoothing: Vec::new(),
+            constraints: Vec::new(),
+        })
+    }
+
+    /// Number of vertices N.
+    pub fn len(&self) -> usize {
+        self.fixed.len()
+    }
+
+    /// Whether there are no vertices (never for a constructed problem).
+    pub fn is_empty(&self) -> bool {
+        self.fixed.is_empty()
+    }
+
+    /// The dimension d.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// The knots.
+    pub fn knots(&self) -> &Knots {
+        &self.knots
+    }
+
+    /// The constraints added so far, in index order.
+    pub fn constraints(&self) -> &[ConicConstraint] {
+        &self.constraints
+    }
+
+    /// H ⊗ I_d as a system.
+    pub(crate) fn system(&self) -> Result<System, Error> {
+        Ok(System::new(&self.hessian, self.dim)?)
+    }
+
+    /// The three bands of H.
+    pub(crate) fn hessian_bands(&self) -> (&[f64], &[f64], &[f64]) {
+        self.hessian.bands()
+    }
+
+    /// The α-rows of the knots.
+    pub(crate) fn stencil(&self) -> Stencil {
+        Stencil::new(&self.knots)
+    }
+
+    fn check_vertex(&self, field: &'static str, v: usize) -> Result<(), Error> {
+        if v >= self.len() {
+            return Err(Error::VertexOutOfRange {
+                field,
+                index: v,
+                len: self.len(),
+            });
+        }
+        Ok(())
+    }
+
+    fn check_vec(&self, field: &'static str, index: usize, v: &[f64]) -> Result<(), Error> {
+        if v.len() != self.dim {
+            return Err(Error::WrongDimension {
+                field,
+                index,
+                expected: self.dim,
+                got: v.len(),
+            });
+        }
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(Error::NonFiniteInput { field, index });
+        }
+        Ok(())
+    }
+
+    /// Prescribes p_vertex = value (interpolation).
+    ///
+    /// # Errors
+    /// [`Error::VertexOutOfRange`], [`Error::WrongDimension`], [`Error::NonFiniteInput`].
+    pub fn fix(&mut self, vertex: usize, value: &[f64]) -> Result<(), Error> {
+        self.check_vertex("fixed", vertex)?;
+        self.check_vec("fixed", vertex, value)?;
+        self.fixed[vertex] = Some(value.to_vec());
+        Ok(())
+    }
+
+    /// Adds the smoothing term ½ weight |p_vertex − target|² (weight ≥ 0).
+    ///
+    /// # Errors
+    /// [`Error::VertexOutOfRange`], [`Error::WrongDimension`], [`Error::NonFiniteInput`], and
+    /// [`Error::InvalidConstraint`] for a negative or non-finite weight.
+    pub fn add_smoothing(
+        &mut self,
+        vertex: usize,
+        weight: f64,
+        target: &[f64],
+    ) -> Result<(), Error> {
+        self.check_vertex("smoothing", vertex)?;
+        self.check_vec("smoothing", vertex, target)?;
+        if !(weight.is_finite() && weight >= 0.0) {
+            return Err(Error::InvalidConstraint {
+                constraint: vertex,
+                reason: "smoothing weight must be finite and ≥ 0",
+            });
+        }
+        self.smoothing.push((vertex, weight, target.to_vec()));
+        Ok(())
+    }
+
+    /// Adds the constraint L p ∈ `set` on `stencil` and returns its index.
+    ///
+    /// # Errors
+    /// [`Error::VertexOutOfRange`] for a stencil vertex ≥ N, [`Error::InvalidConstraint`] (naming the
+    /// index the constraint would get) for an empty or too wide stencil, a negative radius, a
+    /// zero normal, a non-unit axis or an angle outside [0, π/2), [`Error::WrongDimension`] /
+    /// [`Error::NonFiniteInput`] for vectors of the wrong size or non-finite entries.
+    pub fn add_constraint(
+        &mut self,
+        stencil: &[(usize, f64)],
+        set: ConvexSet,
+    ) -> Result<usize, Error> {
+        let index = self.constraints.len();
+        let invalid = |reason| Error::InvalidConstraint {
+            constraint: index,
+            reason,
+        };
+        if stencil.is_empty() || stencil.len() > 3 {
+            return Err(invalid("a stencil has 1 to 3 vertices"));
+        }
+        let n = self.len();
+        for &(v, c) in stencil {
+            self.check_vertex("stencil", v)?;
+            if !c.is_finite() {
+                return Err(Error::NonFiniteInput {
+                    field: "stencil",
+                    index,
+                });
+            }
+        }
+        for &(a, _) in stencil {
+            for &(b, _) in stencil {
+                let gap = a.abs_diff(b);
+                let gap = if self.knots.topology() == Topology::Closed {
+                    gap.min(n - gap)
+                } else {
+                    gap
+                };
+                if gap > 2 {
+                    return Err(invalid("stencil vertices must lie within two steps"));
+                }
+            }
+        }
+        if merge_stencil(stencil).is_empty() {
+            return Err(invalid("stencil coefficients are all zero"));
+        }
+        match &set {
+            ConvexSet::Ball { center, radius } => {
+                self.check_vec("center", index, center)?;
+                if !(radius.is_finite() && *radius >= 0.0) {
+                    return Err(invalid("radius must be finite and ≥ 0"));
+                }
+            }
+            ConvexSet::HalfSpaces(hs) => {
+                if hs.is_empty() {
+                    return Err(invalid("no half-spaces"));
+                }
+                for (nrm, off) in hs {
+                    self.check_vec("normal", index, nrm)?;
+                    if !off.is_finite() {
+                        return Err(Error::NonFiniteInput {
+                            field: "offset",
+                            index,
+                        });
+                    }
+                    if norm(nrm) == 0.0 {
+                        return Err(invalid("zero normal"));
+                    }
+                }
+            }
+            ConvexSet::Cone { axis, half_angle } => {
+                self.check_vec("axis", index, axis)?;
+                if (norm(axis) - 1.0).abs() > 1e-9 {
+                    return Err(invalid("axis must be a unit vector"));
+                }
+                if !(*half_angle >= 0.0 && *half_angle < std::f64::consts::FRAC_PI_2) {
+                    return Err(invalid("half_angle must lie in [0, π/2)"));
+                }
+            }
+            ConvexSet::Point(v) => self.check_vec("point", index, v)?,
+        }
+        self.constraints.push(ConicConstraint {
+            stencil: stencil.to_vec(),
+            set,
+        });
+        Ok(index)
+    }
+
+    /// Solves the problem to the exact optimum (see the module docs) with the full-vertex
+    /// backend.
+    ///
+    /// # Errors
+    /// [`Error::Infeasible`] naming a constraint that cannot be met (an empty polytope, a
+    /// constraint contradicting fixed vertices, or the constraint with the largest violation
+    /// when the interior-point method finds no feasible point), [`Error::NotConverged`],
+    /// [`Error::Energy`] when the Newton matrix is singular (the data do not determine the
+    /// curve, e.g. an open curve with less than two constrained vertices),
+    /// [`Error::WrongDimension`] for a warm start of the wrong shape.
+    pub fn solve(&self, opts: &ConicOptions) -> Result<ConicSolution, Error> {
+        let sol = self.solve_unchecked(opts)?;
+        if sol.kkt.total <= opts.accept {
+            return Ok(sol);
+        }
+        Err(self.diagnose(&sol).unwrap_or(Error::NotConverged {
+            solver: "conic interior-point method",
+            iterations: sol.iterations,
+            residual: sol.kkt.total,
+        }))
+    }
+
+    /// The method's answer whatever its certificate (the caller judges it).
+    ///
+    /// # Errors
+    /// [`Error::Infeasible`] for a constraint that contradicts fixed vertices,
+    /// [`Error::Energy`] when the first Newton matrix is singular, [`Error::WrongDimension`]
+    /// for a warm start of the wrong shape.
+    pub(crate) fn solve_unchecked(&self, opts: &ConicOptions) -> Result<ConicSolution, Error> {
+        let mut be = FullVertex::new(self)?;
+        let start = match &opts.warm_start {
+            Some(w) => {
+                if w.len() != self.len() || w.dim() != self.dim {
+                    return Err(Error::WrongDimension {
+                        field: "warm_start",
+                        index: 0,
+                        expected: self.len() * self.dim,
+                        got: w.len() * w.dim(),
+                    });
+                }
+                Some(Start {
+                    x: be.start(Some(w.coords())),
+                    sz: None,
+                })
+            }
+            None => None,
+        };
+        let sol = conic::solve_with(&mut be, &opts.conic, start, &mut conic::NoMonitor)?;
+        Ok(self.report(&be, &sol, opts.active_rtol))
+    }
+
+    /// Solves the same program with Clarabel (feature `clarabel`): the full-vertex backend
+    /// exports it ([`conic::clarabel::Sparse`], the energy factored) and this crate certifies the
+    /// answer with the method's residuals ([`ConicSolution::kkt`]), independently of Clarabel's
+    /// stopping test. `iterations` counts Clarabel's.
+    ///
+    /// # Errors
+    /// As [`ConicProblem::solve`]'s construction errors; [`Error::Conic`] when Clarabel refuses
+    /// the data.
+    #[cfg(feature = "clarabel")]
+    pub fn solve_clarabel(
+        &self,
+        opts: &conic::clarabel::ClarabelOptions,
+    ) -> Result<ConicSolution, Error> {
+        let mut be = FullVertex::new(self)?;
+        let sol = conic::clarabel::solve(&mut be, opts)?;
+        Ok(self.report(&be, &sol, ConicOptions::default().active_rtol))
+    }
+
+    /// Why a solution that is not certified may be no solution at all: an empty polytope, or
+    /// (with a large primal residual) the most violated constraint, as [`Error::Infeasible`].
+    pub(crate) fn diagnose(&self, sol: &ConicSolution) -> Option<Error> {
+        for (c, con) in self.constraints.iter().enumerate() {
+            if let ConvexSet::HalfSpaces(hs) = &con.set {
+                if polytope_is_empty(hs, self.dim) {
+                    return Some(Error::Infeasible { constraint: c });
+                }
+            }
+        }
+        if sol.kkt.primal > 1e-6 {
+            if let Some(c) = self.worst_constraint(sol.points.coords()) {
+                return Some(Error::Infeasible { constraint: c });
+            }
+        }
+        None
+    }
+
+    fn constraint_value(&self, con: &ConicConstraint, x: &[f64]) -> Vec<f64> {
+        let d = self.dim;
+        let mut y = vec![0.0; d];
+        for &(v, c) in &con.stencil {
+            for k in 0..d {
+                y[k] += c * x[v * d + k];
+            }
+        }
+        y
+    }
+
+    fn worst_constraint(&self, x: &[f64]) -> Option<usize> {
+        let mut worst = None;
+        let mut wv = 0.0;
+        for (ci, con) in self.constraints.iter().enumerate() {
+            let y = self.constraint_value(con, x);
+            let (dist, scale) = set_distance(&con.set, &y);
+            let rel = dist / scale.max(norm(&y)).max(f64::MIN_POSITIVE);
+            if rel > wv {
+                wv = rel;
+                worst = Some(ci);
+            }
+        }
+        worst
+    }
+
+    /// The solution record of the method's answer.
+    fn report(&self, be: &FullVertex, sol: &conic::Solution, active_rtol: f64) -> ConicSolution {
+        let (n, d) = (self.len(), self.dim);
+        let nc = self.constraints.len();
+        let x = &sol.x;
+        let mut forces = vec![vec![0.0; d]; nc];
+        let mut cone_duals = vec![Vec::new(); nc];
+        let mut off = 0;
+        let mut zp = Vec::new();
+        for blk in &be.blocks {
+            let m = blk.cone.dim();
+            zp.clear();
+            zp.extend_from_slice(&sol.z[off..off + m]);
+            conic::cone::project_dual(blk.cone.kind(), &mut zp);
+            cone_duals[blk.constraint].extend_from_slice(&zp);
+            // A = −F L: the force on L p is −Fᵀz.
+            for r in 0..m {
+                for k in 0..d {
+                    forces[blk.constraint][k] -= blk.f[r * d + k] * zp[r];
+                }
+            }
+            off += m;
+        }
+        // Reaction forces of constraints that fixed a vertex: −(g_v + other forces there).
+        let mut g = vec![0.0; n * d];
+        be.full_gradient(x, &mut g);
+        for v in 0..n {
+            if let Some((ci, coef)) = be.owner[v] {
+                let mut other = vec![0.0; d];
+                for (cj, con) in self.constraints.iter().enumerate() {
+                    if cj == ci {
+                        continue;
+                    }
+                    for &(u, c) in &con.stencil {
+                        if u == v {
+                            for k in 0..d {
+                                other[k] += c * forces[cj][k];
+                            }
+                        }
+                    }
+                }
+                for k in 0..d {
+                    forces[ci][k] = -(g[v * d + k] + other[k]) / coef;
+                }
+            }
+        }
+        let mut active = vec![false; nc];
+        let mut ball_weights = vec![None; nc];
+        for (ci, con) in self.constraints.iter().enumerate() {
+            let y = self.constraint_value(con, x);
+            let (_, scale) = set_distance(&con.set, &y);
+            let den = scale.max(norm(&y));
+            active[ci] = set_slack(&con.set, &y) <= active_rtol * den;
+            if let ConvexSet::Ball { radius, .. } = &con.set {
+                if *radius > 0.0 {
+                    ball_weights[ci] =
+                        Some(cone_duals[ci].first().copied().unwrap_or(0.0) / radius);
+                }
+            }
+        }
+        let energy = be.energy(x);
+        let objective = energy
+            + self
+                .smoothing
+                .iter()
+                .map(|(v, w, t)| {
+                    let p = &x[v * d..(v + 1) * d];
+                    0.5 * w * p.iter().zip(t).map(|(a, b)| (a - b) * (a - b)).sum::<f64>()
+                })
+                .sum::<f64>();
+        ConicSolution {
+            points: Points::new(d, x.clone()).unwrap_or_else(|_| Points::zeros(n, d)),
+            forces,
+            ball_weights,
+            cone_duals,
+            active,
+            energy,
+            objective,
+            kkt: sol.residuals,
+            iterations: sol.iterations,
+            polished: sol.polished,
+        }
+    }
+}
+
+/// Is {x : n_i·x ≤ o_i} empty? Decided by the method itself on min ½|x|² s.t. the half-spaces
+/// (a dense problem of one point): it converges iff the polytope is nonempty.
+fn polytope_is_empty(hs: &[(Vec<f64>, f64)], d: usize) -> bool {
+    let m = hs.len();
+    let mut p = vec![0.0; d * d];
+    for k in 0..d {
+        p[k * d + k] = 1.0;
+    }
+    let mut a = Vec::with_capacity(m * d);
+    let mut b = Vec::with_capacity(m);
+    for (nr, o) in hs {
+        let l = norm(nr);
+        a.extend(nr.iter().map(|x| x / l));
+        b.push(o / l);
+    }
+    let Ok(cones) = conic::Cones::new(vec![Cone::Nonnegative(m)]) else {
+        return false;
+    };
+    let Ok(mut prob) = conic::DenseProblem::new(p, vec![0.0; d], a, b, cones) else {
+        return false;
+    };
+    match conic::solve(&mut prob, &conic::Options::default()) {
+        // (NaN is not converged.)
+        Ok(sol) => sol.residuals.total.is_nan() || sol.residuals.total > 1e-9,
+        Err(_) => true,
+    }
+}
+
+/// (distance from y to the set, scale of the set).
+pub(crate) fn set_distance(set: &ConvexSet, y: &[f64]) -> (f64, f64) {
+    match set {
+        ConvexSet::Ball { center, radius } => {
+            let r = norm(&y.iter().zip(center).map(|(a, b)| a - b).collect::<Vec<_>>());
+            ((r - radius).max(0.0), inf_norm(center) + radius)
+        }
+        ConvexSet::Point(v) => (
+            norm(&y.iter().zip(v).map(|(a, b)| a - b).collect::<Vec<_>>()),
+            inf_norm(v),
+        ),
+        ConvexSet::HalfSpaces(hs) => {
+            let mut dist: f64 = 0.0;
+            for (nr, o) in hs {
+                dist = dist.max((dot(nr, y) - o) / norm(nr));
+            }
+            (dist.max(0.0), set_scale(set))
+        }
+        ConvexSet::Cone { axis, half_angle } => {
+            let u = dot(axis, y);
+            let w = (dot(y, y) - u * u).max(0.0).sqrt();
+            let (st, ct) = half_angle.sin_cos();
+            // Inside: u ≥ |y| cos θ ⇔ w cos θ ≤ u sin θ (u ≥ 0).
+            let dist = if u >= 0.0 && w * ct <= u * st {
+                0.0
+            } else if u * ct + w * st <= 0.0 {
+                norm(y)
+            } else {
+                w * ct - u * st
+            };
+            (dist, 0.0)
+        }
+    }
+}
+
+/// Distance from y to the boundary of the set when y is inside (0 on or outside the boundary).
+pub(crate) fn set_slack(set: &ConvexSet, y: &[f64]) -> f64 {
+    match set {
+        ConvexSet::Ball { center, radius } => {
+            let r = norm(&y.iter().zip(center).map(|(a, b)| a - b).collect::<Vec<_>>());
+            (radius - r).max(0.0)
+        }
+        ConvexSet::Point(_) => 0.0,
+        ConvexSet::HalfSpaces(hs) => hs
+            .iter()
+            .map(|(nr, o)| ((o - dot(nr, y)) / norm(nr)).max(0.0))
+            .fold(f64::INFINITY, f64::min),
+        ConvexSet::Cone { axis, half_angle } => {
+            let u = dot(axis, y);
+            let w = (dot(y, y) - u * u).max(0.0).sqrt();
+            let (st, ct) = half_angle.sin_cos();
+            (u * st - w * ct).max(0.0)
+        }
+    }
+}
+
+impl From<conic::Error> for Error {
+    fn from(e: conic::Error) -> Self {
+        match e {
+            conic::Error::Singular { index } => {
+                Error::Energy(energy::Error::Singular { vertex: index })
+            }
+            conic::Error::NotConverged {
+                solver,
+                iterations,
+                residual,
+            } => Error::NotConverged {
+                solver,
+                iterations,
+                residual,
+            },
+            e => Error::Conic(e),
+        }
+    }
+}

@@ -1,0 +1,89 @@
+//! Interpolation, Kersey (3.2): p_{i_k} = q_i at every data vertex.
+//!
+//! Rows: every data vertex fixed at its data point. Multiplier of point i: the reaction
+//! λ_i = −(Hp)_{i_k} (less any derivative force at that vertex), so (Hp)_{i_k} + λ_i = 0.
+//! Certificate: the reaction absorbs the force at the vertex exactly; the violation is
+//! |p_{i_k} − q_i|. No common point (the data are distinct). Translation moves nothing but the
+//! data.
+
+use super::{At, Kind, Rows, Terms};
+use crate::conic_problem::ConicSolution;
+use crate::problem::Problem;
+use crate::stage::FixedProblem;
+use crate::Error;
+
+/// The kind (no data of its own).
+pub(crate) struct Interpolate;
+
+impl Kind for Interpolate {
+    fn validate(&self, _: &Problem) -> Result<(), Error> {
+        Ok(())
+    }
+
+    fn linear(&self) -> bool {
+        true
+    }
+
+    fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
+        for (i, &v) in stage.data_vertex.iter().enumerate() {
+            rows.problem.fix(v, stage.q.point(i))?;
+        }
+        Ok(())
+    }
+
+    fn multipliers(
+        &self,
+        stage: &FixedProblem<'_>,
+        sol: &ConicSolution,
+        rows: &Rows,
+        hp: &[f64],
+    ) -> Vec<Vec<f64>> {
+        (0..stage.q.len())
+            .map(|i| reaction(stage, sol, rows, hp, i))
+            .collect()
+    }
+
+    fn certify(&self, at: &At<'_>, terms: &mut Terms) {
+        fixed_points(at, terms, |_| true);
+    }
+}
+
+/// The reaction at data point i's (fixed) vertex: −(Hp)_v less the derivative forces there.
+pub(crate) fn reaction(
+    stage: &FixedProblem<'_>,
+    sol: &ConicSolution,
+    rows: &Rows,
+    hp: &[f64],
+    i: usize,
+) -> Vec<f64> {
+    let d = stage.q.dim();
+    let v = stage.data_vertex[i];
+    let mut f = super::reaction(hp, v, d);
+    for (c, stencil) in &rows.derivative {
+        for &(u, coef) in stencil {
+            if u == v {
+                for (fc, z) in f.iter_mut().zip(&sol.forces[*c]) {
+                    *fc -= coef * z;
+                }
+            }
+        }
+    }
+    f
+}
+
+/// Certificate terms of the fixed data points (those `fixed(i)` selects): the multiplier is
+/// the reaction, the violation |p_{i_k} − q_i|; always active.
+pub(crate) fn fixed_points(at: &At<'_>, terms: &mut Terms, fixed: impl Fn(usize) -> bool) {
+    let d = at.q.dim();
+    for (i, &v) in at.data_vertex.iter().enumerate() {
+        if !fixed(i) {
+            continue;
+        }
+        let m = &at.multipliers[i];
+        for (f, mc) in terms.force_data[i * d..(i + 1) * d].iter_mut().zip(m) {
+            *f += mc;
+        }
+        terms.primal = terms.primal.max(super::dist(at.p.point(v), at.q.point(i)));
+        terms.active[i] = true;
+    }
+}

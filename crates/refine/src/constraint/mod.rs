@@ -1,0 +1,554 @@
+//! The constraints of a refinement problem: one module per kind behind one trait, [`Kind`].
+//!
+//! A kind is everything one field of a [`Problem`] asks of the curve:
+//!
+//! | kind | field | module | Kersey |
+//! |---|---|---|---|
+//! | interpolation p_{i_k} = q_i | `constraint` | [`interpolate`] | (3.2) |
+//! | balls \|p_{i_k} − q_i\| ≤ ε_i | `constraint` | [`balls`] | (3.4) |
+//! | smoothing ½ Σ w_i \|p_{i_k} − q_i\|² | `constraint` | [`smoothing`] | (3.6) |
+//! | half-space sets p_{i_k} ∈ ∩_j {n_ij·x ≤ c_ij} | `constraint` | [`halfspaces`] | (3.7) |
+//! | derivative constraints on Df(t_{i_k}) | `tangents` | [`tangents`] | §3.5, (3.9)–(3.10) |
+//! | end conditions of an open curve | `boundary` | [`ends`] | §3.6 |
+//!
+//! Each kind says, in its own file:
+//! - how its input is **validated** (errors name the user's field and index);
+//! - the **cone rows** it adds to a stage's conic model ([`Rows`], a [`ConicProblem`] with the
+//!   origin of every row): what the full-vertex backend solves; a kind acting on data vertices
+//!   alone also gives its **point sets** ([`PointSet`]) for the condensed backend, and maps a
+//!   solution back to **multipliers** in the convention of [`crate::Refinement::multipliers`];
+//! - its **certificate terms** ([`Terms`]): its forces in the stationarity condition, its
+//!   violation, complementarity and duality gap — recomputed from the points, independently of
+//!   the solver ([`crate::certify`]);
+//! - its part of the **common-point test** ([`crate::degenerate`]): the projection onto each data
+//!   point's set, when a constant curve can be optimal;
+//! - how it moves under **translation and scaling** of the data.
+//!
+//! Adding a kind is one file and one enum arm (in [`Constraint::kind`], [`Tangent`]'s or
+//! [`Boundary`]'s dispatch).
+
+pub(crate) mod balls;
+pub(crate) mod ends;
+pub(crate) mod halfspaces;
+pub(crate) mod interpolate;
+pub(crate) mod smoothing;
+pub(crate) mod tangents;
+
+use divdiff::{DerivativeRule, Knots, Points};
+
+use crate::backend::condensed::PointSet;
+use crate::conic_problem::{ConicProblem, ConicSolution, ConvexSet};
+use crate::problem::Problem;
+use crate::stage::FixedProblem;
+use crate::Error;
+
+/// One half-space {x : normal · x ≤ offset}.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HalfSpace {
+    /// The outward normal (any non-zero length).
+    pub normal: Vec<f64>,
+    /// The offset c in normal · x ≤ c.
+    pub offset: f64,
+}
+
+/// The constraint that ties the data vertices p_{i_k} to the data q_i (Kersey §3).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum Constraint {
+    /// p_{i_k} = q_i (3.2).
+    #[default]
+    Interpolate,
+    /// |p_{i_k} − q_i| ≤ ε_i (3.4); one radius per data point, 0 interpolates that point.
+    Balls(Vec<f64>),
+    /// Minimize E + ½ Σ w_i |p_{i_k} − q_i|² (3.6); one weight w_i ≥ 0 per data point.
+    Smoothing(Vec<f64>),
+    /// p_{i_k} ∈ K_i = ∩_j {x : n_ij · x ≤ c_ij} (3.7); one (possibly empty) set per data point.
+    HalfSpaces(Vec<Vec<HalfSpace>>),
+}
+
+/// A constraint on the approximate derivative Df(t_{i_k}) at a data vertex (Kersey §3.5).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tangent {
+    /// |Df − center| ≤ radius (Fig. 3.5a).
+    Ball {
+        /// The prescribed vector v_i.
+        center: Vec<f64>,
+        /// The tolerance ε¹_i ≥ 0.
+        radius: f64,
+    },
+    /// The angle between Df and `direction` is at most `half_angle` (Fig. 3.5b).
+    Wedge {
+        /// The prescribed direction (non-zero).
+        direction: Vec<f64>,
+        /// Half the opening angle, in radians, in [0, π/2).
+        half_angle: f64,
+    },
+    /// |Df| ≤ radius (Fig. 3.5c, tension).
+    Tension {
+        /// The tolerance ε¹_i ≥ 0.
+        radius: f64,
+    },
+    /// Df satisfies every half-space.
+    HalfSpaces(Vec<HalfSpace>),
+}
+
+/// End conditions of an open curve (Kersey §3.6).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum Boundary {
+    /// Natural ends: no end condition (an inactive end constraint gives Δ_{1,2} = 0).
+    #[default]
+    Natural,
+    /// Df(t_1) = start, Df(t_N) = end.
+    Clamped {
+        /// The start derivative v_1.
+        start: Vec<f64>,
+        /// The end derivative v_n.
+        end: Vec<f64>,
+    },
+    /// |Df(t_1) − start| ≤ radius, |Df(t_N) − end| ≤ radius.
+    NearClamped {
+        /// The start derivative v_1.
+        start: Vec<f64>,
+        /// The end derivative v_n.
+        end: Vec<f64>,
+        /// The tolerance ≥ 0.
+        radius: f64,
+    },
+}
+
+/// Where a row of the conic model comes from: the user's field and the index in it (the data
+/// point, or for `boundary` 0 = start, 1 = end).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Origin {
+    pub field: &'static str,
+    pub index: usize,
+}
+
+/// A stage's conic model as the kinds build it.
+pub(crate) struct Rows {
+    /// The conic problem (full-vertex form).
+    pub problem: ConicProblem,
+    /// The origin of each of its constraints.
+    pub origin: Vec<Origin>,
+    /// The data kind's constraint index per data point (`None`: fixed, smoothed or free).
+    pub data: Vec<Option<usize>>,
+    /// The derivative kinds' constraints, in order, with their stencils.
+    pub derivative: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+impl Rows {
+    /// An empty model of the stage's curve.
+    pub(crate) fn new(stage: &FixedProblem<'_>) -> Result<Self, Error> {
+        Ok(Rows {
+            problem: ConicProblem::new(stage.knots, stage.q.dim())?,
+            origin: Vec::new(),
+            data: vec![None; stage.q.len()],
+            derivative: Vec::new(),
+        })
+    }
+
+    /// Adds a constraint on data point `index`'s vertex.
+    pub(crate) fn data(
+        &mut self,
+        field: &'static str,
+        index: usize,
+        vertex: usize,
+        set: ConvexSet,
+    ) -> Result<(), Error> {
+        let c = self.problem.add_constraint(&[(vertex, 1.0)], set)?;
+        self.origin.push(Origin { field, index });
+        self.data[index] = Some(c);
+        Ok(())
+    }
+
+    /// Adds a constraint on a derivative stencil.
+    pub(crate) fn derivative(
+        &mut self,
+        field: &'static str,
+        index: usize,
+        stencil: Vec<(usize, f64)>,
+        set: ConvexSet,
+    ) -> Result<(), Error> {
+        let c = self.problem.add_constraint(&stencil, set)?;
+        self.origin.push(Origin { field, index });
+        self.derivative.push((c, stencil));
+        Ok(())
+    }
+
+    /// The user's view of a conic-model error: an infeasible constraint named by its field and
+    /// index.
+    pub(crate) fn user_error(&self, e: Error) -> Error {
+        match e {
+            Error::Infeasible { constraint } => match self.origin.get(constraint) {
+                Some(o) => Error::InfeasibleConstraint {
+                    field: o.field,
+                    point: o.index,
+                },
+                None => Error::Infeasible { constraint },
+            },
+            e => e,
+        }
+    }
+}
+
+/// What a kind's certificate terms are computed from (see [`crate::certify`]).
+pub(crate) struct At<'a> {
+    pub p: &'a Points,
+    pub q: &'a Points,
+    pub knots: &'a Knots,
+    pub data_vertex: &'a [usize],
+    /// The data kind's multipliers, one entry per data point, in its convention.
+    pub multipliers: &'a [Vec<f64>],
+    /// The derivative kinds' (cone dual ζ_c, force z_c = −F_cᵀζ_c), one per derivative
+    /// constraint in the order of [`Rows`] (a constraint the solver turned into a fixed vertex has
+    /// no dual, only its reaction force).
+    pub duals: &'a [(Vec<f64>, Vec<f64>)],
+    pub rule: DerivativeRule,
+    /// The length scale L (data and curve extent about the data's centroid).
+    pub length: f64,
+    /// A constraint within this relative slack of its boundary counts as active.
+    pub active_tol: f64,
+}
+
+/// A kind's certificate terms, accumulated (module docs of [`crate::certify`] for the units).
+pub(crate) struct Terms {
+    /// Σ (constraint gradient × multiplier) at the data vertices (n × d).
+    pub force_data: Vec<f64>,
+    /// Σ L_cᵀ z_c of derivative constraints at every vertex (N × d), when any.
+    pub force_all: Option<Vec<f64>>,
+    /// Largest violation, in length units.
+    pub primal: f64,
+    /// Largest violation relative to the constraint's own scale (derivative constraints).
+    pub primal_rel: f64,
+    /// Largest negative multiplier (or dual-cone violation), in force units.
+    pub dual: f64,
+    /// Largest complementarity |multiplier × slack|, in force units.
+    pub comp: f64,
+    /// Σ |multiplier × slack|, in energy units: a bound on E(p) − E* (the duality gap).
+    pub gap: f64,
+    /// Whether each data point's constraint is active.
+    pub active: Vec<bool>,
+    /// Data points that Corollary 3.3's inactive jumps do not concern (smoothing: a penalty,
+    /// not a constraint).
+    pub no_jump: Vec<bool>,
+    /// The next derivative dual to read.
+    pub next_dual: usize,
+}
+
+impl Terms {
+    pub(crate) fn new(n: usize, d: usize, nv: usize, derivative: bool) -> Self {
+        Terms {
+            force_data: vec![0.0; n * d],
+            force_all: derivative.then(|| vec![0.0; nv * d]),
+            primal: 0.0,
+            primal_rel: 0.0,
+            dual: 0.0,
+            comp: 0.0,
+            gap: 0.0,
+            active: vec![false; n],
+            no_jump: vec![false; n],
+            next_dual: 0,
+        }
+    }
+}
+
+/// What a kind contributes to the common-point test of [`crate::degenerate`].
+pub(crate) enum CommonPoint<'a> {
+    /// No data point is restricted (a constant curve is not even a candidate: interpolation,
+    /// smoothing, derivative constraints).
+    Never,
+    /// Point i's set as a projection, its violation and a necessary test on consecutive sets.
+    Sets(Box<dyn Projections + 'a>),
+}
+
+/// The sets of a common-point test.
+pub(crate) trait Projections {
+    /// A cheap necessary condition for a common point (false: there is none).
+    fn possible(&self) -> bool {
+        true
+    }
+    /// Projects x onto every set in turn (one sweep of alternating projections).
+    fn sweep(&self, x: &mut [f64]);
+    /// The largest violation of x over all sets (0 inside all), in length units.
+    fn violation(&self, x: &[f64]) -> f64;
+    /// Multipliers of the constant curve (all zero), in the kind's convention.
+    fn zero_multipliers(&self, d: usize) -> Vec<Vec<f64>>;
+}
+
+/// One kind of constraint (module docs).
+pub(crate) trait Kind {
+    /// Checks the kind's input against the problem; errors name the user's field and index.
+    fn validate(&self, problem: &Problem) -> Result<(), Error>;
+
+    /// Whether it acts on derivative stencils (then only the full-vertex backend applies, and
+    /// the knots enter the constraint).
+    fn on_derivatives(&self) -> bool {
+        false
+    }
+
+    /// Whether it may need the full-vertex backend on the whole first stage (then
+    /// [`Problem::validate`] refuses problems beyond [`crate::MAX_CONIC_COORDS`]).
+    fn may_need_full_vertex(&self) -> bool {
+        self.on_derivatives()
+    }
+
+    /// Whether the problem with this kind alone is a linear system (interpolation, smoothing).
+    fn linear(&self) -> bool {
+        false
+    }
+
+    /// Adds its rows to one stage's conic model.
+    ///
+    /// # Errors
+    /// Errors of [`ConicProblem`] for malformed rows (impossible after validation).
+    fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error>;
+
+    /// Its sets on the data vertices for the condensed backend, one per data point (`None`: no
+    /// constraint there), when it is a set on data vertices alone.
+    fn point_sets(&self, stage: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
+        let _ = stage;
+        None
+    }
+
+    /// Its multipliers, one entry per data point in the convention of
+    /// [`crate::Refinement::multipliers`], from a full-vertex solution of `rows` (`hp`: Hp at
+    /// every vertex). Derivative kinds report none.
+    fn multipliers(
+        &self,
+        stage: &FixedProblem<'_>,
+        sol: &ConicSolution,
+        rows: &Rows,
+        hp: &[f64],
+    ) -> Vec<Vec<f64>> {
+        let _ = (stage, sol, rows, hp);
+        Vec::new()
+    }
+
+    /// Adds its certificate terms.
+    fn certify(&self, at: &At<'_>, terms: &mut Terms);
+
+    /// Its part of the common-point test, for the data `q`.
+    fn common_point<'s>(&'s self, q: &'s Points) -> CommonPoint<'s> {
+        let _ = q;
+        CommonPoint::Never
+    }
+
+    /// Moves its data with a translation of the data points by `offset`, in `into`.
+    fn translate(&self, offset: &[f64], into: &mut Problem) {
+        let _ = (offset, into);
+    }
+}
+
+impl Constraint {
+    /// The kind behind this data constraint.
+    pub(crate) fn kind(&self) -> Box<dyn Kind + '_> {
+        match self {
+            Constraint::Interpolate => Box::new(interpolate::Interpolate),
+            Constraint::Balls(r) => Box::new(balls::Balls(r)),
+            Constraint::Smoothing(w) => Box::new(smoothing::Smoothing(w)),
+            Constraint::HalfSpaces(s) => Box::new(halfspaces::HalfSpaces(s)),
+        }
+    }
+}
+
+impl Problem {
+    /// Every kind of the problem: the data constraint, then the tangents and the end conditions
+    /// when present.
+    pub(crate) fn kinds(&self) -> Vec<Box<dyn Kind + '_>> {
+        let mut out = vec![self.constraint.kind()];
+        if let Some(t) = &self.tangents {
+            if t.iter().any(Option::is_some) {
+                out.push(Box::new(tangents::Tangents(t)));
+            }
+        }
+        if self.boundary != Boundary::Natural {
+            out.push(Box::new(ends::Ends(&self.boundary)));
+        }
+        out
+    }
+}
+
+// Shared validation helpers (errors name the user's field and index).
+
+pub(crate) fn check_len(field: &'static str, got: usize, expected: usize) -> Result<(), Error> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(Error::WrongLength {
+            field,
+            expected,
+            got,
+        })
+    }
+}
+
+pub(crate) fn check_nonneg_one(field: &'static str, index: usize, value: f64) -> Result<(), Error> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            field,
+            index,
+            value,
+            reason: "must be finite and >= 0",
+        })
+    }
+}
+
+pub(crate) fn check_nonneg(field: &'static str, v: &[f64]) -> Result<(), Error> {
+    v.iter()
+        .enumerate()
+        .try_for_each(|(i, &x)| check_nonneg_one(field, i, x))
+}
+
+pub(crate) fn check_dim(
+    field: &'static str,
+    index: usize,
+    v: &[f64],
+    d: usize,
+) -> Result<(), Error> {
+    if v.len() != d {
+        return Err(Error::WrongDimension {
+            field,
+            index,
+            expected: d,
+            got: v.len(),
+        });
+    }
+    if let Some(&x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(Error::InvalidValue {
+            field,
+            index,
+            value: x,
+            reason: "not finite",
+        });
+    }
+    Ok(())
+}
+
+pub(crate) fn check_halfspaces(
+    field: &'static str,
+    point: usize,
+    set: &[HalfSpace],
+    d: usize,
+) -> Result<(), Error> {
+    for (j, h) in set.iter().enumerate() {
+        let bad = |reason| Error::InvalidHalfSpace {
+            field,
+            point,
+            index: j,
+            reason,
+        };
+        if h.normal.len() != d {
+            return Err(bad("the normal's dimension differs from the points'"));
+        }
+        if h.normal.iter().any(|x| !x.is_finite()) || !h.offset.is_finite() {
+            return Err(bad("not finite"));
+        }
+        if h.normal.iter().all(|&x| x == 0.0) {
+            return Err(bad("the normal must be non-zero"));
+        }
+        // The solvers divide by |n|² and |n| (projections, distances): both must be normal
+        // floating-point numbers, and so must the offset in units of |n|.
+        let nn: f64 = h.normal.iter().map(|x| x * x).sum();
+        if !(nn.is_normal() && (h.offset / nn.sqrt()).is_finite()) {
+            return Err(bad(
+                "the normal's length (squared) must be a normal floating-point number and offset/|normal| finite: rescale the half-space",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The Euclidean distance |a − b|.
+pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The half-spaces as the conic model's polytope.
+pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
+    ConvexSet::HalfSpaces(set.iter().map(|h| (h.normal.clone(), h.offset)).collect())
+}
+
+/// The reaction −(Hp)_v at a fixed data vertex (interpolation's multiplier), from Hp at every
+/// vertex.
+pub(crate) fn reaction(hp: &[f64], v: usize, d: usize) -> Vec<f64> {
+    hp[v * d..(v + 1) * d].iter().map(|x| -x).collect()
+}
+
+/// The certificate terms of one derivative constraint L p ∈ K on the stencil at vertex `v`,
+/// with its dual ζ (the next in `at.duals`): its force −Lᵀ Fᵀ ζ at the stencil's vertices, its
+/// violation dist(L p, K) relative to max(|L p|, the set's scale), the dual-cone violation of ζ
+/// (as a force), and |sᵀζ| with s = g + F L p in the duality gap (the rows (F, g) of
+/// [`crate::backend::full`], recomputed here from the set).
+pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
+    let d = at.q.dim();
+    let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) else {
+        terms.primal_rel = f64::INFINITY;
+        return;
+    };
+    let x = at.p.coords();
+    let mut y = vec![0.0; d];
+    for &(u, c) in stencil.iter() {
+        for k in 0..d {
+            y[k] += c * x[u * d + k];
+        }
+    }
+    let (dist_y, scale) = crate::conic_problem::set_distance(set, &y);
+    let den = scale.max(y.iter().map(|a| a * a).sum::<f64>().sqrt());
+    if dist_y > 0.0 {
+        terms.primal_rel = terms.primal_rel.max(if den > 0.0 {
+            dist_y / den
+        } else {
+            f64::INFINITY
+        });
+    }
+    let (zeta, force) = match at.duals.get(terms.next_dual) {
+        Some(z) => z,
+        None => {
+            terms.primal_rel = f64::INFINITY;
+            return;
+        }
+    };
+    terms.next_dual += 1;
+    let cmax = stencil.iter().fold(0.0f64, |a, &(_, c)| a.max(c.abs()));
+    let all = terms.force_all.get_or_insert_with(|| vec![0.0; x.len()]);
+    for &(u, c) in stencil.iter() {
+        for k in 0..d {
+            all[u * d + k] += c * force[k];
+        }
+    }
+    let rows = crate::backend::full::set_rows(set, d);
+    let m: usize = rows.iter().map(|(cone, _, _)| cone.dim()).sum();
+    if zeta.len() != m {
+        // The solver fixed a vertex for it: its reaction force is all there is to check.
+        return;
+    }
+    let mut off = 0;
+    for (cone, f, g) in rows {
+        let mb = cone.dim();
+        let zb = &zeta[off..off + mb];
+        let mut proj = zb.to_vec();
+        conic::cone::project_dual(cone.kind(), &mut proj);
+        // The dual-cone violation as a force: |Fᵀ(ζ − Π ζ)| times the stencil's size.
+        let mut fz = vec![0.0; d];
+        for r in 0..mb {
+            for k in 0..d {
+                fz[k] += f[r][k] * (zb[r] - proj[r]);
+            }
+        }
+        terms.dual = terms
+            .dual
+            .max(cmax * fz.iter().fold(0.0f64, |a, x| a.max(x.abs())));
+        if cone.kind() != conic::Kind::Zero {
+            let sz: f64 = (0..mb)
+                .map(|r| (g[r] + f[r].iter().zip(&y).map(|(a, b)| a * b).sum::<f64>()) * zb[r])
+                .sum();
+            terms.gap += sz.abs();
+        }
+        off += mb;
+    }
+}

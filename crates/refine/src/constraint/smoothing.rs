@@ -1,0 +1,74 @@
+//! Smoothing, Kersey (3.6): minimize E + ½ Σ w_i |p_{i_k} − q_i|², one weight w_i ≥ 0 per data
+//! point (a penalty, not a constraint: the problem is the linear system (H + W)p = W q̃).
+//!
+//! Rows: a smoothing term per positive weight. Multiplier of point i: its weight `[w_i]`.
+//! Certificate: the force w_i(p_{i_k} − q_i) enters the stationarity exactly; nothing is ever
+//! active, and Corollary 3.3's jumps do not apply. Validation: enough positive weights to pin
+//! down the kernel of H (constants closed, linear polynomials open). No common point. Translation
+//! moves nothing but the data.
+
+use divdiff::Topology;
+
+use super::{At, Kind, Rows, Terms};
+use crate::conic_problem::ConicSolution;
+use crate::problem::Problem;
+use crate::stage::FixedProblem;
+use crate::Error;
+
+/// The weights.
+pub(crate) struct Smoothing<'a>(pub &'a [f64]);
+
+impl Kind for Smoothing<'_> {
+    fn validate(&self, problem: &Problem) -> Result<(), Error> {
+        let w = self.0;
+        super::check_len("weights", w.len(), problem.points.len())?;
+        super::check_nonneg("weights", w)?;
+        let positive = w.iter().filter(|&&x| x > 0.0).count();
+        let needed = match problem.topology {
+            Topology::Open => 2,
+            Topology::Closed => 1,
+        };
+        if positive < needed {
+            return Err(Error::TooFewWeights {
+                needed,
+                got: positive,
+            });
+        }
+        Ok(())
+    }
+
+    fn linear(&self) -> bool {
+        true
+    }
+
+    fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
+        for (i, &v) in stage.data_vertex.iter().enumerate() {
+            if self.0[i] > 0.0 {
+                rows.problem.add_smoothing(v, self.0[i], stage.q.point(i))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn multipliers(
+        &self,
+        _: &FixedProblem<'_>,
+        _: &ConicSolution,
+        _: &Rows,
+        _: &[f64],
+    ) -> Vec<Vec<f64>> {
+        self.0.iter().map(|&w| vec![w]).collect()
+    }
+
+    fn certify(&self, at: &At<'_>, terms: &mut Terms) {
+        let d = at.q.dim();
+        for (i, &v) in at.data_vertex.iter().enumerate() {
+            let w = self.0[i];
+            let (pv, qi) = (at.p.point(v), at.q.point(i));
+            for c in 0..d {
+                terms.force_data[i * d + c] += w * (pv[c] - qi[c]);
+            }
+            terms.no_jump[i] = true;
+        }
+    }
+}

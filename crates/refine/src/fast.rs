@@ -1,0 +1,623 @@
+//! Interpolatory refinement (3.3) by static condensation of the data spans: O(N) work with
+//! only short, independent dependency chains, plus one tridiagonal system of size n.
+//!
+//! Write E = ½ Σ_r (a_r · p)², a_r the α-row r of A (Kersey §2). With the data vertices
+//! v_i = m·i (m = k + 1) fixed at q_i, the rows split in two kinds:
+//! - the k *span rows* r = v_i + 1 … v_i + k of data span i involve only the vertices
+//!   v_i … v_{i+1} of that span. Collect them as e_i = B_i x_i + c_i, with x_i the k free
+//!   vertices, B_i the k×k tridiagonal matrix of their α's (nonsingular: weakly diagonally
+//!   dominant with strict dominance in its first and last rows), and c_i the fixed ends;
+//! - the *data rows* s_i = a_{v_i} · p, coupling the last free vertex of span i − 1 with the first
+//!   of span i (all of them for a closed curve; the first and last rows of an open curve are zero).
+//!
+//! x_i ↦ e_i is a bijection, so minimize over e_i: stationarity gives
+//! e_i = −(α_{v_i,3} s_i) g_i − (α_{v_{i+1},1} s_{i+1}) h_i with g_i = B_i⁻ᵀ e_first and
+//! h_i = B_i⁻ᵀ e_last (so p_{v_i+1} = g_i · (e_i − c_i), p_{v_{i+1}−1} = h_i · (e_i − c_i)). Substituting into
+//! the definition of the data rows gives a symmetric positive definite tridiagonal system
+//! (cyclic for closed curves) for the n data-row values s_i:
+//!
+//! s_i (1 + α_{v_i,1}² h_{i−1}·h_{i−1} + α_{v_i,3}² g_i·g_i) + s_{i−1} α_{v_i,1} α_{v_{i−1},3} g_{i−1}·h_{i−1}
+//!   + s_{i+1} α_{v_i,3} α_{v_{i+1},1} g_i·h_i = α_{v_i,2} q_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i,
+//!
+//! after which every span is recovered independently, x_i = B_i⁻¹(e_i − c_i). The cyclic system
+//! is solved by Sherman–Morrison on a tridiagonal LDLᵀ.
+
+use divdiff::{Knots, Points};
+
+use crate::operator::Stencil;
+use crate::Error;
+
+/// Tridiagonal LU of the span matrix B (sub `a`, diagonal `b`, super `c`, each of length k):
+/// B = L U, L unit lower bidiagonal with multipliers `l`, U upper bidiagonal with diagonal u and
+/// super-diagonal `c`.
+/// `u` holds the reciprocals 1/u_j of the pivots (one division per row, on the chain anyway;
+/// every later use multiplies).
+#[inline]
+fn span_lu(rows: &[[f64; 3]], l: &mut [f64], u: &mut [f64]) -> Result<(), usize> {
+    let k = rows.len();
+    let mut inv = 1.0 / rows[0][1];
+    u[0] = inv;
+    for j in 1..k {
+        l[j] = rows[j][0] * inv;
+        inv = 1.0 / (rows[j][1] - l[j] * rows[j - 1][2]);
+        u[j] = inv;
+    }
+    // B has α_2 = −α_1 − α_3 < 0 on the diagonal: the pivots stay negative and bounded away from
+    // zero by its diagonal dominance; anything else means the knots were not valid.
+    match u[..k]
+        .iter()
+        .position(|&x| x.is_nan() || x >= 0.0 || x.is_infinite())
+    {
+        Some(j) => Err(j),
+        None => Ok(()),
+    }
+}
+
+/// First and last rows of B⁻¹ as vectors g = B⁻ᵀ e_0 and h = B⁻ᵀ e_{k−1}.
+#[inline]
+fn span_gh(rows: &[[f64; 3]], l: &[f64], u: &[f64], g: &mut [f64], h: &mut [f64]) {
+    let k = rows.len();
+    // Bᵀ = Uᵀ Lᵀ. g: Uᵀ w = e_0 (forward), Lᵀ g = w (backward).
+    let mut w = u[0];
+    g[0] = w;
+    for j in 1..k {
+        w = -rows[j - 1][2] * w * u[j];
+        g[j] = w;
+    }
+    for j in (0..k - 1).rev() {
+        g[j] -= l[j + 1] * g[j + 1];
+    }
+    // h: Uᵀ w = e_{k−1} gives w = e_{k−1}/u_{k−1}; Lᵀ h = w.
+    h[k - 1] = u[k - 1];
+    for j in (0..k - 1).rev() {
+        h[j] = -l[j + 1] * h[j + 1];
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The data-row condensation of the energy on fixed knots (module docs): with the data vertices
+/// v_i = m·i at y_i, the data-row values s solve T s = K y, T symmetric positive definite
+/// tridiagonal (cyclic for closed curves), K tridiagonal (cyclic) on the data points; the
+/// energy minimized over the free vertices is E(y) = ½ Σ_coords sᵀ K y = ½ (Ky)ᵀ T⁻¹ (Ky), and
+/// its gradient is Kᵀ s = (Hp)_{v_i}. (With s = L e + K y and e = −Lᵀ s, T = I + L Lᵀ and
+/// E = ½|e|² + ½|s|² = ½ sᵀ T s.)
+pub(crate) struct Condensation {
+    /// Number of data points n.
+    pub n: usize,
+    /// The vertex of each data point (increasing; `new` spaces them `stride` apart).
+    pub vertices: Vec<usize>,
+    /// Whether the curve is closed.
+    pub closed: bool,
+    /// The first data row with an unknown (0 closed, 1 open: the end rows are zero).
+    pub first: usize,
+    /// T: diagonal (one entry per data row first..first + len).
+    pub diag: Vec<f64>,
+    /// T: `off[j]` couples rows j and j + 1 (cyclic: the last couples back to 0; unused on open
+    /// curves).
+    pub off: Vec<f64>,
+    /// K: row j holds the coefficients on the data points first + j − 1, first + j,
+    /// first + j + 1 (indices modulo n on closed curves).
+    pub krows: Vec<[f64; 3]>,
+    /// Per free vertex (indexed by vertex): its span's LU multiplier l and reciprocal pivot u,
+    /// and the entries of g = B⁻ᵀe_first and h = B⁻ᵀe_last (pass 1's work, reused by pass 2).
+    factors: [Vec<f64>; 4],
+    /// Per span: [g·g, g·h, h·h, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (reused by
+    /// [`Condensation::at_vertices_reusing`]).
+    spans: Vec<[f64; 7]>,
+}
+
+impl Condensation {
+    /// Pass 1 over the spans of `knots` (α-rows in `stencil`), n data points every `stride`
+    /// vertices.
+    ///
+    /// # Errors
+    /// [`Error::Energy`] (`Singular`) naming a vertex whose pivot is not of the sign and size the
+    /// structure guarantees (impossible for valid knots; reported rather than assumed).
+    pub(crate) fn new(
+        knots: &Knots,
+        stencil: &Stencil,
+        n: usize,
+        stride: usize,
+    ) -> Result<Self, Error> {
+        let vertices: Vec<usize> = (0..n).map(|i| i * stride).collect();
+        Self::at_vertices_reusing(knots, stencil, vertices, None)
+    }
+
+    /// Pass 1 with the data points at the given increasing `vertices` of `knots` (any spacing
+    /// of at least two; the first is vertex 0, and for an open curve the last is the last
+    /// vertex): every other vertex is free. The working-set method of the balls solver
+    /// condenses onto a subset of the data vertices this way, reusing the span work of `prev`,
+    /// a condensation of the same knots onto other vertices: a span of `prev` that is also a
+    /// span here (same ends) keeps its factors; only the others are factored (new points split
+    /// a few spans between rounds).
+    ///
+    /// # Errors
+    /// As [`Condensation::new`]; also `Singular` at a vertex whose span has no free vertex or
+    /// where the vertex list is not of that shape (an internal error, reported).
+    pub(crate) fn at_vertices_reusing(
+        knots: &Knots,
+        stencil: &Stencil,
+        vertices: Vec<usize>,
+        prev: Option<Condensation>,
+    ) -> Result<Self, Error> {
+        let closed = knots.is_closed();
+        let n = vertices.len();
+        let nv = knots.vertex_count();
+        let spans = if closed { n } else { n - 1 };
+        let rows = &stencil.rows;
+        let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
+        // End of span i (exclusive: its right data vertex; nv for the closing span).
+        let end = |i: usize| if i + 1 < n { vertices[i + 1] } else { nv };
+        if vertices.first() != Some(&0) || (!closed && vertices.last() != Some(&(nv - 1))) {
+            return Err(singular(0));
+        }
+        for (i, &a) in vertices[..spans].iter().enumerate() {
+            if end(i) < a + 2 {
+                return Err(singular(a));
+            }
+        }
+        let prev = prev.filter(|p| p.closed == closed && p.factors[0].len() == nv);
+        // The span factors, kept for the second pass (indexed by vertex; the data vertices'
+        // entries are unused), and per span G = g·g, X = g·h, Y = h·h and the weights of its two
+        // data points in g·c and h·c, c = α_{a+1,1} q_i e_0 + α_{b−1,3} q_{i+1} e_{k−1}:
+        // [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}].
+        let (mut factors, prev_spans) = match prev {
+            Some(p) => (p.factors, Some((p.vertices, p.spans))),
+            None => (
+                [vec![0.0; nv], vec![0.0; nv], vec![0.0; nv], vec![0.0; nv]],
+                None,
+            ),
+        };
+        let mut span = vec![[0.0; 7]; spans];
+        let [fl, fu, fg, fh] = &mut factors;
+        for i in 0..spans {
+            let (a, b) = (vertices[i], end(i));
+            if let Some((pv, ps)) = &prev_spans {
+                if let Ok(p) = pv.binary_search(&a) {
+                    let pend = if p + 1 < pv.len() { pv[p + 1] } else { nv };
+                    if pend == b && p < ps.len() {
+                        span[i] = ps[p];
+                        continue;
+                    }
+                }
+            }
+            let k = b - a - 1;
+            let span_rows = &rows[a + 1..b];
+            let (l, u, g, h) = (
+                &mut fl[a + 1..b],
+                &mut fu[a + 1..b],
+                &mut fg[a + 1..b],
+                &mut fh[a + 1..b],
+            );
+            span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
+            span_gh(span_rows, l, u, g, h);
+            let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
+            span[i] = [
+                dot(g, g),
+                dot(g, h),
+                dot(h, h),
+                c0 * g[0],
+                c1 * g[k - 1],
+                c0 * h[0],
+                c1 * h[k - 1],
+            ];
+        }
+
+        let first = usize::from(!closed);
+        let last = if closed { n } else { n - 1 }; // exclusive
+        let size = last.saturating_sub(first);
+        let mut diag = vec![0.0; size];
+        let mut off = vec![0.0; size];
+        let mut krows = vec![[0.0; 3]; size];
+        for (j, i) in (first..last).enumerate() {
+            let ar = rows[vertices[i]];
+            let prev = if i == 0 { spans - 1 } else { i - 1 };
+            let cur = i % spans;
+            diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
+            let next = i + 1;
+            if next < last || closed {
+                let an = rows[vertices[next % n]];
+                off[j] = ar[2] * an[0] * span[cur][1];
+            }
+            // (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
+            krows[j] = [
+                -ar[0] * span[prev][5],
+                ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
+                -ar[2] * span[cur][4],
+            ];
+        }
+        Ok(Condensation {
+            n,
+            vertices,
+            closed,
+            first,
+            diag,
+            off,
+            krows,
+            factors,
+            spans: span,
+        })
+    }
+
+    /// Number of data rows with an unknown (n closed, n − 2 open).
+    pub(crate) fn len(&self) -> usize {
+        self.diag.len()
+    }
+
+    /// The data point of column `t` (0, 1, 2) of K's row j.
+    #[inline(always)]
+    pub(crate) fn col(&self, j: usize, t: usize) -> usize {
+        let c = self.first + j + t;
+        if self.closed {
+            (c + self.n - 1) % self.n
+        } else {
+            c - 1
+        }
+    }
+
+    /// out = K y (row j, d columns), y with n × d entries. Evaluated in difference form,
+    /// K_{j,0}(y_a − y_b) + K_{j,2}(y_c − y_b): K annihilates constants (constant data are
+    /// interpolated with zero energy), so the rounding error scales with the steps between data
+    /// points rather than with |y|.
+    #[inline]
+    pub(crate) fn apply_k(&self, y: &[f64], d: usize, out: &mut [f64]) {
+        match d {
+            1 => self.apply_k_d::<1>(y, out),
+            2 => self.apply_k_d::<2>(y, out),
+            3 => self.apply_k_d::<3>(y, out),
+            _ => self.apply_k_any(y, d, out),
+        }
+    }
+
+    /// [`Condensation::apply_k`] for a compile-time d: the rows that wrap around a closed curve
+    /// are done apart, so the others index without a modulo.
+    fn apply_k_d<const D: usize>(&self, y: &[f64], out: &mut [f64]) {
+        let size = self.krows.len();
+        if size < 3 || !self.closed {
+            return self.apply_k_any(y, D, out);
+        }
+        // Closed: row j has columns j − 1, j, j + 1 (first = 0).
+        let yc = |i: usize| -> [f64; D] { std::array::from_fn(|e| y[i * D + e]) };
+        let row = |j: usize, a: [f64; D], b: [f64; D], c: [f64; D], out: &mut [f64]| {
+            let kr = self.krows[j];
+            for e in 0..D {
+                out[j * D + e] = kr[0] * (a[e] - b[e]) + kr[2] * (c[e] - b[e]);
+            }
+        };
+        row(0, yc(size - 1), yc(0), yc(1), out);
+        let (mut a, mut b) = (yc(0), yc(1));
+        for j in 1..size - 1 {
+            let c = yc(j + 1);
+            row(j, a, b, c, out);
+            (a, b) = (b, c);
+        }
+        row(size - 1, a, b, yc(0), out);
+    }
+
+    fn apply_k_any(&self, y: &[f64], d: usize, out: &mut [f64]) {
+        for (j, kr) in self.krows.iter().enumerate() {
+            let (a, b, c) = (self.col(j, 0), self.col(j, 1), self.col(j, 2));
+            for e in 0..d {
+                let yb = y[b * d + e];
+                out[j * d + e] = kr[0] * (y[a * d + e] - yb) + kr[2] * (y[c * d + e] - yb);
+            }
+        }
+    }
+
+    /// out = Kᵀ s (n × d), s with one row per data row.
+    #[inline]
+    pub(crate) fn apply_kt(&self, s: &[f64], d: usize, out: &mut [f64]) {
+        match d {
+            1 => self.apply_kt_d::<1>(s, out),
+            2 => self.apply_kt_d::<2>(s, out),
+            3 => self.apply_kt_d::<3>(s, out),
+            _ => self.apply_kt_any(s, d, out),
+        }
+    }
+
+    /// [`Condensation::apply_kt`] for a compile-time d, gathering per output point (column i of
+    /// a closed curve collects rows i − 1, i, i + 1) without a modulo away from the ends.
+    fn apply_kt_d<const D: usize>(&self, s: &[f64], out: &mut [f64]) {
+        let size = self.krows.len();
+        if size < 3 || !self.closed {
+            return self.apply_kt_any(s, D, out);
+        }
+        let k = &self.krows;
+        let col = |i: usize, jp: usize, jn: usize, out: &mut [f64]| {
+            for e in 0..D {
+                out[i * D + e] =
+                    k[jp][2] * s[jp * D + e] + k[i][1] * s[i * D + e] + k[jn][0] * s[jn * D + e];
+            }
+        };
+        col(0, size - 1, 1, out);
+        for i in 1..size - 1 {
+            col(i, i - 1, i + 1, out);
+        }
+        col(size - 1, size - 2, 0, out);
+    }
+
+    fn apply_kt_any(&self, s: &[f64], d: usize, out: &mut [f64]) {
+        out.fill(0.0);
+        for (j, kr) in self.krows.iter().enumerate() {
+            for (t, &kv) in kr.iter().enumerate() {
+                let c = self.col(j, t);
+                for e in 0..d {
+                    out[c * d + e] += kv * s[j * d + e];
+                }
+            }
+        }
+    }
+
+    /// Pass 2: the minimizing curve with the data vertices at y (n × d) and data-row values
+    /// `s` (one row of d per data row first..first + len, i.e. T s = K y).
+    ///
+    /// # Errors
+    /// As [`Condensation::new`].
+    pub(crate) fn reconstruct(
+        &self,
+        knots: &Knots,
+        stencil: &Stencil,
+        y: &[f64],
+        s: &[f64],
+        d: usize,
+    ) -> Result<Points, Error> {
+        let nv = knots.vertex_count();
+        let mut x = vec![0.0; nv * d];
+        match d {
+            1 => self.reconstruct_into::<1>(&stencil.rows, y, s, 1, &mut x),
+            2 => self.reconstruct_into::<2>(&stencil.rows, y, s, 2, &mut x),
+            3 => self.reconstruct_into::<3>(&stencil.rows, y, s, 3, &mut x),
+            _ => self.reconstruct_into::<0>(&stencil.rows, y, s, d, &mut x),
+        }
+        Ok(Points::new(d, x)?)
+    }
+
+    /// [`Condensation::reconstruct`] into `x` (N × d), with d a compile-time constant for
+    /// d = 1, 2, 3 (`D` = 0: `d`). Each span is solved in place in its slice of `x`.
+    fn reconstruct_into<const D: usize>(
+        &self,
+        rows: &[[f64; 3]],
+        y: &[f64],
+        s: &[f64],
+        d: usize,
+        x: &mut [f64],
+    ) {
+        let d = if D == 0 { d } else { D };
+        let nv = x.len() / d;
+        let n = self.n;
+        let vertices = &self.vertices;
+        let end = |i: usize| if i + 1 < n { vertices[i + 1] } else { nv };
+        let spans = if self.closed { n } else { n - 1 };
+        let yp = |i: usize| {
+            let i = if i == n { 0 } else { i };
+            &y[i * d..(i + 1) * d]
+        };
+        // The data-row value of row i (zero for the end rows of an open curve).
+        let srow = |i: usize, c: usize| {
+            if i >= self.first && i - self.first < self.len() {
+                s[(i - self.first) * d + c]
+            } else {
+                0.0
+            }
+        };
+        let [fl, fu, fg, fh] = &self.factors;
+        for (i, &v) in vertices.iter().enumerate() {
+            x[v * d..(v + 1) * d].copy_from_slice(yp(i));
+        }
+        for i in 0..spans {
+            let (a, b) = (vertices[i], end(i));
+            let k = b - a - 1;
+            let span_rows = &rows[a + 1..b];
+            let (l, u, g, h) = (&fl[a + 1..b], &fu[a + 1..b], &fg[a + 1..b], &fh[a + 1..b]);
+            let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
+            let right = if i + 1 == n { 0 } else { i + 1 };
+            let (qa, qb) = (yp(i), yp(i + 1));
+            let f = &mut x[(a + 1) * d..b * d];
+            for c in 0..d {
+                // x = B⁻¹(e − c), e = −μ g − ν h with μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1}.
+                let mu = rows[a][2] * srow(i, c);
+                let nu = rows[vertices[right]][0] * srow(right, c);
+                for j in 0..k {
+                    f[j * d + c] = -mu * g[j] - nu * h[j];
+                }
+                f[c] -= c0 * qa[c];
+                f[(k - 1) * d + c] -= c1 * qb[c];
+            }
+            // B x = f: forward with L, backward with U (super-diagonal = α_{·,3}).
+            for j in 1..k {
+                for c in 0..d {
+                    f[j * d + c] -= l[j] * f[(j - 1) * d + c];
+                }
+            }
+            for c in 0..d {
+                f[(k - 1) * d + c] *= u[k - 1];
+            }
+            for j in (0..k - 1).rev() {
+                for c in 0..d {
+                    f[j * d + c] = (f[j * d + c] - span_rows[j][2] * f[(j + 1) * d + c]) * u[j];
+                }
+            }
+        }
+    }
+}
+
+/// Solves the interpolation problem (3.3) on `knots` with q_i fixed at vertex `stride · i`,
+/// using the α-rows in `stencil` (built from the same knots).
+///
+/// # Errors
+/// [`Error::Energy`] (`Singular`) naming a vertex whose pivot is not of the sign and size the
+/// structure guarantees (impossible for valid knots; reported rather than assumed).
+pub(crate) fn interpolate(
+    knots: &Knots,
+    stencil: &Stencil,
+    q: &Points,
+    stride: usize,
+) -> Result<Points, Error> {
+    let d = q.dim();
+    let n = q.len();
+    let cond = Condensation::new(knots, stencil, n, stride)?;
+    let size = cond.len();
+    let mut s = vec![0.0; size * d];
+    if size > 0 {
+        cond.apply_k(q.coords(), d, &mut s);
+        let (mut diag, mut off) = (cond.diag.clone(), cond.off.clone());
+        solve_tridiagonal(&mut diag, &mut off, &mut s, d, cond.closed && size >= 3).map_err(
+            |j| {
+                Error::from(energy::Error::Singular {
+                    vertex: (cond.first + j) * stride,
+                })
+            },
+        )?;
+    }
+    cond.reconstruct(knots, stencil, q.coords(), &s, d)
+}
+
+/// Solves the symmetric tridiagonal (or, with `cyclic`, cyclic tridiagonal: `off[len−1]`
+/// couples the last unknown with the first) positive definite system in place, for `d`
+/// right-hand-side columns stored row-major in `rhs`. Returns the index of a non-positive pivot.
+pub(super) fn solve_tridiagonal(
+    diag: &mut [f64],
+    off: &mut [f64],
+    rhs: &mut [f64],
+    d: usize,
+    cyclic: bool,
+) -> Result<(), usize> {
+    let size = diag.len();
+    if !cyclic {
+        return ldl_solve(diag, &off[..size.saturating_sub(1)], rhs, d, None);
+    }
+    // Sherman–Morrison: A = T + v vᵀ with v = (γ, 0, …, 0, corner/γ) and T the tridiagonal part
+    // with its first and last diagonal entries reduced by γ and corner²/γ.
+    let corner = off[size - 1];
+    let gamma = -diag[0];
+    diag[0] -= gamma;
+    diag[size - 1] -= corner * corner / gamma;
+    let mut v = vec![0.0; size];
+    v[0] = gamma;
+    v[size - 1] = corner;
+    ldl_solve(diag, &off[..size - 1], rhs, d, Some(&mut v))?;
+    // v now holds T⁻¹v (with v = (γ, 0, …, corner)); vᵀ(·) uses the same v.
+    let vt = |y0: f64, yl: f64| y0 + corner / gamma * yl;
+    let denom = 1.0 + vt(v[0], v[size - 1]);
+    for c in 0..d {
+        let f = vt(rhs[c], rhs[(size - 1) * d + c]) / denom;
+        for j in 0..size {
+            rhs[j * d + c] -= f * v[j];
+        }
+    }
+    Ok(())
+}
+
+/// L D Lᵀ x = b for the D columns of `x` (row-major) and, if not empty, the column `e`, given
+/// the multipliers `lm` and the reciprocal pivots `inv`. The columns' recurrences run side by
+/// side with their running values in registers (reading back a value just stored would put
+/// store forwarding on each chain).
+#[inline]
+fn substitute<const D: usize>(lm: &[f64], inv: &[f64], x: &mut [f64], e: &mut [f64]) {
+    let size = inv.len();
+    if size == 0 {
+        return;
+    }
+    let has_e = !e.is_empty();
+    let mut prev: [f64; D] = std::array::from_fn(|c| x[c]);
+    let mut pe = if has_e { e[0] } else { 0.0 };
+    for j in 1..size {
+        let l = lm[j];
+        for c in 0..D {
+            prev[c] = x[j * D + c] - l * prev[c];
+            x[j * D + c] = prev[c];
+        }
+        if has_e {
+            pe = e[j] - l * pe;
+            e[j] = pe;
+        }
+    }
+    let last = size - 1;
+    for c in 0..D {
+        prev[c] = x[last * D + c] * inv[last];
+        x[last * D + c] = prev[c];
+    }
+    if has_e {
+        pe = e[last] * inv[last];
+        e[last] = pe;
+    }
+    for j in (0..last).rev() {
+        let (l, iv) = (lm[j + 1], inv[j]);
+        for c in 0..D {
+            prev[c] = x[j * D + c] * iv - l * prev[c];
+            x[j * D + c] = prev[c];
+        }
+        if has_e {
+            pe = e[j] * iv - l * pe;
+            e[j] = pe;
+        }
+    }
+}
+
+/// LDLᵀ of a symmetric positive definite tridiagonal matrix (diagonal `diag`, overwritten with
+/// the reciprocal pivots; off-diagonal `off`), solving for the `d` columns of `rhs` and, if
+/// given, one extra column `extra`. Returns the row of a pivot that is not positive.
+///
+/// The pivots come from the determinant recurrence P_j = a_j P_{j−1} − b_{j−1}² P_{j−2}
+/// (P_{−1} = 1) as D_j = P_j / P_{j−1}: the continued fraction D_j = a_j − b_{j−1}²/D_{j−1} puts
+/// a division on the dependency chain of every row, the recurrence only a multiply-add (the
+/// divisions overlap). P is rescaled by a power of two, which is exact, whenever it leaves
+/// [1e-150, 1e150].
+fn ldl_solve(
+    diag: &mut [f64],
+    off: &[f64],
+    rhs: &mut [f64],
+    d: usize,
+    extra: Option<&mut Vec<f64>>,
+) -> Result<(), usize> {
+    let size = diag.len();
+    let mut lm = vec![0.0; size];
+    let (mut p2, mut p1) = (0.0f64, 1.0f64);
+    for j in 0..size {
+        let b = if j > 0 { off[j - 1] } else { 0.0 };
+        let p = diag[j] * p1 - b * b * p2;
+        let inv = p1 / p;
+        if !(inv > 0.0 && inv.is_finite()) {
+            return Err(j);
+        }
+        diag[j] = inv;
+        if j > 0 {
+            lm[j] = b * diag[j - 1];
+        }
+        (p2, p1) = (p1, p);
+        if !(1e-150..=1e150).contains(&p1) {
+            // P_j > 0 here (D_j > 0 and P_{j−1} > 0): scale both by 2^(−exponent of P_j).
+            let e = ((p1.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+            let scale = 2f64.powi(-e);
+            (p2, p1) = (p2 * scale, p1 * scale);
+        }
+    }
+    // Forward and backward substitution, one column at a time with the running value kept in
+    // a register (reading back the value just stored would put store forwarding on the chain).
+    let mut none: Vec<f64> = Vec::new();
+    let e: &mut [f64] = match extra {
+        Some(e) => e,
+        None => &mut none,
+    };
+    match d {
+        1 => substitute::<1>(&lm, diag, rhs, e),
+        2 => substitute::<2>(&lm, diag, rhs, e),
+        3 => substitute::<3>(&lm, diag, rhs, e),
+        _ => {
+            for c in 0..d {
+                let mut col: Vec<f64> = (0..size).map(|j| rhs[j * d + c]).collect();
+                substitute::<1>(&lm, diag, &mut col, &mut []);
+                for (j, v) in col.into_iter().enumerate() {
+                    rhs[j * d + c] = v;
+                }
+            }
+            if !e.is_empty() {
+                substitute::<1>(&lm, diag, e, &mut []);
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,172 @@
+//! Solving a [`Problem`]: Algorithm 4.1 on centred data, the closed-form interpolatory
+//! refinement, and the stage-0 solve the free-knot optimizer calls.
+
+use crate::constraint::Constraint;
+use crate::problem::{Problem, Solver};
+use crate::stage::FixedProblem;
+use crate::{algorithm, strategy, uniform, Refinement};
+
+impl Problem {
+    /// Validates the problem and runs Algorithm 4.1 (see the crate docs).
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`]; [`crate::Error::DegenerateRefinedSpan`]
+    /// when a knot update meets coincident refined vertices; [`crate::Error::Energy`] if a
+    /// linear system is numerically singular; [`crate::Error::Unsupported`] for combinations a
+    /// solver does not handle.
+    pub fn solve(&self) -> Result<Refinement, crate::Error> {
+        // Solve on data centred at their centroid and translate back: every part of the
+        // problem is translation invariant, but the interior-point method measures its
+        // convergence relative to absolute coordinates, so data far from the origin (relative
+        // to their extent) stopped early with a wrong active set (tests/invariance.rs).
+        self.validate()?;
+        let (n, d) = (self.points.len(), self.points.dim());
+        let mut centroid = vec![0.0; d];
+        for x in self.points.iter() {
+            for (c, v) in centroid.iter_mut().zip(x) {
+                *c += v / n as f64;
+            }
+        }
+        if centroid.iter().all(|&c| c == 0.0) {
+            return self.accept(algorithm::run(self)?);
+        }
+        let mut centred = self.clone();
+        for i in 0..n {
+            for (x, c) in centred.points.point_mut(i).iter_mut().zip(&centroid) {
+                *x -= c;
+            }
+        }
+        // Each kind moves its own data with the points (half-space offsets, …).
+        let offset: Vec<f64> = centroid.iter().map(|c| -c).collect();
+        for kind in self.kinds() {
+            kind.translate(&offset, &mut centred);
+        }
+        let mut r = algorithm::run(&centred)?;
+        for j in 0..r.points.len() {
+            for (x, c) in r.points.point_mut(j).iter_mut().zip(&centroid) {
+                *x += c;
+            }
+        }
+        self.accept(r)
+    }
+
+    /// The interpolatory k-level refinement (3.3) of the data on their knots (the given knots or
+    /// the parametrization), from data to refined vertices in closed form and without the
+    /// certificate: O(N) with one streaming write of the N vertices (see the `uniform` module:
+    /// every span of the split is a cubic). The points are those of [`Problem::solve`] with
+    /// `knot_iterations = 0` and no further levels, to rounding (tested); their knots are
+    /// [`Problem::refined_knots`]. Use `solve` for the energy, reactions and the KKT certificate.
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`]; [`crate::Error::Unsupported`] unless the
+    /// constraint is [`Constraint::Interpolate`] with no tangents and natural ends.
+    ///
+    /// ```
+    /// use divdiff::Points;
+    /// use refine::Problem;
+    /// let square = Points::from_rows(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]).unwrap();
+    /// let problem = Problem::new(square).with_k(3);
+    /// let p = problem.refine_points().unwrap();
+    /// assert_eq!((p.len(), problem.refined_knots().unwrap().values().len()), (16, 17));
+    /// assert_eq!(p.point(4), &[1.0, 0.0]); // the data are interpolated
+    /// ```
+    pub fn refine_points(&self) -> Result<divdiff::Points, crate::Error> {
+        self.validate()?;
+        if self.constraint != Constraint::Interpolate || self.has_derivative_constraints() {
+            return Err(crate::Error::Unsupported {
+                field: "constraint",
+                reason: "refine_points is interpolation with natural ends; use solve",
+            });
+        }
+        uniform::interpolate_from_data_knots(
+            &self.data_knots_unvalidated()?,
+            &self.points,
+            self.k + 1,
+        )
+    }
+
+    /// The conic program of the first fixed-knot solve — stage 0 on the k-level split of the
+    /// data knots, before any knot update — as the constraint kinds state it: what the exact
+    /// solver's full-vertex entries solve ([`crate::strategy`]), for inspection and for
+    /// solving with another method (e.g. [`ConicProblem::solve_clarabel`]). The data are not
+    /// centred ([`Problem::solve`] centres them first).
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`]; errors of the derivative stencils.
+    pub fn conic_problem(&self) -> Result<crate::ConicProblem, crate::Error> {
+        self.validate()?;
+        let knots = algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)?;
+        let stride = self.k + 1;
+        let dv: Vec<usize> = (0..self.points.len()).map(|i| stride * i).collect();
+        let fp = FixedProblem {
+            knots: &knots,
+            q: &self.points,
+            data_vertex: &dv,
+            constraint: &self.constraint,
+            problem: self,
+            derivatives: true,
+            stride,
+            uniform_spans: true,
+            working_set: None,
+            options: &self.options,
+        };
+        let mut rows = crate::constraint::Rows::new(&fp)?;
+        for k in fp.kinds() {
+            k.rows(&fp, &mut rows)?;
+        }
+        Ok(rows.problem)
+    }
+
+    /// The knots of the k-level split (3.1) of the data knots: the knots of
+    /// [`Problem::refine_points`] (and of the first solve of [`Problem::solve`]).
+    ///
+    /// # Errors
+    /// Any validation error of [`Problem::validate`].
+    pub fn refined_knots(&self) -> Result<divdiff::Knots, crate::Error> {
+        self.validate()?;
+        algorithm::split_knots(&self.data_knots_unvalidated()?, self.k)
+    }
+
+    /// Refuses an exact result whose independent certificate (the largest over its stages) is
+    /// above [`crate::SolveOptions::accept_kkt`]: an answer that is not optimal is an error
+    /// carrying the best residual reached, never a result.
+    fn accept(&self, r: Refinement) -> Result<Refinement, crate::Error> {
+        let certified = r.kkt_residual <= self.options.accept_kkt; // false for NaN too
+        if self.solver == Solver::Exact && !certified {
+            return Err(crate::Error::NotConverged {
+                solver: "exact refinement",
+                iterations: r.iterations.solver,
+                residual: r.kkt_residual,
+            });
+        }
+        Ok(r)
+    }
+}
+
+/// One exact fixed-knot solve of stage 0 (the near-interpolatory k-level step) on the given
+/// refined knots, certified: the points, E, and the relative KKT residual. Used by the free-knot
+/// optimizer ([`crate::optimize_knots`]), which validates `problem` and `knots` first.
+pub(crate) fn solve_stage0_on(
+    problem: &Problem,
+    knots: &divdiff::Knots,
+) -> Result<(divdiff::Points, f64, f64), crate::Error> {
+    let q = &problem.points;
+    let stride = problem.k + 1;
+    let dv: Vec<usize> = (0..q.len()).map(|i| stride * i).collect();
+    let fp = FixedProblem {
+        knots,
+        q,
+        data_vertex: &dv,
+        constraint: &problem.constraint,
+        problem,
+        derivatives: true,
+        stride,
+        uniform_spans: false,
+        working_set: None,
+        options: &problem.options,
+    };
+    let s = strategy::exact(&fp)?;
+    let (cert, _) = strategy::certificate(&fp, &s);
+    let kkt = cert.kkt_residual;
+    Ok((s.points, cert.energy, kkt))
+}

@@ -1,0 +1,185 @@
+//! Newton's method on the tridiagonal Hessian of Φ, with a backtracking line search.
+
+use super::phi::{inf_norm, Hints, Outer, OuterOut};
+use crate::cell::CellStats;
+use crate::error::Error;
+use crate::linalg::Band;
+use crate::types::Options;
+
+/// Stop when the Newton decrement ½ gᵀH⁻¹g is below this fraction of 1 + Φ and the Newton step
+/// below [`STEP_TOL`] (normalized frame: Φ, unknowns and steps are of unit order).
+pub(crate) const DECREMENT_TOL: f64 = 1e-15;
+/// Newton steps below this fraction of 1 + ‖x‖∞ are negligible (with [`DECREMENT_TOL`]).
+pub(crate) const STEP_TOL: f64 = 1e-12;
+/// Once the decrement is below [`DECREMENT_TOL`], full Newton steps are taken without a line
+/// search as long as Φ rises by at most this fraction of 1 + |Φ| (its rounding level) …
+const PHI_ROUNDING: f64 = 1e-14;
+/// … and at most this many of them.
+const POLISH_STEPS: usize = 3;
+/// Line-search backtracking steps before giving up.
+const LINE_SEARCH_STEPS: usize = 60;
+/// Armijo sufficient-decrease constant.
+const ARMIJO: f64 = 1e-4;
+
+/// Projected Newton on the banded Hessian. Returns (x, iterations, (cells, x, gradient)).
+pub(crate) fn newton(
+    o: &Outer,
+    mut x: Vec<f64>,
+    opts: &Options,
+    hints: &mut Hints,
+    stats: &mut CellStats,
+    solves: &mut usize,
+) -> Result<OuterOut, Error> {
+    let nv = o.nvar;
+    let mut band = Band::zeros(nv);
+    let mut ev = o
+        .eval(&x, hints, Some(&mut band), stats, solves)
+        .map_err(|j| o.no_candidate(j))?;
+    let g0 = inf_norm(&ev.grad);
+    let tol = opts.gradient_tol * (1.0 + g0);
+    let mut it = 0;
+    let mut polished = 0;
+    let mut newton_decrement = 0.0;
+    while it < opts.max_iterations {
+        if inf_norm(&ev.grad) <= tol || nv == 0 {
+            break;
+        }
+        it += 1;
+        let hb = band.clone();
+        let rhs: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
+        newton_decrement = f64::INFINITY;
+        let mut lambda = 0.0;
+        let maxdiag =
+            hb.a.iter()
+                .fold(0.0f64, |m, r| m.max(r[0].abs()))
+                .max(1e-300);
+        let dir = loop {
+            let mut hl = hb.clone();
+            for r in hl.a.iter_mut() {
+                r[0] += lambda;
+            }
+            if let Some(d) = hl.solve(&rhs) {
+                break d;
+            }
+            lambda = if lambda == 0.0 {
+                1e-12 * maxdiag
+            } else {
+                lambda * 10.0
+            };
+            if lambda > 1e6 * maxdiag {
+                break rhs.clone();
+            }
+        };
+        // Newton decrement: ½ gᵀH⁻¹g estimates Φ − min Φ; along very stiff directions (contacts
+        // next to a grid point) it is the meaningful convergence measure, not ‖g‖. But
+        // Φ − min Φ ~ 1e-15 Φ still leaves the unknowns off by up to ~√1e-15 along soft
+        // directions, and Φ can no longer see progress there (Armijo tests at rounding level
+        // accept or refuse at random). So once the decrement is that small, full Newton steps
+        // are taken as long as Φ does not rise beyond rounding (at most POLISH_STEPS of them;
+        // Newton converges quadratically), and the solve stops when the step is negligible.
+        let mut polish = None;
+        if lambda == 0.0 {
+            newton_decrement = 0.5 * (0..nv).map(|k| rhs[k] * dir[k]).sum::<f64>();
+            if newton_decrement <= DECREMENT_TOL * (1.0 + ev.phi.abs()) {
+                if inf_norm(&dir) <= STEP_TOL * (1.0 + inf_norm(&x)) || polished >= POLISH_STEPS {
+                    break;
+                }
+                polished += 1;
+                let xn: Vec<f64> = (0..nv).map(|k| x[k] + dir[k]).collect();
+                let mut h2 = hints.clone();
+                match o.eval(&xn, &mut h2, None, stats, solves) {
+                    Ok(e) if e.phi <= ev.phi + PHI_ROUNDING * (1.0 + ev.phi.abs()) => {
+                        polish = Some((xn, h2, e.phi));
+                    }
+                    _ => break,
+                }
+            }
+        }
+        // backtracking line search along the Newton direction; if it cannot decrease
+        // Φ (a Hessian that jumps across candidate regions), along the diagonally scaled and
+        // then the plain negative gradient
+        let diag_dir: Vec<f64> = (0..nv)
+            .map(|k| {
+                let d = band.a[k][0];
+                -ev.grad[k] / if d > 0.0 { d } else { 1.0 }
+            })
+            .collect();
+        let grad_dir: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
+        let mut accepted = polish;
+        for dir in [&dir, &diag_dir, &grad_dir] {
+            if accepted.is_some() {
+                break;
+            }
+            let mut alpha = 1.0;
+            for _ in 0..LINE_SEARCH_STEPS {
+                let xn: Vec<f64> = (0..nv).map(|k| x[k] + alpha * dir[k]).collect();
+                let mut h2 = hints.clone();
+                if let Ok(e) = o.eval(&xn, &mut h2, None, stats, solves) {
+                    let dec: f64 = (0..nv).map(|k| ev.grad[k] * (xn[k] - x[k])).sum();
+                    if dec < 0.0 && e.phi <= ev.phi + ARMIJO * dec {
+                        accepted = Some((xn, h2, e.phi));
+                        break;
+                    }
+                }
+                alpha *= 0.5;
+            }
+            if accepted.is_some() {
+                break;
+            }
+        }
+        let Some((xn, h2, _)) = accepted else {
+            break; // no further decrease representable: converged to rounding
+        };
+        x = xn;
+        *hints = h2;
+        band = Band::zeros(nv);
+        ev = o
+            .eval(&x, hints, Some(&mut band), stats, solves)
+            .map_err(|j| o.no_candidate(j))?;
+    }
+    // the decrement at the final point
+    newton_decrement = match band.solve(&ev.grad) {
+        Some(d) => 0.5 * ev.grad.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
+        None => newton_decrement,
+    };
+    // out of iterations with neither the gradient nor the decrement (the estimate of Φ − min Φ)
+    // converged: the caller decides (see `crate::strategy`)
+    let decrement_ok = newton_decrement <= ACCEPT_DECREMENT * (1.0 + ev.phi.abs());
+    let converged = it < opts.max_iterations || inf_norm(&ev.grad) <= tol || decrement_ok;
+    Ok(OuterOut {
+        decrement: newton_decrement,
+        iterations: it,
+        converged,
+        sols: ev.sols,
+        x,
+        grad: ev.grad,
+        phi: ev.phi,
+    })
+}
+
+/// The Newton decrement ½ gᵀH⁻¹g at `x` (the estimate of Φ − min Φ), from one evaluation of
+/// the Hessian; NaN when that fails.
+pub(crate) fn decrement_at(o: &Outer, x: &[f64], grad: &[f64]) -> f64 {
+    let mut band = Band::zeros(o.nvar);
+    let m = o.cells.len();
+    if o.eval(
+        x,
+        &mut vec![None; m],
+        Some(&mut band),
+        &mut CellStats::default(),
+        &mut 0,
+    )
+    .is_err()
+    {
+        return f64::NAN;
+    }
+    match band.solve(grad) {
+        Some(d) => 0.5 * grad.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>(),
+        None => f64::NAN,
+    }
+}
+
+/// Relative Newton decrement below which a solve that ran out of iterations is still accepted
+/// (Φ is within this fraction of its minimum: the gradient can stall at kinks of polyline bounds
+/// while Φ has converged).
+pub(crate) const ACCEPT_DECREMENT: f64 = 1e-9;

@@ -1,0 +1,284 @@
+//! Benchmarks for `conic`: the exact fixed-knot solve of every problem class, the crate's own
+//! interior-point method (through `refine::Problem::solve`, the path users call: the strategy
+//! list, the condensed or full-vertex backend, the polish and the independent certificate)
+//! against Clarabel on the same conic program (`Problem::conic_problem` →
+//! `ConicProblem::solve_clarabel`: the full-vertex program with the energy factored, Clarabel's
+//! tolerances 1e-10, its answer certified by `conic`'s residuals).
+//!
+//! Data: the noisy star of `crates/refine/tests/kersey_support/cases.rs` (jittered angles,
+//! balls and boxes of 0.05–0.25 of the local chord; wedges at every 8th point; clamped ends),
+//! k = 3, d = 2, no knot update (one fixed-knot solve), closed and open, n = 10²…10⁵ (Clarabel up
+//! to where it finishes within its time limit).
+//!
+//! A second table times the full-vertex backend alone on issue 3's balls problem (a wavy closed
+//! curve with radii 0.05–0.55 of the spacing) against Clarabel on the same SOCP as posed
+//! (P = H ⊗ I), the table the `energy` group used to print.
+//!
+//! Every ratio is measured in the same run; nothing is asserted.
+
+#[allow(clippy::duplicate_mod)]
+#[path = "../../../crates/refine/tests/kersey_support/mod.rs"]
+mod kersey_support;
+
+use std::time::{Duration, Instant};
+
+use divdiff::Topology;
+use kersey_support::cases::{problem, Class};
+use refine::{ConicOptions, ConicProblem, ConvexSet};
+
+use super::{time_median, Opts};
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// Clarabel's time limit per solve (a run that hits it is reported, not compared).
+const CLARABEL_LIMIT_S: f64 = 60.0;
+
+/// Runs this group and prints its tables.
+pub fn run(opts: Opts) -> anyhow::Result<()> {
+    println!("## conic — exact fixed-knot solves, ours vs Clarabel on the same conic program");
+    println!();
+    println!("noisy star, k = 3, d = 2, knot_iterations = 0; ours = Problem::solve (certified); Clarabel = the same program (ConicProblem::solve_clarabel, tolerance 1e-10), certified by the same residuals");
+    println!();
+    println!("| class | topology | n | N | ours | ns/vertex | iterations | certificate | Clarabel | status | its certificate | energy rel. diff | Clarabel / ours |");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|");
+    let sizes: &[usize] = if opts.quick {
+        &[100, 1_000]
+    } else {
+        &[100, 1_000, 10_000, 100_000]
+    };
+    let clarabel_max = if opts.quick { 1_000 } else { 100_000 };
+    for class in [
+        Class::Balls,
+        Class::HalfSpaces,
+        Class::Tangents,
+        Class::Clamped,
+    ] {
+        for topology in [Topology::Closed, Topology::Open] {
+            if class == Class::Clamped && topology == Topology::Closed {
+                continue;
+            }
+            // Clarabel stops being worth waiting for once it has taken over a minute.
+            let mut clarabel_gave_up = false;
+            for &n in sizes {
+                let p = problem(class, n, 2, topology, 3, 7);
+                let nv = refine::Problem::refined_len(p.topology, n, p.k);
+                let reps = (200_000 / n).clamp(1, 15);
+                let start = Instant::now();
+                let first = p.solve();
+                let once = start.elapsed();
+                let sol = match first {
+                    Ok(s) => s,
+                    Err(e) => {
+                        println!(
+                            "| {} | {topology:?} | {n} | {nv} | refused after {:.1} ms: {e} | | | | | | | | |",
+                            class.name(),
+                            ms(once)
+                        );
+                        continue;
+                    }
+                };
+                let t = if reps > 1 {
+                    time_median(reps, || p.solve().expect("solved once"))
+                } else {
+                    once
+                };
+                let ours = format!(
+                    "{:.2} ms | {:.0} | {} | {:.1e}",
+                    ms(t),
+                    t.as_secs_f64() * 1e9 / nv as f64,
+                    sol.iterations.solver,
+                    sol.kkt_residual
+                );
+                let theirs = if n > clarabel_max || clarabel_gave_up {
+                    "— | not run | | | ".to_string()
+                } else {
+                    let cp = p.conic_problem()?;
+                    let copts = conic::clarabel::ClarabelOptions {
+                        time_limit: Some(CLARABEL_LIMIT_S),
+                        ..Default::default()
+                    };
+                    let start = Instant::now();
+                    let r = cp.solve_clarabel(&copts);
+                    let tc = start.elapsed();
+                    if tc.as_secs_f64() >= CLARABEL_LIMIT_S {
+                        clarabel_gave_up = true;
+                    }
+                    match r {
+                        Ok(c) => {
+                            let e = energy::energy(cp.knots(), &c.points)?;
+                            let status = if c.kkt.total <= 1e-9 {
+                                "certified"
+                            } else {
+                                "not certified"
+                            };
+                            format!(
+                                "{:.2} ms | {status} ({} it.) | {:.1e} | {:.1e} | {:.1}×",
+                                ms(tc),
+                                c.iterations,
+                                c.kkt.total,
+                                (e - sol.energy).abs() / sol.energy,
+                                tc.as_secs_f64() / t.as_secs_f64()
+                            )
+                        }
+                        Err(e) => format!("{:.2} ms | failed: {e} | | | ", ms(tc)),
+                    }
+                };
+                println!(
+                    "| {} | {topology:?} | {n} | {nv} | {ours} | {theirs} |",
+                    class.name()
+                );
+            }
+        }
+    }
+    println!();
+    full_vertex(opts)?;
+    Ok(())
+}
+
+/// Points per span in issue 3's balls problem.
+const BALLS_K: usize = 3;
+
+/// The data of issue 3's balls problem: n points on a noisy closed curve and the refined knots
+/// (centripetal data knots split uniformly into k + 1 pieces).
+fn balls_data(n: usize) -> anyhow::Result<(Vec<[f64; 2]>, divdiff::Knots)> {
+    let k = BALLS_K;
+    let q: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            let wobble = 1.0 + 0.2 * (7.0 * a).sin() + 0.01 * ((i * 7919 % 97) as f64 / 97.0 - 0.5);
+            [wobble * a.cos(), 0.7 * wobble * a.sin()]
+        })
+        .collect();
+    let mut t = vec![0.0];
+    for i in 0..n {
+        let (a, b) = (q[i], q[(i + 1) % n]);
+        let span = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2))
+            .sqrt()
+            .sqrt();
+        let t0 = *t.last().unwrap_or(&0.0);
+        for j in 1..=k + 1 {
+            t.push(t0 + span * j as f64 / (k + 1) as f64);
+        }
+    }
+    Ok((q, divdiff::Knots::closed(t)?))
+}
+
+/// Issue 3's balls problem: n data points on a noisy closed curve, k = 3 (N = 4n vertices),
+/// d = 2, centripetal data knots split uniformly, a ball of random radius about every data point.
+fn balls_problem(n: usize) -> anyhow::Result<ConicProblem> {
+    let k = BALLS_K;
+    let (q, knots) = balls_data(n)?;
+    let mut p = ConicProblem::new(&knots, 2)?;
+    let spacing = std::f64::consts::TAU / n as f64;
+    for (i, c) in q.iter().enumerate() {
+        let r = spacing * (0.05 + 0.5 * ((i * 31 % 101) as f64 / 101.0));
+        p.add_constraint(
+            &[((k + 1) * i, 1.0)],
+            ConvexSet::Ball {
+                center: c.to_vec(),
+                radius: r,
+            },
+        )?;
+    }
+    Ok(p)
+}
+
+/// The full-vertex backend alone on issue 3's balls problem, against Clarabel on the same SOCP
+/// as posed (P = H ⊗ I).
+fn full_vertex(opts: Opts) -> anyhow::Result<()> {
+    println!("## conic — the full-vertex backend alone: issue 3's balls problem (closed, k = 3, d = 2), vs Clarabel as posed");
+    println!();
+    println!("| n | N | ours | iterations | certificate | Clarabel | Clarabel objective | rel. diff | ratio |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let sizes: &[usize] = if opts.quick {
+        &[1_000]
+    } else {
+        &[1_000, 10_000, 100_000]
+    };
+    for &n in sizes {
+        let p = balls_problem(n)?;
+        let reps = if n >= 100_000 { 3 } else { 7 };
+        let t = time_median(reps, || p.solve(&ConicOptions::default()));
+        let sol = p.solve(&ConicOptions::default())?;
+        let (tc, obj) = if n <= 10_000 {
+            let (tc, obj) = clarabel_balls(&p)?;
+            (Some(tc), Some(obj))
+        } else {
+            (None, None)
+        };
+        println!(
+            "| {n} | {} | {:.2} ms | {} | {:.1e} | {} | {} | {} | {} |",
+            4 * n,
+            ms(t),
+            sol.iterations,
+            sol.kkt.total,
+            tc.map(|d| format!("{:.2} ms", ms(d)))
+                .unwrap_or_else(|| "—".into()),
+            obj.map(|o| format!("{o:.10e}"))
+                .unwrap_or_else(|| "—".into()),
+            obj.map(|o| format!("{:.1e}", (o - sol.objective).abs() / sol.objective.abs()))
+                .unwrap_or_else(|| "—".into()),
+            tc.map(|c| format!("{:.0}×", c.as_secs_f64() / t.as_secs_f64()))
+                .unwrap_or_else(|| "—".into()),
+        );
+    }
+    println!();
+    Ok(())
+}
+
+/// Clarabel's solve time (one run, setup excluded) and objective for a balls problem as posed,
+/// built from the dense-free banded H.
+fn clarabel_balls(p: &ConicProblem) -> anyhow::Result<(Duration, f64)> {
+    use clarabel::algebra::CscMatrix;
+    use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
+    let nv = p.len();
+    let d = 2;
+    let h = energy::Hessian::new(p.knots());
+    let (dg, o1, o2) = h.bands();
+    let (mut pi, mut pj, mut pv) = (vec![], vec![], vec![]);
+    let mut push = |a: usize, b: usize, v: f64| {
+        for c in 0..d {
+            let (r, s) = (a * d + c, b * d + c);
+            pi.push(r.min(s));
+            pj.push(r.max(s));
+            pv.push(v);
+        }
+    };
+    for j in 0..nv {
+        push(j, j, dg[j]);
+        push(j, (j + 1) % nv, o1[j]);
+        push(j, (j + 2) % nv, o2[j]);
+    }
+    let pm = CscMatrix::new_from_triplets(nv * d, nv * d, pi, pj, pv);
+    let (mut ai, mut aj, mut av, mut b) = (vec![], vec![], vec![], vec![]);
+    let mut cones = vec![];
+    let mut row = 0;
+    for (c, con) in p.constraints().iter().enumerate() {
+        let ConvexSet::Ball { center, radius } = &con.set else {
+            anyhow::bail!("constraint {c} is not a ball");
+        };
+        b.push(*radius);
+        row += 1;
+        for (comp, cc) in center.iter().enumerate() {
+            ai.push(row);
+            aj.push(con.stencil[0].0 * d + comp);
+            av.push(1.0);
+            b.push(*cc);
+            row += 1;
+        }
+        cones.push(SupportedConeT::SecondOrderConeT(d + 1));
+    }
+    let am = CscMatrix::new_from_triplets(row, nv * d, ai, aj, av);
+    let q = vec![0.0; nv * d];
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .build()
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut solver = DefaultSolver::new(&pm, &q, &am, &b, &cones, settings)
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let t0 = Instant::now();
+    solver.solve();
+    Ok((t0.elapsed(), solver.solution.obj_val))
+}
