@@ -113,3 +113,18 @@ def test_kkt_certificate_of_a_hard_problem():
         boundary={"type": "clamped", "start": [1, 0, 0], "end": [0, 1, 0]},
     )
     assert same.to_dict() == r.to_dict()
+
+
+@pytest.mark.parametrize("readme", ["README.md", "crates/curvefit-py/README.md"])
+def test_readme_example_runs_as_printed(readme, capsys):
+    """The five-line example next to the pip line runs and prints what its comment says."""
+    text = (Path(__file__).resolve().parents[3] / readme).read_text()
+    text = text[text.index("pip install ./crates/curvefit-py"):]
+    block = text[text.index("```python\n") + len("```python\n"):]
+    block = block[: block.index("```")]
+    assert len(block.strip().splitlines()) == 5, block
+    exec(compile(block, readme, "exec"), {})
+    out = capsys.readouterr().out.split()
+    assert out[:2] == ["(96,", "2)"], out
+    energy, kkt = float(out[2]), float(out[3])
+    assert energy > 0 and kkt <= 1e-9, out
