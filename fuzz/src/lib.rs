@@ -187,16 +187,21 @@ pub fn check_strip(problem: &spec::StripProblem, s: &StripResult) {
         // Remark 4.2: a value on a cubic-piece bound is moved inside by 1e-7 of the strip width
         // (reported in `shifted_data`)
         let moved = if s.shifted_data.contains(&i) {
-            let (lo, hi) = (
-                bound_at(&problem.lower, t, i).unwrap_or(yi),
-                bound_at(&problem.upper, t, i).unwrap_or(yi),
-            );
-            let width = if (hi - lo).abs() > 0.0 {
-                hi - lo
-            } else {
-                scale
-            };
-            1.0000001e-7 * width.abs()
+            // ε = 1e-7 of the strip width there, or of the value scale V where one bound is
+            // missing (V: data, bounds and end slopes × span about the chord; bounded here by
+            // their magnitudes)
+            let span = t[t.len() - 1] - t[0];
+            let slopes = problem
+                .end_slopes
+                .iter()
+                .flatten()
+                .flatten()
+                .fold(0.0f64, |m, v| m.max(v.abs() * span));
+            let bounds = (0..t.len())
+                .flat_map(|j| [bound_at(&problem.lower, t, j), bound_at(&problem.upper, t, j)])
+                .flatten()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            2e-7 * (scale.max(bounds).max(slopes) * 2.0)
         } else {
             0.0
         };

@@ -98,6 +98,7 @@ pub fn strip<'py>(py: Python<'py>, s: spec::StripResult) -> PyResult<Bound<'py, 
         norm,
         iterations,
         gradient_norm,
+        shifted_data,
     } = s;
     let m = coefficients.len();
     d.set_item("breaks", vector(py, breaks))?;
@@ -121,6 +122,8 @@ pub fn strip<'py>(py: Python<'py>, s: spec::StripResult) -> PyResult<Bound<'py, 
     d.set_item("norm", norm)?;
     d.set_item("iterations", iterations)?;
     d.set_item("gradient_norm", gradient_norm)?;
+    let shifted: Vec<i64> = shifted_data.into_iter().map(|i| i as i64).collect();
+    d.set_item("shifted_data", vector(py, shifted))?;
     Ok(d)
 }
 

@@ -175,6 +175,9 @@ class StripResult(_Result):
         norm: ‖f''‖ = √energy.
         iterations: outer iterations.
         gradient_norm: the final gradient norm of Φ (Dontchev–Kolmanovsky §3).
+        shifted_data: ``(k,)`` int64, indices of data values that lay on a cubic-piece bound
+            and were moved inside by 1e-7 of the strip width (Remark 4.2); the spline
+            interpolates the moved values. Empty when every value is interpolated exactly.
     """
 
     _fields = (
@@ -186,6 +189,7 @@ class StripResult(_Result):
         "norm",
         "iterations",
         "gradient_norm",
+        "shifted_data",
     )
     _repr_skip = ("coefficients", "slopes")
 
@@ -197,6 +201,7 @@ class StripResult(_Result):
     norm: float
     iterations: int
     gradient_norm: float
+    shifted_data: np.ndarray
 
     def __init__(self, **fields: Any) -> None:
         fields["extra_knots"] = [ExtraKnot(t, kind) for t, kind in fields["extra_knots"]]
