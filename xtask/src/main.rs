@@ -4,11 +4,13 @@
 //! * `cargo xtask figures [--out DIR]` — redraws the seeds' figures as SVG.
 //! * `cargo xtask bench [--quick]` — the benchmark tables (ratios measured in the same run).
 //! * `cargo xtask fuzz [--execs N]` — mutational fuzzing of the command line (parser + solvers).
+//! * `cargo xtask playground [--out DIR]` — the interactive page (WebAssembly + static files).
 //! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
 
 mod bench;
 mod figures;
 mod fuzz;
+mod playground;
 mod tidy;
 mod verify;
 
@@ -26,8 +28,9 @@ fn main() -> ExitCode {
         "bench" => bench::run(rest),
         "tidy" => tidy::run(rest),
         "fuzz" => fuzz::run(rest),
+        "playground" => playground::run(rest),
         _ => {
-            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--execs N]>");
+            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--execs N] | playground [--out DIR]>");
             return if cmd == "help" || cmd == "--help" {
                 ExitCode::SUCCESS
             } else {
