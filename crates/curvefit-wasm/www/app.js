@@ -90,10 +90,15 @@ function showStats() {
   }
 }
 
+// The problem as readable JSON: one line per point (`[x, y]`), nested objects indented.
+function pretty(p) {
+  return JSON.stringify(p, null, 1).replace(/\[\s*(-?[\d.e+-]+(?:,\s*-?[\d.e+-]+)*)\s*\]/g, (_, xs) => `[${xs.split(/,\s*/).join(", ")}]`);
+}
+
 // The share box, the command line and the URL show the current problem.
 function showProblem() {
   const text = JSON.stringify(mode().problem);
-  if (document.activeElement !== $("json")) $("json").value = JSON.stringify(mode().problem, null, 1);
+  if (document.activeElement !== $("json")) $("json").value = pretty(mode().problem);
   $("command").textContent = `curvefit ${mode().sub} ${mode().sub}.json`;
   history.replaceState(null, "", `#${state.mode}=${encodeURIComponent(text)}`);
 }
@@ -193,7 +198,7 @@ async function main() {
     }
   });
   $("download").addEventListener("click", () => {
-    const blob = new Blob([JSON.stringify(mode().problem, null, 1) + "\n"], { type: "application/json" });
+    const blob = new Blob([pretty(mode().problem) + "\n"], { type: "application/json" });
     const a = document.createElement("a");
     a.href = URL.createObjectURL(blob);
     a.download = `${mode().sub}.json`;

@@ -2,7 +2,7 @@
 // command line's problem object itself, edited in place, so what the page shares is exactly
 // what it solved.
 
-import { round, fmt } from "./view.js";
+import { round, fmt, badIndex } from "./view.js";
 
 // Tangent handles are drawn at q + TANGENT_SCALE · Df (Df in units of the curve's parameter).
 const TANGENT_SCALE = 1 / 3;
@@ -204,7 +204,7 @@ export class RefineMode {
       v.polyline(r.points, { color: "#1d2330", width: 2.2, closed: !!p.closed });
       for (const j of r.data_vertex) v.dot(r.points[j], { r: 2.5, fill: "#1f6feb" });
     }
-    const bad = out && out.error && out.error.index;
+    const bad = badIndex(out, ["points", "constraint.radii", "constraint.weights", "constraint.sets", "tangents"]);
     this.points.forEach((q, i) => v.dot(q, { r: 5, fill: i === bad ? "#c62828" : "#fff", stroke: i === bad ? "#c62828" : "#1d2330" }));
     if (this.clamped) {
       for (const h of this.handles().filter((h) => typeof h.id === "string")) {

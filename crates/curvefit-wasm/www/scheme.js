@@ -3,7 +3,7 @@
 // (`curvefit natural`) of the same open polygon for comparison. The state is the `scheme`
 // problem object.
 
-import { round, fmt } from "./view.js";
+import { round, fmt, badIndex } from "./view.js";
 
 export function defaultProblem() {
   return {
@@ -97,7 +97,7 @@ export class SchemeMode {
         v.polyline(pts, { color: last ? "#1d2330" : LEVEL_COLORS[Math.min(l, LEVEL_COLORS.length - 1)], width: last ? 2.2 : 1, closed, alpha: last ? 1 : 0.8 });
       });
     }
-    const bad = out && out.error && out.error.index;
+    const bad = badIndex(out, ["polygon.points", "points"]);
     this.points.forEach((q, i) => v.dot(q, { r: 5, fill: i === bad ? "#c62828" : "#fff", stroke: i === bad ? "#c62828" : "#1d2330" }));
   }
 

@@ -2,7 +2,7 @@
 // (t_i, y_i) of least ∫f''² between a lower and an upper polyline. The state is the command
 // line's problem object; the natural spline (no bounds) is solved alongside for comparison.
 
-import { round, fmt, W } from "./view.js";
+import { round, fmt, badIndex, W } from "./view.js";
 
 const KIND_COLOR = {
   touch_lower: "#d97706",
@@ -154,7 +154,7 @@ export class StripMode {
         v.dot([k.t, evaluate(r, k.t)], { r: 4.5, fill: KIND_COLOR[k.kind] || "#000" });
       }
     }
-    const bad = out && out.error && out.error.index;
+    const bad = badIndex(out, ["t", "y"]);
     p.t.forEach((t, i) => v.dot([t, p.y[i]], { r: 5, fill: i === bad ? "#c62828" : "#1d2330" }));
   }
 

@@ -107,3 +107,11 @@ export function fmt(x, digits = 4) {
   const a = Math.abs(x);
   return a !== 0 && (a < 1e-3 || a >= 1e5) ? x.toExponential(2) : x.toPrecision(digits);
 }
+
+// The index of the point an error names, when its field is one of `fields` (`points[3]`,
+// `constraint.radii[3]` → 3); null otherwise (the error is about something else).
+export function badIndex(out, fields) {
+  const e = out && out.error;
+  if (!e || e.index === null || e.index === undefined) return null;
+  return fields.some((f) => e.field.startsWith(`${f}[`)) ? e.index : null;
+}
