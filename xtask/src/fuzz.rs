@@ -1,17 +1,46 @@
-//! `cargo xtask fuzz [--execs N] [--seed S]`: a mutational fuzzer for the JSON problem parser and
-//! the solve entry points, driving `curvefit::cli::run` in-process.
+//! `cargo xtask fuzz` (see [`USAGE`]): two fuzzers.
 //!
-//! cargo-fuzz needs a nightly toolchain (sanitizer flags), and this project builds on stable only,
-//! so this is the equivalent that runs here: seeds from `tests/fuzz-corpus/<command>/`, structure-
-//! aware mutations (numbers replaced by extremes, elements duplicated or dropped, fields removed,
-//! types swapped, bytes flipped), and three oracles:
+//! - `cargo xtask fuzz libfuzzer …` runs the coverage-guided cargo-fuzz (libFuzzer) targets of
+//!   `fuzz/` on a nightly toolchain, whose oracles check results (finite, feasible, certified,
+//!   translation-invariant), not only exit codes (`libfuzzer.rs`).
+//! - `cargo xtask fuzz [mutate] …` is a mutational fuzzer of the binary's contract that needs only
+//!   stable Rust, driving `curvefit::cli::run` in-process: seeds from
+//!   `tests/fuzz-corpus/<command>/`, structure-aware mutations (numbers replaced by extremes,
+//!   elements duplicated or dropped, fields removed, types swapped, bytes flipped), and three
+//!   oracles:
 //! 1. no panic (a panic is caught by `cli::run` and reported as exit code 70);
 //! 2. exit code 0 or 2 only;
 //! 3. on success, the output is valid JSON without `null` (serde_json writes NaN as null).
 //!
-//! Inputs that break an oracle are saved to `tests/fuzz-corpus/crashes/` (replayed by CI through
-//! `tests/tests/fuzz_corpus.rs`); inputs that reach a new (command, exit code, error-field) outcome
-//! are kept in memory as further seeds.
+//! Inputs that break an oracle are saved under `--out DIR` (default `target/fuzz/mutate`, never
+//! the current directory); copied to `tests/fuzz-corpus/crashes/<command>/` they are replayed by
+//! CI through `tests/tests/fuzz_corpus.rs`. Inputs that reach a new (command, exit code,
+//! error-field) outcome are kept in memory as further seeds.
+
+/// What `cargo xtask fuzz --help` prints.
+pub const USAGE: &str = "\
+usage: cargo xtask fuzz [mutate] [--execs N] [--seed S] [--out DIR]
+       cargo xtask fuzz libfuzzer [TARGET…] [--time SECONDS | --runs N] [--out DIR]
+
+mutate (the default; stable Rust)
+  Mutates the JSON problems of tests/fuzz-corpus/<command>/ and runs the binary's contract
+  in-process (curvefit::cli::run). Oracles: no panic; exit code 0 or 2; on success valid JSON
+  without null; on refusal one line on standard error.
+  --execs N     executions (default 100000)
+  --seed S      the generator's seed (default fixed: runs are reproducible)
+  --out DIR     where inputs that break an oracle are written (default target/fuzz/mutate)
+
+libfuzzer (coverage-guided; needs `rustup toolchain install nightly` and `cargo install cargo-fuzz`)
+  Runs the cargo-fuzz targets of fuzz/ (all of them when none is named): refine_json,
+  refine_structured, strip_json, strip_structured, scheme_json, csv_reader. Oracles (fuzz/src/lib.rs):
+  every result finite; an exact refinement certified <= 1e-9 and feasible; a strip interpolating,
+  C2 and within its bounds; translated problems solved with the same energy; refusals with a
+  field and a message. Seeds: fuzz/corpus/<target>/ (committed); new coverage is added there.
+  --time SECONDS  per target (default 60)
+  --runs N        per target instead of a time limit
+  --out DIR       crash and timeout artifacts (default target/fuzz/artifacts/<target>/)
+  Prints the executions per target and their total.
+";
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -219,7 +248,21 @@ fn load_corpus(root: &Path) -> anyhow::Result<Vec<(String, String)>> {
 }
 
 pub fn run(args: &[String]) -> anyhow::Result<bool> {
+    match args.first().map(String::as_str) {
+        Some("--help" | "-h" | "help") => {
+            print!("{USAGE}");
+            return Ok(true);
+        }
+        Some("libfuzzer") => return crate::libfuzzer::run(&args[1..]),
+        Some("mutate") => return mutational(&args[1..]),
+        _ => {}
+    }
+    mutational(args)
+}
+
+fn mutational(args: &[String]) -> anyhow::Result<bool> {
     let mut execs: u64 = 100_000;
+    let mut crash_dir = PathBuf::from("target/fuzz/mutate");
     let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -236,7 +279,10 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
                     .ok_or_else(|| anyhow::anyhow!("--seed S"))?
                     .parse()?
             }
-            other => anyhow::bail!("unknown argument {other}"),
+            "--out" => {
+                crash_dir = PathBuf::from(it.next().ok_or_else(|| anyhow::anyhow!("--out DIR"))?)
+            }
+            other => anyhow::bail!("unknown argument {other} (see cargo xtask fuzz --help)"),
         }
     }
     // Record each panic's location and message instead of printing a backtrace per crash.
@@ -256,7 +302,6 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     let root = PathBuf::from("tests/fuzz-corpus");
     let mut seeds = load_corpus(&root)?;
     anyhow::ensure!(!seeds.is_empty(), "no seeds in {}", root.display());
-    let crash_dir = root.join("crashes");
     // Seeds loaded from disk are valid problems (crash files aside); jitter mutations start from them.
     let n_base = seeds.len();
     let mut rng = Rng(seed | 1);
@@ -302,7 +347,8 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
             let name = format!("{:016x}.json", fxhash(&input));
             std::fs::write(crash_dir.join(&cmd).join(&name), &input)?;
             println!(
-                "oracle broken (exit {code}) for {cmd}: saved crashes/{cmd}/{name}: {}",
+                "oracle broken (exit {code}) for {cmd}: saved {}: {}",
+                crash_dir.join(&cmd).join(&name).display(),
                 stderr.trim()
             );
         }

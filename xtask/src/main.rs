@@ -3,13 +3,15 @@
 //! * `cargo xtask verify`  — every identity, theorem and worked example of the seeds as a named case.
 //! * `cargo xtask figures [--out DIR]` — redraws the seeds' figures as SVG.
 //! * `cargo xtask bench [--quick]` — the benchmark tables (ratios measured in the same run).
-//! * `cargo xtask fuzz [--execs N]` — mutational fuzzing of the command line (parser + solvers).
+//! * `cargo xtask fuzz [--help]` — mutational fuzzing of the command line on stable, and the
+//!   coverage-guided cargo-fuzz targets of `fuzz/` (`fuzz libfuzzer`).
 //! * `cargo xtask playground [--out DIR]` — the interactive page (WebAssembly + static files).
 //! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
 
 mod bench;
 mod figures;
 mod fuzz;
+mod libfuzzer;
 mod playground;
 mod tidy;
 mod verify;
@@ -30,7 +32,7 @@ fn main() -> ExitCode {
         "fuzz" => fuzz::run(rest),
         "playground" => playground::run(rest),
         _ => {
-            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--execs N] | playground [--out DIR]>");
+            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--help] | playground [--out DIR]>");
             return if cmd == "help" || cmd == "--help" {
                 ExitCode::SUCCESS
             } else {

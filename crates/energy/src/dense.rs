@@ -66,10 +66,10 @@ pub fn alpha_matrix(knots: &Knots) -> DMatrix<f64> {
 /// The (n − 2)×n second-difference matrix D₂ with rows (1, −2, 1) (Warren–Weimer §6.2).
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `n < 3` (there is no second difference).
+/// [`Error::WrongLength`] if `n < 3` (there is no second difference).
 pub fn second_difference_matrix(n: usize) -> Result<DMatrix<f64>, Error> {
     if n < 3 {
-        return Err(Error::SizeMismatch {
+        return Err(Error::WrongLength {
             field: "n",
             expected: 3,
             got: n,
@@ -93,7 +93,7 @@ pub fn second_difference_matrix(n: usize) -> Result<DMatrix<f64>, Error> {
 /// ½∫|f''|², Warren–Weimer's pᵀE_k p discretizes ∫|f''|².
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `n < 3`.
+/// [`Error::WrongLength`] if `n < 3`.
 pub fn warren_weimer_matrix(n: usize, level: u32) -> Result<DMatrix<f64>, Error> {
     let d = second_difference_matrix(n)?;
     Ok(d.transpose() * d * 8f64.powi(level as i32))

@@ -14,7 +14,7 @@ pub enum Error {
     },
     /// Two objects that must agree in size do not.
     #[error("{field} has size {got}, expected {expected}")]
-    SizeMismatch {
+    WrongLength {
         /// The field.
         field: &'static str,
         /// The expected size.

@@ -7,7 +7,7 @@ use crate::Error;
 /// Checks that `points` has one point per vertex of `knots`.
 pub(crate) fn check_sizes(knots: &Knots, points: &Points) -> Result<(), Error> {
     if points.len() != knots.vertex_count() {
-        return Err(Error::SizeMismatch {
+        return Err(Error::WrongLength {
             field: "points",
             expected: knots.vertex_count(),
             got: points.len(),
@@ -24,7 +24,7 @@ pub(crate) fn check_sizes(knots: &Knots, points: &Points) -> Result<(), Error> {
 /// one (§3.6). Here s_i = (p_{i+1} − p_i)/h_i is the slope of span i. It discretizes ½∫|f''|².
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `points` does not have one point per vertex.
+/// [`Error::WrongLength`] if `points` does not have one point per vertex.
 ///
 /// ```
 /// use divdiff::{DerivativeRule, Knots, Points};
@@ -67,7 +67,7 @@ pub(crate) fn neighbours(knots: &Knots, i: usize) -> (usize, usize, usize) {
 /// An independent third way to the same number as [`energy`] and [`Hessian::energy`](crate::Hessian::energy).
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `points` does not have one point per vertex.
+/// [`Error::WrongLength`] if `points` does not have one point per vertex.
 pub fn energy_by_jumps(knots: &Knots, points: &Points) -> Result<f64, Error> {
     check_sizes(knots, points)?;
     let j = divdiff::jumps(knots, points)?;
@@ -116,7 +116,7 @@ fn span_derivatives(knots: &Knots, c: &Points, s: &Points) -> Vec<f64> {
 /// of the knots: Σ_k ∂E/∂t_k = 0 and Σ_k t_k ∂E/∂t_k = −3E.
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `points` does not have one point per vertex.
+/// [`Error::WrongLength`] if `points` does not have one point per vertex.
 ///
 /// ```
 /// use divdiff::{DerivativeRule, Knots, Points};
@@ -153,7 +153,7 @@ pub fn knot_gradient(knots: &Knots, points: &Points) -> Result<Vec<f64>, Error> 
 /// Corollary 2.5 talk about (the free-knot condition is that it vanishes).
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `points` does not have one point per vertex.
+/// [`Error::WrongLength`] if `points` does not have one point per vertex.
 pub fn vertex_knot_gradient(knots: &Knots, points: &Points) -> Result<Vec<f64>, Error> {
     let mut g = knot_gradient(knots, points)?;
     if knots.is_closed() {
@@ -174,7 +174,7 @@ pub fn vertex_knot_gradient(knots: &Knots, points: &Points) -> Result<Vec<f64>, 
 /// |Δ_{i,2} f|² − |Δ_{i−2,2} f|² in its last steps (see [`knot_gradient`]).
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `points` does not have one point per vertex.
+/// [`Error::WrongLength`] if `points` does not have one point per vertex.
 pub fn knot_gradient_printed(knots: &Knots, points: &Points) -> Result<Vec<f64>, Error> {
     let (c, s) = differences(knots, points)?;
     let n = knots.vertex_count();
@@ -215,7 +215,7 @@ pub fn knot_gradient_printed(knots: &Knots, points: &Points) -> Result<Vec<f64>,
 /// −Df(t_i)·(Hp)_i + |Δ_{i,2} f|² − |Δ_{i−2,2} f|² ≈ 0.
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `points` does not have one point per vertex.
+/// [`Error::WrongLength`] if `points` does not have one point per vertex.
 pub fn orthogonality_residuals(
     knots: &Knots,
     points: &Points,

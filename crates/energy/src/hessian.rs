@@ -131,11 +131,11 @@ impl Hessian {
     /// Hp, applied to each coordinate column of `p`, in O(N d).
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if `p` does not have one point per vertex.
+    /// [`Error::WrongLength`] if `p` does not have one point per vertex.
     pub fn try_apply(&self, p: &Points) -> Result<Points, Error> {
         let n = self.len();
         if p.len() != n {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "points",
                 expected: n,
                 got: p.len(),
@@ -174,7 +174,7 @@ impl Hessian {
     /// The energy ½ pᵀHp, summed over the coordinates.
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if `p` does not have one point per vertex.
+    /// [`Error::WrongLength`] if `p` does not have one point per vertex.
     pub fn energy(&self, p: &Points) -> Result<f64, Error> {
         let hp = self.try_apply(p)?;
         Ok(0.5 * dot(p.coords(), hp.coords()))

@@ -57,7 +57,7 @@ impl System {
     /// K = H ⊗ I_dim for the energy Hessian `h` (no weights, nothing fixed yet).
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] for `dim` = 0 or a closed curve with fewer than 3 vertices.
+    /// [`Error::WrongLength`] for `dim` = 0 or a closed curve with fewer than 3 vertices.
     pub fn new(h: &Hessian, dim: usize) -> Result<System, Error> {
         let (d, o1, o2) = h.bands();
         System::from_bands(h.topology(), d.to_vec(), o1.to_vec(), o2.to_vec(), dim)
@@ -69,7 +69,7 @@ impl System {
     /// open curves `off1[N−1]`, `off2[N−2]`, `off2[N−1]` are ignored).
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if the bands differ in length, N = 0 or `dim` = 0 (field `"dim"`),
+    /// [`Error::WrongLength`] if the bands differ in length, N = 0 or `dim` = 0 (field `"dim"`),
     /// or a closed curve has N < 3 (field `"vertices"`).
     pub fn from_bands(
         topology: Topology,
@@ -80,7 +80,7 @@ impl System {
     ) -> Result<System, Error> {
         let n = diag.len();
         if dim == 0 {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "dim",
                 expected: 1,
                 got: 0,
@@ -88,7 +88,7 @@ impl System {
         }
         let min = if topology == Topology::Closed { 3 } else { 1 };
         if n < min {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "vertices",
                 expected: min,
                 got: n,
@@ -96,7 +96,7 @@ impl System {
         }
         for (field, band) in [("off1", &off1), ("off2", &off2)] {
             if band.len() != n {
-                return Err(Error::SizeMismatch {
+                return Err(Error::WrongLength {
                     field,
                     expected: n,
                     got: band.len(),
@@ -170,7 +170,7 @@ impl System {
     /// Only the symmetric part ½(B + Bᵀ) is used.
     ///
     /// # Errors
-    /// [`Error::IndexOutOfRange`] for a vertex ≥ N, [`Error::SizeMismatch`] for a block that does
+    /// [`Error::IndexOutOfRange`] for a vertex ≥ N, [`Error::WrongLength`] for a block that does
     /// not have d² entries.
     pub fn add_block(&mut self, vertex: usize, block: &[f64]) -> Result<(), Error> {
         self.add_stencil(&[(vertex, 1.0)], block)
@@ -181,20 +181,20 @@ impl System {
     /// so K stays block-pentadiagonal. `block` is B (row-major, d², symmetric part used).
     ///
     /// # Errors
-    /// [`Error::IndexOutOfRange`] for a vertex ≥ N, [`Error::SizeMismatch`] for a block that does
+    /// [`Error::IndexOutOfRange`] for a vertex ≥ N, [`Error::WrongLength`] for a block that does
     /// not have d² entries or a stencil with more than three entries (field `"stencil"`),
     /// [`Error::StencilTooWide`] if two stencil vertices are more than two steps apart.
     pub fn add_stencil(&mut self, stencil: &[(usize, f64)], block: &[f64]) -> Result<(), Error> {
         let (n, d) = (self.len(), self.dim());
         if block.len() != d * d {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "block",
                 expected: d * d,
                 got: block.len(),
             });
         }
         if stencil.len() > 3 {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "stencil",
                 expected: 3,
                 got: stencil.len(),
@@ -260,7 +260,7 @@ impl System {
     /// K x for the assembled matrix, ignoring which vertices are fixed (all rows of K).
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if `x` is not N points of dimension d.
+    /// [`Error::WrongLength`] if `x` is not N points of dimension d.
     pub fn apply(&self, x: &Points) -> Result<Points, Error> {
         self.check_points("x", x)?;
         let mut y = vec![0.0; self.len() * self.dim()];
@@ -272,12 +272,12 @@ impl System {
     /// overwritten), without allocating.
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if `x` or `y` does not have N·d entries.
+    /// [`Error::WrongLength`] if `x` or `y` does not have N·d entries.
     pub fn apply_flat(&self, x: &[f64], y: &mut [f64]) -> Result<(), Error> {
         let len = self.len() * self.dim();
         for (field, got) in [("x", x.len()), ("y", y.len())] {
             if got != len {
-                return Err(Error::SizeMismatch {
+                return Err(Error::WrongLength {
                     field,
                     expected: len,
                     got,
@@ -296,14 +296,14 @@ impl System {
 
     fn check_points(&self, field: &'static str, x: &Points) -> Result<(), Error> {
         if x.dim() != self.dim() {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field,
                 expected: self.dim(),
                 got: x.dim(),
             });
         }
         if x.len() != self.len() {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field,
                 expected: self.len(),
                 got: x.len(),
@@ -409,7 +409,7 @@ impl Factor {
     /// x); the other rows hold b.
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if `rhs` is not N points of dimension d.
+    /// [`Error::WrongLength`] if `rhs` is not N points of dimension d.
     pub fn solve(&self, rhs: &Points) -> Result<Points, Error> {
         let mut x = rhs.clone();
         self.solve_in_place(&mut x)?;
@@ -419,10 +419,10 @@ impl Factor {
     /// [`solve`](Factor::solve) overwriting `x` (which holds the right-hand side on entry).
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if `x` is not N points of dimension d.
+    /// [`Error::WrongLength`] if `x` is not N points of dimension d.
     pub fn solve_in_place(&self, x: &mut Points) -> Result<(), Error> {
         if x.dim() != self.dim || x.len() != self.n {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "rhs",
                 expected: self.n * self.dim,
                 got: x.len() * x.dim(),
@@ -434,10 +434,10 @@ impl Factor {
     /// Solves K x = b for a flat vertex-major right-hand side of length N·d, in place.
     ///
     /// # Errors
-    /// [`Error::SizeMismatch`] if the length is not N·d.
+    /// [`Error::WrongLength`] if the length is not N·d.
     pub fn solve_flat(&self, x: &mut [f64]) -> Result<(), Error> {
         if x.len() != self.n * self.dim {
-            return Err(Error::SizeMismatch {
+            return Err(Error::WrongLength {
                 field: "rhs",
                 expected: self.n * self.dim,
                 got: x.len(),
@@ -483,13 +483,13 @@ impl Factor {
 /// ```
 ///
 /// # Errors
-/// [`Error::SizeMismatch`] if `values` does not have one point per fixed index,
+/// [`Error::WrongLength`] if `values` does not have one point per fixed index,
 /// [`Error::IndexOutOfRange`] for an index ≥ N, [`Error::DuplicateFixed`] for an index given
 /// twice, [`Error::Singular`] if the fixed set does not determine the curve (a closed curve with
 /// nothing fixed, an open curve with fewer than two fixed vertices).
 pub fn solve_interpolatory(h: &Hessian, fixed: &[usize], values: &Points) -> Result<Points, Error> {
     if values.len() != fixed.len() {
-        return Err(Error::SizeMismatch {
+        return Err(Error::WrongLength {
             field: "values",
             expected: fixed.len(),
             got: values.len(),

@@ -118,7 +118,7 @@ fn apply_reports_size_mismatch() {
     let err = h.try_apply(&Points::zeros(4, 2)).unwrap_err();
     assert_eq!(
         err,
-        energy::Error::SizeMismatch {
+        energy::Error::WrongLength {
             field: "points",
             expected: 3,
             got: 4

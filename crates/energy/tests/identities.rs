@@ -265,7 +265,7 @@ fn regular_polygon_is_knot_stationary() {
 fn size_mismatch_is_an_error() {
     let knots = Knots::open(vec![0.0, 1.0, 3.0]).unwrap();
     let p = Points::zeros(2, 2);
-    let want = energy::Error::SizeMismatch {
+    let want = energy::Error::WrongLength {
         field: "points",
         expected: 3,
         got: 2,

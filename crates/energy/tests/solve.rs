@@ -337,7 +337,7 @@ fn bad_input_is_rejected() {
     ));
     assert!(matches!(
         s.add_block(0, &[1.0]),
-        Err(Error::SizeMismatch { .. })
+        Err(Error::WrongLength { .. })
     ));
     assert!(matches!(
         s.add_stencil(&[(0, 1.0), (3, 1.0)], &[1.0, 0.0, 0.0, 1.0]),
@@ -355,17 +355,17 @@ fn bad_input_is_rejected() {
             vec![0.0; 2],
             1
         ),
-        Err(Error::SizeMismatch { .. })
+        Err(Error::WrongLength { .. })
     ));
     assert!(matches!(
         System::from_bands(Topology::Open, vec![1.0; 4], vec![0.0; 3], vec![0.0; 4], 1),
-        Err(Error::SizeMismatch { .. })
+        Err(Error::WrongLength { .. })
     ));
     s.add_weight(0, 1.0).unwrap();
     let f = s.factor().unwrap();
     assert!(matches!(
         f.solve(&Points::zeros(5, 2)),
-        Err(Error::SizeMismatch { .. })
+        Err(Error::WrongLength { .. })
     ));
 }
 

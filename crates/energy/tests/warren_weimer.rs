@@ -62,6 +62,6 @@ fn energies_differ_by_one_half() {
 fn too_small_grids_are_errors() {
     assert!(matches!(
         warren_weimer_matrix(2, 0),
-        Err(energy::Error::SizeMismatch { field: "n", .. })
+        Err(energy::Error::WrongLength { field: "n", .. })
     ));
 }

@@ -224,7 +224,11 @@ pub fn not_an_object(first: Option<u8>) -> Result<(), InputError> {
     }
 }
 
-fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputError {
+/// The [`InputError`] of a parse error at a field path: what [`from_json`] and
+/// [`from_deserializer`] return. Public for readers that track the path themselves (the Python
+/// package reads keyword arguments through its own `serde::Deserializer` over Python objects,
+/// whose error type is `serde_json::Error`, and words its errors exactly as the JSON's).
+pub fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputError {
     let path = e.path().to_string();
     let field = if path == "." { String::new() } else { path };
     let inner = e.into_inner();

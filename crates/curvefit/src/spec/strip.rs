@@ -82,6 +82,11 @@ pub struct Solution {
     pub iterations: usize,
     /// Final gradient norm of Φ.
     pub gradient_norm: f64,
+    /// Indices of data values that lay on a bound and were moved inside by ε = 1e-7 of the strip
+    /// width there before solving (Dontchev–Kolmanovsky Remark 4.2; cubic-piece bounds only —
+    /// polyline bounds keep such data exactly): the curve passes through the moved values, not
+    /// the given ones. Empty when every data value is interpolated exactly.
+    pub shifted_data: Vec<usize>,
 }
 
 fn bound(b: &Option<BoundSpec>) -> strip::Bound {
@@ -251,6 +256,7 @@ pub fn solve(p: &Problem) -> Result<Solution, InputError> {
         norm: s.norm,
         iterations: s.iterations,
         gradient_norm: s.gradient_norm,
+        shifted_data: s.shifted_data,
     })
 }
 

@@ -143,7 +143,14 @@ fn data_knots(r: &Refinement) -> Vec<f64> {
 fn optimum(name: &'static str, problem: Problem) -> anyhow::Result<Optimum> {
     let result = optimize_knots(&problem, &FreeKnotOptions::default())
         .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    anyhow::ensure!(result.converged, "{name}: the optimizer did not converge");
+    anyhow::ensure!(
+        result.converged,
+        "{name}: the optimizer did not converge ({} iterations, {} solves, stationarity {:.1e}, fixed-knot KKT {:.1e})",
+        result.iterations,
+        result.solves,
+        result.after.stationarity,
+        result.after.kkt_residual
+    );
     let mut u = result
         .data_vertex
         .iter()
