@@ -5,12 +5,14 @@
 //! * `cargo xtask bench [--quick]` — the benchmark tables (ratios measured in the same run).
 //! * `cargo xtask fuzz [--help]` — mutational fuzzing of the command line on stable, and the
 //!   coverage-guided cargo-fuzz targets of `fuzz/` (`fuzz libfuzzer`).
+//! * `cargo xtask playground [--out DIR]` — the interactive page (WebAssembly + static files).
 //! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
 
 mod bench;
 mod figures;
 mod fuzz;
 mod libfuzzer;
+mod playground;
 mod tidy;
 mod verify;
 
@@ -28,8 +30,9 @@ fn main() -> ExitCode {
         "bench" => bench::run(rest),
         "tidy" => tidy::run(rest),
         "fuzz" => fuzz::run(rest),
+        "playground" => playground::run(rest),
         _ => {
-            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--help]>");
+            eprintln!("usage: cargo xtask <verify [FILTER] | figures [--out DIR] | bench [--quick] [FILTER] | tidy | fuzz [--help] | playground [--out DIR]>");
             return if cmd == "help" || cmd == "--help" {
                 ExitCode::SUCCESS
             } else {
