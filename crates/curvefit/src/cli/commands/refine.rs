@@ -78,6 +78,19 @@ impl super::super::Command for RefineCmd {
     fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
         Some(picture(problem, solution))
     }
+
+    /// The limit curve (docs/limit.md) in `format`.
+    fn export(
+        problem: &RefineProblem,
+        solution: &RefineResult,
+        format: crate::export::ExportFormat,
+        samples: Option<usize>,
+    ) -> Option<Result<String, InputError>> {
+        Some(
+            crate::export::refine_limit(problem, solution)
+                .and_then(|s| crate::export::export(&s, format, samples)),
+        )
+    }
 }
 
 /// Draws each tangent constraint at its data vertex: the derivative of the refined curve there
