@@ -4,12 +4,12 @@
 //! # The math
 //!
 //! Kersey's energy (2.1), E = Σ |s_j − s_{j−1}|² / (h_{j−1} + h_j), discretizes ½∫|f''|²: for the
-//! polygon inscribed in a C² curve at knots of mesh h, |s_j − s_{j−1}| = f''(t_j)(h_{j−1} + h_j)/2
-//! + O(h²), so E = Σ_j ¼ |f''(t_j)|² (h_{j−1} + h_j) + O(h) → ½∫|f''|². A constraint that acts on
+//! polygon inscribed in a C² curve at knots of mesh h,
+//! |s_j − s_{j−1}| = f''(t_j)(h_{j−1} + h_j)/2 + O(h²), so E = Σ_j ¼ |f''(t_j)|² (h_{j−1} + h_j) + O(h) → ½∫|f''|². A constraint that acts on
 //! data vertices only (interpolation, balls, smoothing, half-space sets) fixes nothing but the
 //! values f(u_i) at the data parameters, and among curves with prescribed values at u_0 < … <
-//! u_{n−1} the minimizer of ∫|f''|² is the cubic spline with breakpoints u_i (de Boor, *A Practical
-//! Guide to Splines*, 2001, ch. V, Theorem (7); Warren–Weimer ch. 6, the natural cubic spline as the
+//! u_{n−1} the minimizer of ∫|f''|² is the cubic spline with breakpoints u_i (Holladay's theorem; de Boor,
+//! *A Practical Guide to Splines*, rev. ed. 2001, ch. V; Warren–Weimer ch. 6, the natural cubic spline as the
 //! limit of variational subdivision; math.md §4 for the strip's version of the same statement):
 //! natural ends (f'' = 0) for an open curve without end conditions, periodic for a closed curve,
 //! clamped (f' prescribed) where a first derivative is prescribed. So the limit curve of a

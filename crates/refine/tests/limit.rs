@@ -309,8 +309,9 @@ fn dense_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
         b.swap(c, p);
         for r in c + 1..n {
             let f = a[r][c] / a[c][c];
-            for k in c..n {
-                a[r][k] -= f * a[c][k];
+            let pivot = a[c].clone();
+            for (x, y) in a[r][c..].iter_mut().zip(&pivot[c..]) {
+                *x -= f * y;
             }
             b[r] -= f * b[c];
         }
@@ -329,8 +330,8 @@ fn power_basis(t: f64, u: &[f64], o: usize, coef: &[f64], interior: &[usize]) ->
     let fall = |p: i32, o: usize| -> f64 { (0..o).map(|m| (p - m as i32) as f64).product() };
     let x = t - u[0];
     let mut v = 0.0;
-    for j in o..4 {
-        v += coef[j] * fall(j as i32, o) * x.powi(j as i32 - o as i32);
+    for (j, &a) in coef.iter().enumerate().take(4).skip(o) {
+        v += a * fall(j as i32, o) * x.powi(j as i32 - o as i32);
     }
     for (c, &i) in interior.iter().enumerate() {
         let y = t - u[i];
