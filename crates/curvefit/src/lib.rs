@@ -14,7 +14,8 @@
 //! | [`subdivision`] | Khan et al.'s (2m+2)-point n-ary schemes for curves and tensor-product surfaces, Warren–Weimer's natural cubic subdivision (§6.2–6.3) |
 //! | [`strip`] | best interpolation in a strip (Dontchev–Kolmanovsky) |
 //!
-//! plus [`spec`], the JSON contract of every subcommand as a library (problem and result types,
+//! plus [`export`], a refinement's limit curve as CSV, SVG, DXF and B-spline JSON text, and
+//! [`spec`], the JSON contract of every subcommand as a library (problem and result types,
 //! validation naming the user's field and index, one entry point per subcommand), and — with the
 //! default feature `cli` — [`plot`] (SVG figures) and [`cli`] (the `curvefit` command line,
 //! callable in-process).
@@ -33,6 +34,7 @@
 
 #[cfg(feature = "cli")]
 pub mod cli;
+pub mod export;
 #[cfg(feature = "cli")]
 pub mod plot;
 pub mod spec;

@@ -99,6 +99,23 @@ pub enum Marker {
     Cross,
     /// A six-pointed asterisk (the seeds' "*" for extra knots).
     Star,
+    /// A filled triangle pointing up.
+    TriangleUp,
+    /// A filled triangle pointing down.
+    TriangleDown,
+    /// A filled diamond.
+    Diamond,
+}
+
+/// What a legend entry shows next to its text: the mark as it is drawn in the figure.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Swatch {
+    /// A line in the item's stroke (dashed if the item is).
+    Line(Style),
+    /// A marker of the given pixel size.
+    Marker(Marker, f64, Style),
+    /// A region: a small filled, outlined square.
+    Region(Style),
 }
 
 #[derive(Clone, Debug)]
@@ -131,7 +148,9 @@ enum Item {
 pub struct Figure {
     title: String,
     captions: Vec<String>,
-    legend: Vec<(String, Style)>,
+    fields: Vec<Vec<(String, String)>>,
+    legend: Vec<(String, Swatch)>,
+    labels: Option<(String, String)>,
     items: Vec<Item>,
     equal_aspect: bool,
     width: f64,
@@ -139,11 +158,11 @@ pub struct Figure {
     axes: bool,
 }
 
-/// Pixel margins: left (tick labels), right, top (title), bottom (ticks + caption lines).
-const MARGIN_LEFT: f64 = 56.0;
+/// Pixel margins: left (tick labels, axis label), right, top (title), bottom (ticks, axis label).
+const MARGIN_LEFT: f64 = 70.0;
 const MARGIN_RIGHT: f64 = 16.0;
 const MARGIN_TOP: f64 = 34.0;
-const MARGIN_BOTTOM: f64 = 34.0;
+const MARGIN_BOTTOM: f64 = 50.0;
 const CAPTION_LINE: f64 = 16.0;
 
 impl Figure {
@@ -152,7 +171,9 @@ impl Figure {
         Figure {
             title: title.into(),
             captions: Vec::new(),
+            fields: Vec::new(),
             legend: Vec::new(),
+            labels: None,
             items: Vec::new(),
             equal_aspect: true,
             width: 640.0,
@@ -253,9 +274,45 @@ impl Figure {
         self
     }
 
-    /// Adds a legend entry (drawn top-right).
+    /// Names the axes (drawn under the x ticks and, rotated, left of the y ticks).
+    pub fn axis_labels(&mut self, x: &str, y: &str) -> &mut Self {
+        self.labels = Some((x.into(), y.into()));
+        self
+    }
+
+    /// Adds a caption line of named values, laid out in equal columns (`name: value`).
+    pub fn caption_fields(&mut self, fields: &[(&str, String)]) -> &mut Self {
+        self.fields.push(
+            fields
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.clone()))
+                .collect(),
+        );
+        self
+    }
+
+    /// Adds a legend entry for a line (drawn top-right).
     pub fn legend(&mut self, text: &str, style: Style) -> &mut Self {
-        self.legend.push((text.into(), style));
+        self.legend.push((text.into(), Swatch::Line(style)));
+        self
+    }
+
+    /// Adds a legend entry for a marker, drawn as in [`Figure::points_sized`].
+    pub fn legend_marker(
+        &mut self,
+        text: &str,
+        marker: Marker,
+        size: f64,
+        style: Style,
+    ) -> &mut Self {
+        self.legend
+            .push((text.into(), Swatch::Marker(marker, size, style)));
+        self
+    }
+
+    /// Adds a legend entry for a region (a filled, outlined shape).
+    pub fn legend_region(&mut self, text: &str, style: Style) -> &mut Self {
+        self.legend.push((text.into(), Swatch::Region(style)));
         self
     }
 
@@ -289,8 +346,21 @@ impl Figure {
     /// Renders the figure as an SVG document string.
     pub fn to_svg(&self) -> String {
         let (w, h) = (self.width, self.height);
-        let total_h = h + CAPTION_LINE * self.captions.len() as f64;
-        let frame = [MARGIN_LEFT, MARGIN_TOP, w - MARGIN_RIGHT, h - MARGIN_BOTTOM];
+        let lines = self.captions.len() + self.fields.len();
+        let total_h = h + CAPTION_LINE * lines as f64;
+        // The legend gets its own column right of the plot, so it never hides a mark.
+        let plot_w = w;
+        let w = if self.legend.is_empty() {
+            w
+        } else {
+            w + LEGEND_WIDTH + 8.0
+        };
+        let frame = [
+            MARGIN_LEFT,
+            MARGIN_TOP,
+            plot_w - MARGIN_RIGHT,
+            h - MARGIN_BOTTOM,
+        ];
         let mut doc = Document::new()
             .set("width", w)
             .set("height", total_h)
@@ -316,6 +386,31 @@ impl Figure {
         );
         if self.axes {
             doc = doc.add(map.axes(frame));
+        }
+        if let Some((x, y)) = &self.labels {
+            let cx = (frame[0] + frame[2]) / 2.0;
+            let cy = (frame[1] + frame[3]) / 2.0;
+            doc = doc
+                .add(
+                    Text::new(x.as_str())
+                        .set("x", cx)
+                        .set("y", frame[3] + 32.0)
+                        .set("text-anchor", "middle")
+                        .set("font-size", 12)
+                        .set("font-style", "italic"),
+                )
+                .add(
+                    Text::new(y.as_str())
+                        .set("x", 0)
+                        .set("y", 0)
+                        .set("text-anchor", "middle")
+                        .set("font-size", 12)
+                        .set("font-style", "italic")
+                        .set(
+                            "transform",
+                            format!("translate({} {cy}) rotate(-90)", frame[0] - 50.0),
+                        ),
+                );
         }
         let mut g = Group::new();
         for it in &self.items {
@@ -382,33 +477,90 @@ impl Figure {
             };
         }
         doc = doc.add(g);
-        for (k, (text, style)) in self.legend.iter().enumerate() {
-            let y = MARGIN_TOP + 14.0 + 16.0 * k as f64;
-            let x = w - MARGIN_RIGHT - 170.0;
-            let line = Line::new()
-                .set("x1", x)
-                .set("y1", y - 4.0)
-                .set("x2", x + 22.0)
-                .set("y2", y - 4.0);
-            doc = doc.add(styled(line, &line_style(style), false)).add(
+        if !self.legend.is_empty() {
+            // A white box behind the legend keeps it readable over the curve.
+            let x = plot_w + 4.0;
+            doc = doc.add(
+                Rectangle::new()
+                    .set("x", x - 6.0)
+                    .set("y", MARGIN_TOP + 2.0)
+                    .set("width", LEGEND_WIDTH)
+                    .set("height", 16.0 * self.legend.len() as f64 + 6.0)
+                    .set("fill", "white")
+                    .set("fill-opacity", 0.85)
+                    .set("stroke", "#dddddd")
+                    .set("stroke-width", 1),
+            );
+        }
+        for (k, (text, swatch)) in self.legend.iter().enumerate() {
+            let y = MARGIN_TOP + 16.0 + 16.0 * k as f64;
+            let x = plot_w + 4.0;
+            doc = match swatch {
+                Swatch::Line(style) => {
+                    let line = Line::new()
+                        .set("x1", x)
+                        .set("y1", y - 4.0)
+                        .set("x2", x + 22.0)
+                        .set("y2", y - 4.0);
+                    doc.add(styled(line, &line_style(style), false))
+                }
+                Swatch::Marker(marker, size, style) => {
+                    doc.add(marker_node([x + 11.0, y - 4.0], *marker, *size, style))
+                }
+                Swatch::Region(style) => doc.add(styled(
+                    Rectangle::new()
+                        .set("x", x + 5.0)
+                        .set("y", y - 10.0)
+                        .set("width", 12)
+                        .set("height", 12),
+                    style,
+                    true,
+                )),
+            }
+            .add(
                 Text::new(text.as_str())
                     .set("x", x + 28.0)
                     .set("y", y)
                     .set("font-size", 11),
             );
         }
-        for (k, c) in self.captions.iter().enumerate() {
+        let mut line = 0;
+        for c in &self.captions {
             doc = doc.add(
                 Text::new(c.as_str())
                     .set("x", w / 2.0)
-                    .set("y", h + CAPTION_LINE * k as f64 + 4.0)
+                    .set("y", h + CAPTION_LINE * line as f64 + 4.0)
                     .set("text-anchor", "middle")
                     .set("font-size", 12),
             );
+            line += 1;
+        }
+        for fields in &self.fields {
+            let y = h + CAPTION_LINE * line as f64 + 4.0;
+            let col = (w - 2.0 * MARGIN_RIGHT) / fields.len().max(1) as f64;
+            for (k, (name, value)) in fields.iter().enumerate() {
+                let x = MARGIN_RIGHT + col * (k as f64 + 0.5);
+                doc = doc.add(
+                    Text::new("")
+                        .set("x", x)
+                        .set("y", y)
+                        .set("text-anchor", "middle")
+                        .set("font-size", 12)
+                        .add(
+                            svg::node::element::TSpan::new(format!("{name}: "))
+                                .set("fill", "#555555"),
+                        )
+                        .add(svg::node::element::TSpan::new(value.as_str())),
+                );
+            }
+            line += 1;
         }
         doc.to_string()
     }
 }
+
+/// Pixel width of the legend box.
+const LEGEND_WIDTH: f64 = 210.0;
 
 /// Legend swatch: a line in the item's stroke (or fill) colour.
 fn line_style(s: &Style) -> Style {
@@ -476,6 +628,25 @@ fn marker_node(p: [f64; 2], marker: Marker, size: f64, s: &Style) -> Group {
                 .set("height", size)
                 .set("fill", color),
         ),
+        Marker::TriangleUp | Marker::TriangleDown | Marker::Diamond => {
+            let r = 1.2 * r;
+            let pts = match marker {
+                Marker::TriangleUp => vec![(0.0, -r), (r, 0.8 * r), (-r, 0.8 * r)],
+                Marker::TriangleDown => vec![(0.0, r), (r, -0.8 * r), (-r, -0.8 * r)],
+                _ => vec![(0.0, -r), (r, 0.0), (0.0, r), (-r, 0.0)],
+            };
+            let mut data = Data::new().move_to((p[0] + pts[0].0, p[1] + pts[0].1));
+            for &(dx, dy) in &pts[1..] {
+                data = data.line_to((p[0] + dx, p[1] + dy));
+            }
+            g.add(
+                Path::new()
+                    .set("d", data.close())
+                    .set("fill", color)
+                    .set("stroke", "white")
+                    .set("stroke-width", 0.6),
+            )
+        }
         Marker::Cross | Marker::Star => {
             let mut data = Data::new()
                 .move_to((p[0] - r, p[1] - r))

@@ -60,6 +60,11 @@
 //!   (below) is at most [`SolveOptions::accept_kkt`] = [`EXACT_ACCEPT_KKT`] = 1e-9; otherwise
 //!   the solve refuses with [`Error::NotConverged`] naming the best certificate reached.
 //!
+//! **The limit curve** ([`limit_curve`]): as k → ∞ the refined polygon tends to the cubic
+//! spline ([`CubicSpline`]) through the constrained vertices at their knots, natural, periodic or
+//! clamped as the problem's ends say — the curve to evaluate, differentiate and export
+//! (derivation in `docs/limit.md`).
+//!
 //! **Optimal free knots** (beyond the paper, [`optimize_knots`]): minimize F(t) = E(p*(t), t)
 //! over the data knots (each data span split into k + 1 equal sub-spans) with the total parameter
 //! length T fixed, p*(t) being the exact fixed-knot optimum. Position constraints do not depend on
@@ -109,6 +114,7 @@ mod degenerate;
 mod error;
 mod fast;
 mod freeknots;
+mod limit;
 mod linear;
 mod operator;
 mod options;
@@ -129,6 +135,7 @@ pub use error::Error;
 pub use freeknots::{
     optimize_knots, reduced_objective, FreeKnotOptions, FreeKnotResult, FreeKnots, KnotDiagnostics,
 };
+pub use limit::{limit_curve, limit_curve_of, CubicSpline};
 pub use options::{
     CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
 };

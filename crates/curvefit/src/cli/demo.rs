@@ -101,6 +101,33 @@ pub const EXAMPLES: &[Example] = &[
     },
 ];
 
+/// The introduction of `index.html`: what the figures show, how to read their marks, and which
+/// seed each reproduces.
+const INTRO: &str = "<p>Each figure below is one built-in example, solved by the same code as the \
+command line (<code>curvefit SUBCOMMAND examples/data/NAME.json --svg NAME.svg</code>); the caption \
+names the figure of the paper it reproduces and the numbers the solver certified.</p>\n\
+<ul>\n\
+<li><b>refine-*</b>: S. N. Kersey, <i>Near-interpolatory variational refinement of piecewise-linear \
+curves</i> (J. Comput. Appl. Math. 223, 2009), §3–4. Black dots are the data points q<sub>i</sub>; \
+the blue polygon is the refined curve (N vertices, minimal discrete energy E of (2.1)); hollow rings \
+are the refined vertices attached to the data points; shaded discs and polygons are the tolerance \
+regions each attached vertex must stay in, red where the constraint is active (the vertex is on its \
+boundary), grey where it is not; orange arrows are the curve's derivative at a tangent-constrained \
+vertex, dashed green rays the wedge it must lie in. The footer gives E, the independent KKT \
+residual of the certificate and, where constraints can be inactive, how many are active.</li>\n\
+<li><b>strip-*</b>: A. L. Dontchev, I. Kolmanovsky, <i>Best interpolation in a strip</i>, the \
+examples of §5: the C² cubic spline of least ∫f''² through the data (rings) between the dashed \
+bounds; its contacts with the bounds are marked by kind (▼ touches the upper bound, ▲ the lower, a \
+thick red stretch is a subarc along a bound, ◆ a touching pair), as Theorem 2.1 classifies them.</li>\n\
+<li><b>natural-example</b>: J. Warren, H. Weimer, <i>Subdivision Methods for Geometric Design</i>, \
+§6.2–6.3: natural cubic subdivision is <i>approximating</i> — the rings are control points, and the \
+curve passes through the two end ones only; its limit is a natural cubic spline whose exact energy the footer \
+compares with the last level's.</li>\n\
+<li><b>surface-torus</b>: F. Khan, I. Mukhtar, N. Batool, <i>A unified (2m+2)-point n-ary interpolating subdivision scheme</i> (Open J. Appl. Sci. 3, 2013), §4: the \
+tensor-product surface rule on a closed grid, drawn as an isometric wireframe over the dashed \
+control net it interpolates.</li>\n\
+</ul>\n";
+
 /// The summary of one solved example.
 pub struct Summary {
     /// One-line description of the result (energy, residual, counts).
@@ -140,8 +167,9 @@ pub fn run(
     let mut html = String::from(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>curvefit demo</title>\
          <style>body{font-family:sans-serif;max-width:1400px;margin:auto}figure{display:inline-block;margin:8px;\
-         vertical-align:top;width:660px}figcaption{font-size:14px}</style></head><body>\n<h1>curvefit demo</h1>\n",
+         vertical-align:top;width:870px}figcaption{font-size:14px}</style></head><body>\n<h1>curvefit demo</h1>\n",
     );
+    html.push_str(INTRO);
     let mut files = Vec::new();
     let mut summary = format!("{:<28} {:<8} result\n", "example", "command");
     for ex in EXAMPLES {
@@ -151,7 +179,7 @@ pub fn run(
         if let Some(svg) = s.svg {
             files.push((out.join(format!("{}.svg", ex.name)), svg.into_bytes()));
             html.push_str(&format!(
-                "<figure><img src=\"{0}.svg\" width=\"640\"><figcaption><b>{0}</b> ({1}): {2}<br><code>{3}</code></figcaption></figure>\n",
+                "<figure><img src=\"{0}.svg\" width=\"858\"><figcaption><b>{0}</b> ({1}): {2}<br><code>{3}</code></figcaption></figure>\n",
                 ex.name,
                 ex.command,
                 ex.title,

@@ -6,6 +6,7 @@
 
 mod commands;
 pub mod demo;
+pub mod export;
 pub mod format;
 pub mod input;
 pub mod output;
@@ -55,6 +56,16 @@ pub trait Command {
     }
     /// The result's main array for `--format csv|npy`, or `None` (JSON only).
     fn table(_solution: &Self::Solution) -> Option<format::Table<'_>> {
+        None
+    }
+    /// The curve for `--export` in `format` (`samples`: the CSV count), or `None` when the
+    /// command has no curve to export.
+    fn export(
+        _problem: &Self::Problem,
+        _solution: &Self::Solution,
+        _format: crate::export::ExportFormat,
+        _samples: Option<usize>,
+    ) -> Option<Result<String, InputError>> {
         None
     }
     /// A mesh for `--obj` (Wavefront OBJ text), or `None` when the command has none.
@@ -180,6 +191,9 @@ pub struct JsonArgs {
     /// Print one JSON line {"parse_s", "solve_s", "write_s"} on standard error.
     #[arg(long)]
     pub timings: bool,
+    /// `--export FILE` (refine): the limit curve as CSV, SVG, DXF or JSON.
+    #[command(flatten)]
+    pub export: export::ExportArgs,
     /// Whether standard input is a terminal (then no problem file is an error, not a wait).
     #[arg(skip)]
     pub stdin_is_terminal: bool,
@@ -469,6 +483,7 @@ pub fn run_json_with<C: Command>(
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
     let t0 = Instant::now();
+    args.export.check()?;
     let problem: C::Problem = parse_problem::<C>(args, stdin)?;
     let t1 = Instant::now();
     let solution = C::solve(&problem)?;
@@ -487,6 +502,14 @@ pub fn run_json_with<C: Command>(
         let text = C::obj(&problem, &solution)
             .ok_or_else(|| InputError::new("--obj", format!("`{name}` has no mesh output")))??;
         outputs.add("--obj", Some(path), bytes_writer(text.into_bytes()))?;
+    }
+    if let Some(path) = &args.export.export_file {
+        let format = args.export.format(path)?;
+        let text =
+            C::export(&problem, &solution, format, args.export.samples).ok_or_else(|| {
+                InputError::new("--export", format!("`{name}` has no curve to export"))
+            })??;
+        outputs.add("--export", Some(path), bytes_writer(text.into_bytes()))?;
     }
     match (&args.svg, svg) {
         (Some(path), Some(svg)) => {

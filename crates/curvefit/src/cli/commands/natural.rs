@@ -50,6 +50,11 @@ impl super::super::Command for NaturalCmd {
         let k = last.level;
         let mut fig = Figure::new("Natural cubic subdivision (Warren–Weimer §6.2)");
         fig.equal_aspect(problem.points.dim() >= 2);
+        if problem.points.dim() >= 2 {
+            fig.axis_labels("x", "y");
+        } else {
+            fig.axis_labels("t (grid 0, 1, …, L)", "value");
+        }
         fig.polyline(
             &project(&problem.points, 1.0),
             Style::stroke(palette::REGION, 1.0).dashed("4 3"),
@@ -63,10 +68,33 @@ impl super::super::Command for NaturalCmd {
             &project(&last.points, 1.0 / (1u64 << k.min(60)) as f64),
             Style::stroke(palette::CURVE, 1.8),
         );
-        fig.caption(&format!(
-            "level {k}: energy {:.6}; exact limit energy p0ᵀE0N0p0 = {:.6}",
-            last.energy, solution.limit_energy
-        ));
+        fig.legend(
+            "control polygon",
+            Style::stroke(palette::REGION, 1.0).dashed("4 3"),
+        );
+        fig.legend_marker(
+            "control point",
+            Marker::Ring,
+            5.0,
+            Style::stroke(palette::DATA, 1.2),
+        );
+        fig.legend(
+            &format!("level {k} (→ natural cubic spline)"),
+            Style::stroke(palette::CURVE, 1.8),
+        );
+        fig.caption(
+            "The points are control points of an approximating scheme: the curve passes through the two end points only.",
+        );
+        fig.caption_fields(&[
+            (
+                &format!("energy at level {k}") as &str,
+                format!("{:.6}", last.energy),
+            ),
+            (
+                "exact limit energy p0ᵀE0N0p0",
+                format!("{:.6}", solution.limit_energy),
+            ),
+        ]);
         Some(fig.to_svg())
     }
 }

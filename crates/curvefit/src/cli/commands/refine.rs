@@ -78,6 +78,19 @@ impl super::super::Command for RefineCmd {
     fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
         Some(picture(problem, solution))
     }
+
+    /// The limit curve (docs/limit.md) in `format`.
+    fn export(
+        problem: &RefineProblem,
+        solution: &RefineResult,
+        format: crate::export::ExportFormat,
+        samples: Option<usize>,
+    ) -> Option<Result<String, InputError>> {
+        Some(
+            crate::export::refine_limit(problem, solution)
+                .and_then(|s| crate::export::export(&s, format, samples)),
+        )
+    }
 }
 
 /// Draws each tangent constraint at its data vertex: the derivative of the refined curve there
@@ -103,6 +116,7 @@ fn draw_tangents(
         .fold(0.0f64, |m, x| m.max(x.abs()))
         .max(1e-300);
     let len = 0.12 * extent;
+    let mut wedges = false;
     for (i, t) in tangents.iter().enumerate() {
         let (Some(t), Some(&j)) = (t, r.data_vertex.get(i)) else {
             continue;
@@ -132,6 +146,7 @@ fn draw_tangents(
             half_angle,
         } = t
         {
+            wedges = true;
             let u = (direction[0].hypot(direction[1])).max(1e-300);
             for s in [-1.0, 1.0] {
                 let (c, sn) = ((s * half_angle).cos(), (s * half_angle).sin());
@@ -147,7 +162,13 @@ fn draw_tangents(
             }
         }
     }
-    fig.legend("Df at vertex", Style::stroke(palette::SECOND, 2.0));
+    fig.legend("curve's derivative Df", Style::stroke(palette::SECOND, 2.0));
+    if wedges {
+        fig.legend(
+            "wedge bounds (allowed Df)",
+            Style::stroke(palette::THIRD, 1.0).dashed("3 2"),
+        );
+    }
 }
 
 /// The 2-D polygon of a JSON half-space set, clipped to a square (see
@@ -200,6 +221,11 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         r.points.len()
     ));
     fig.equal_aspect(d >= 2);
+    if d >= 2 {
+        fig.axis_labels("x", "y");
+    } else {
+        fig.axis_labels("t (the returned knots' parameter)", "f(t)");
+    }
     let data_t: Vec<f64> = r
         .data_vertex
         .iter()
@@ -279,22 +305,47 @@ pub fn picture(p: &RefineProblem, r: &RefineResult) -> String {
         .map(|(q, &t)| xy(q, t))
         .collect();
     fig.points(&data, Marker::Dot, Style::fill(palette::DATA));
-    fig.legend("refined curve", Style::stroke(palette::CURVE, 1.6));
-    fig.legend("data point", Style::fill(palette::DATA));
-    if !matches!(
+    fig.legend("refined polygon", Style::stroke(palette::CURVE, 1.6));
+    fig.legend_marker(
+        "data point q_i",
+        Marker::Dot,
+        5.0,
+        Style::fill(palette::DATA),
+    );
+    fig.legend_marker(
+        "its refined vertex p_{i_k}",
+        Marker::Ring,
+        6.0,
+        Style::stroke(palette::CURVE, 1.0),
+    );
+    // Only balls and half-space sets can be inactive (interpolation always binds, smoothing is
+    // a penalty, not a constraint).
+    let can_be_inactive = matches!(
         p.constraint,
-        ConstraintSpec::Interpolate | ConstraintSpec::Smoothing { .. }
-    ) {
-        fig.legend("active constraint", Style::stroke(palette::ACTIVE, 1.3));
-        fig.legend("inactive constraint", Style::stroke(palette::REGION, 1.0));
+        ConstraintSpec::Balls { .. } | ConstraintSpec::Halfspaces { .. }
+    );
+    let drawn_regions = match &p.constraint {
+        ConstraintSpec::Balls { .. } => d >= 2,
+        ConstraintSpec::Halfspaces { .. } => d == 2,
+        _ => false,
+    };
+    if drawn_regions {
+        if r.active.iter().any(|&a| a) {
+            fig.legend_region("active tolerance region", active_style.clone());
+        }
+        if r.active.iter().any(|&a| !a) {
+            fig.legend_region("inactive tolerance region", inactive_style.clone());
+        }
     }
-    let n_active = r.active.iter().filter(|&&a| a).count();
-    fig.caption(&format!(
-        "E = {:.6}   KKT residual = {:.1e}   active: {n_active} of {}",
-        r.energy,
-        r.kkt_residual,
-        r.active.len()
-    ));
+    let mut fields = vec![
+        ("E (Kersey (2.1))", format!("{:.6}", r.energy)),
+        ("KKT residual", format!("{:.1e}", r.kkt_residual)),
+    ];
+    if can_be_inactive {
+        let n_active = r.active.iter().filter(|&&a| a).count();
+        fields.push(("active", format!("{n_active} of {}", r.active.len())));
+    }
+    fig.caption_fields(&fields);
     fig.to_svg()
 }
 

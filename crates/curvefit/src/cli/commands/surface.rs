@@ -89,6 +89,12 @@ impl super::super::Command for SurfaceCmd {
             &problem.points,
             Style::stroke(palette::SECOND, 1.2).dashed("4 3"),
         );
+        fig.legend("refined grid", Style::stroke(palette::CURVE, 0.6));
+        fig.legend(
+            "control net (interpolated)",
+            Style::stroke(palette::SECOND, 1.2).dashed("4 3"),
+        );
+        fig.caption("isometric view of (x, y, z): no axes");
         fig.caption(&format!(
             "{}-point {}-ary tensor-product scheme, {} level(s): {} × {} grid",
             problem.scheme.points,
