@@ -10,8 +10,8 @@
 //! finite residual above a finite tolerance, or a flag — so an infinite residual (a case's way of
 //! saying its precondition did not hold) fails it too. Every case names the independent
 //! reference it compared with ([`Oracle`], printed in the table), and a passing case with a
-//! tolerance ≥ [`LOOSE_TOLERANCE`] says why in [`Outcome::derived`]; both are enforced once
-//! every case of the suite complies (`REQUIRE_ORACLE`).
+//! tolerance ≥ [`LOOSE_TOLERANCE`] says why in [`Outcome::derived`]; both are enforced
+//! (`REQUIRE_ORACLE`).
 
 mod energy;
 mod kersey_defs;
@@ -201,10 +201,9 @@ fn judge(expect: Expect, o: &Outcome, errored: bool) -> (bool, &'static str) {
     }
 }
 
-/// Whether a missing oracle or an underived loose tolerance fails a case. Off until the strip
-/// cases name their oracles and derive their tolerances (issue 16; `cargo xtask verify | grep -c
-/// "none named"` counts what is left); every other area complies.
-const REQUIRE_ORACLE: bool = false;
+/// Whether a missing oracle or an underived loose tolerance fails a case: every case of the
+/// suite complies, so it is on.
+const REQUIRE_ORACLE: bool = true;
 
 fn all_cases() -> Vec<Case> {
     let mut v = Vec::new();

@@ -109,6 +109,7 @@ impl Kind for Balls<'_> {
             terms.dual = terms.dual.max(-w * eps.max(gap));
             terms.comp = terms.comp.max((w * (eps - gap)).abs());
             terms.gap += (0.5 * w * (eps * eps - gap * gap)).abs();
+            terms.stiffness = terms.stiffness.max(w.abs());
             terms.active[i] = gap >= (1.0 - at.active_tol) * eps;
         }
     }

@@ -225,6 +225,10 @@ pub(crate) struct Terms {
     pub comp: f64,
     /// Σ |multiplier × slack|, in energy units: a bound on E(p) − E* (the duality gap).
     pub gap: f64,
+    /// The largest curvature the kind adds to the Lagrangian's Hessian H + W (a ball's or a
+    /// smoothing weight's w_i, in force per length): rounding of size ε|p| in the points moves
+    /// its forces by this times ε|p|, so it enters the certificate's rounding level beside ‖H‖.
+    pub stiffness: f64,
     /// Whether each data point's constraint is active.
     pub active: Vec<bool>,
     /// Data points that Corollary 3.3's inactive jumps do not concern (smoothing: a penalty,
@@ -244,6 +248,7 @@ impl Terms {
             dual: 0.0,
             comp: 0.0,
             gap: 0.0,
+            stiffness: 0.0,
             active: vec![false; n],
             no_jump: vec![false; n],
             next_dual: 0,

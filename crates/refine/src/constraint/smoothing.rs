@@ -69,6 +69,7 @@ impl Kind for Smoothing<'_> {
                 terms.force_data[i * d + c] += w * (pv[c] - qi[c]);
             }
             terms.no_jump[i] = true;
+            terms.stiffness = terms.stiffness.max(w.abs());
         }
     }
 }
