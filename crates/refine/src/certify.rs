@@ -112,13 +112,19 @@ struct Geo {
 }
 
 impl Geo {
-    /// The α-row of vertex i (Kersey §2): α₁ = √2/(h_{i−1}√(h_{i−1}+h_i)),
-    /// α₃ = √2/(h_i√(h_{i−1}+h_i)), α₂ = −α₁ − α₃ on vertices i − 1, i, i + 1 (zero where the
-    /// centred difference does not exist).
-    fn row(&self) -> [f64; 3] {
-        let r = (2.0 * self.iw).sqrt();
-        let (a1, a3) = (r * self.ihl, r * self.ihr);
-        [a1, -a1 - a3, a3]
+    /// Row i's terms of the ‖H‖_∞ bound. The α-row of vertex i (Kersey §2) is
+    /// α₁ = √2/(h_{i−1}√(h_{i−1}+h_i)), α₂ = −α₁ − α₃, α₃ = √2/(h_i√(h_{i−1}+h_i)) on vertices
+    /// i − 1, i, i + 1, with absolute sum 2(α₁ + α₃); the products |α₃|·2(α₁ + α₃),
+    /// |α₂|·2(α₁ + α₃), |α₁|·2(α₁ + α₃) — what row i adds at vertices i + 1, i, i − 1 — are
+    /// 4/(h_{i−1} h_i²), 4(h_{i−1} + h_i)/(h_{i−1}² h_i²), 4/(h_{i−1}² h_i): no square root.
+    /// Zero where the centred difference does not exist.
+    fn norm_terms(&self) -> [f64; 3] {
+        if self.w > 0.0 {
+            let p = 4.0 * self.ihl * self.ihr;
+            [p * self.ihr, p * (self.ihl + self.ihr), p * self.ihl]
+        } else {
+            [0.0; 3]
+        }
     }
 }
 
@@ -189,9 +195,12 @@ fn sweep<const D: usize>(
         [0.0; D]
     };
     let (mut g, mut cc, mut s) = (g0, c0, slope(0, g0.ihr));
-    let mut row_prev = if closed { g_last.row() } else { [0.0; 3] };
-    let mut row = g0.row();
-    let rowsum = |a: &[f64; 3]| a[0].abs() + a[1].abs() + a[2].abs();
+    let mut row_prev = if closed {
+        g_last.norm_terms()
+    } else {
+        [0.0; 3]
+    };
+    let mut row = g0.norm_terms();
     let c_mid: [f64; D] = std::array::from_fn(|c| center[first + c]);
     let mut out = Pass {
         hp: Vec::new(),
@@ -240,13 +249,10 @@ fn sweep<const D: usize>(
             let row_next = if i1 == 0 && !closed {
                 [0.0; 3]
             } else {
-                g1.row()
+                g1.norm_terms()
             };
-            out.h_norm = out.h_norm.max(
-                row_prev[2].abs() * rowsum(&row_prev)
-                    + row[1].abs() * rowsum(&row)
-                    + row_next[0].abs() * rowsum(&row_next),
-            );
+            // Σ_r |A_rj| Σ_l |A_rl| over the rows j − 1, j, j + 1 that touch vertex j.
+            out.h_norm = out.h_norm.max(row_prev[0] + row[1] + row_next[2]);
             (row_prev, row) = (row, row_next);
         }
         (cp, cc, g) = (cc, cn, g1);
