@@ -98,7 +98,8 @@ mod tests {
             .with_knot_iterations(2)
             .with_constraint(crate::Constraint::Balls(vec![0.05; n]))
             .with_options(
-                crate::SolveOptions::default().with_progress(move |e| seen.lock().unwrap().push(*e)),
+                crate::SolveOptions::default()
+                    .with_progress(move |e| seen.lock().unwrap().push(*e)),
             );
         problem.solve().unwrap();
         let events = events.lock().unwrap();
