@@ -405,3 +405,15 @@ fn csv_separators_other_than_comma_name_the_line() {
     let (code, _, err) = run_cli(&["refine", "--points", &c], "");
     assert_eq!(code, 0, "a header line is accepted: {err}");
 }
+
+/// `--quiet` (no progress line) is accepted by the JSON subcommands and changes no output; the
+/// progress line itself is only written when the process's standard error is a terminal.
+#[test]
+fn quiet_changes_no_output() {
+    let p = problem_path("refine-interpolate-closed.json");
+    let p = p.to_string_lossy();
+    let (code, out, err) = run_cli(&["refine", &p, "--quiet"], "");
+    assert_eq!(code, 0, "{err}");
+    let (_, want, want_err) = run_cli(&["refine", &p], "");
+    assert_eq!((out, err), (want, want_err));
+}

@@ -8,10 +8,13 @@ fn main() {
     }
     use std::io::IsTerminal;
     let stdin = std::io::stdin();
-    let code = curvefit::cli::run_with_terminal(
+    let code = curvefit::cli::run_with_terminals(
         std::env::args_os(),
         &mut stdin.lock(),
-        stdin.is_terminal(),
+        curvefit::cli::Terminals {
+            stdin: stdin.is_terminal(),
+            stderr: std::io::stderr().is_terminal(),
+        },
         &mut std::io::stdout().lock(),
         &mut std::io::stderr().lock(),
     );

@@ -243,7 +243,15 @@ fn stage_loop(
     let mut sol: Option<FixedSolution> = None;
     // The balls active in the last solution (multiplier > 0) start the next working set.
     let mut working_set: Option<Vec<bool>> = None;
-    for _ in 0..=problem.knot_iterations {
+    for knot_iteration in 0..=problem.knot_iterations {
+        crate::progress::report(
+            problem.options.progress.as_ref(),
+            crate::Progress::Solve {
+                stage,
+                knot_iteration,
+                knot_iterations: problem.knot_iterations,
+            },
+        );
         if let Some(FixedSolution { points, .. }) = &sol {
             *knots =
                 divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {

@@ -84,6 +84,8 @@ pub struct ConicOptions {
     /// L_c p to the boundary of K_c, inside) is at most this times the constraint's scale
     /// (radius, |L_c p|, offsets) (default 1e-7).
     pub active_rtol: f64,
+    /// Told of each interior-point iteration (default `None`; see [`crate::Progress`]).
+    pub progress: Option<crate::Observer>,
 }
 
 impl Default for ConicOptions {
@@ -93,6 +95,7 @@ impl Default for ConicOptions {
             accept: 1e-9,
             warm_start: None,
             active_rtol: 1e-7,
+            progress: None,
         }
     }
 }
@@ -424,7 +427,18 @@ impl ConicProblem {
             }
             None => None,
         };
-        let sol = conic::solve_with(&mut be, &opts.conic, start, &mut conic::NoMonitor)?;
+        let mut monitor = |it: &conic::Iterate<'_>| {
+            crate::progress::report(
+                opts.progress.as_ref(),
+                crate::Progress::Iteration {
+                    solver: "full-vertex interior point",
+                    iteration: it.iteration,
+                    residual: it.residuals.total,
+                },
+            );
+            true
+        };
+        let sol = conic::solve_with(&mut be, &opts.conic, start, &mut monitor)?;
         Ok(self.report(&be, &sol, opts.active_rtol))
     }
 

@@ -120,6 +120,7 @@ mod operator;
 mod options;
 mod paper;
 mod problem;
+mod progress;
 mod slots;
 mod solve;
 mod split;
@@ -142,5 +143,6 @@ pub use options::{
 pub use problem::{
     Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
 };
+pub use progress::{Observer, Progress};
 pub use slots::halfplane_polygon;
 pub use split::{data_vertex, split};

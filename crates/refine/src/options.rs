@@ -38,6 +38,17 @@ pub struct SolveOptions {
     pub paper: PaperOptions,
     /// The common-point test.
     pub common_point: CommonPointOptions,
+    /// Told of each fixed-knot solve and each interior-point iteration (default `None`; see
+    /// [`crate::Progress`]).
+    pub progress: Option<crate::Observer>,
+}
+
+impl SolveOptions {
+    /// Sets [`SolveOptions::progress`] to an observer calling `f`.
+    pub fn with_progress(mut self, f: impl Fn(&crate::Progress) + Send + Sync + 'static) -> Self {
+        self.progress = Some(crate::Observer::new(f));
+        self
+    }
 }
 
 impl Default for SolveOptions {
@@ -51,6 +62,7 @@ impl Default for SolveOptions {
             active_rtol: 1e-7,
             paper: PaperOptions::default(),
             common_point: CommonPointOptions::default(),
+            progress: None,
         }
     }
 }

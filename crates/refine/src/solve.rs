@@ -42,8 +42,8 @@ impl Problem {
             kind.translate(&offset, &mut centred);
         }
         let mut r = algorithm::run(&centred)?;
-        for j in 0..r.points.len() {
-            for (x, c) in r.points.point_mut(j).iter_mut().zip(&centroid) {
+        for x in r.points.coords_mut().chunks_exact_mut(d) {
+            for (x, c) in x.iter_mut().zip(&centroid) {
                 *x += c;
             }
         }

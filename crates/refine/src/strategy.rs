@@ -221,6 +221,7 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         fp.working_set,
         &mut judge,
         fp.options.polish_above,
+        fp.options.progress.as_ref(),
     )?;
     Ok(FixedSolution {
         certificate: Some(sol.certificate),
@@ -240,6 +241,7 @@ fn full(
     }
     let mut opts = ConicOptions {
         conic: fp.options.conic.clone().with_tolerance(tolerance),
+        progress: fp.options.progress.clone(),
         ..ConicOptions::default()
     };
     if let Some(f) = from {

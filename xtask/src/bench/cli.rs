@@ -41,8 +41,8 @@ ts.sort()
 print(json.dumps({"median_s": ts[len(ts) // 2], "evaluations": int(out.shape[0])}))
 "#;
 
-/// The noisy star of the module docs, as a `refine` problem.
-fn star_problem(n: usize, k: usize) -> serde_json::Value {
+/// The noisy star of the module docs, as a `refine` problem (also the `hard` group's data).
+pub(super) fn star_problem(n: usize, k: usize) -> serde_json::Value {
     let mut s: u64 = 0x2545_F491_4F6C_DD1D;
     let mut unif = move || {
         s = s
@@ -108,7 +108,7 @@ fn run_once(bin: &Path, problem: &Path, out: &Path, format: &str) -> anyhow::Res
     Ok([f("parse_s"), f("solve_s"), f("write_s"), wall, size])
 }
 
-fn peer(problem: &Path, reps: usize) -> Option<f64> {
+pub(super) fn peer(problem: &Path, reps: usize) -> Option<f64> {
     match Command::new("python3")
         .args(["-c", PEER])
         .arg(problem)

@@ -46,6 +46,9 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     if "refine".contains(filter) || filter.is_empty() {
         refine::run(opts)?;
     }
+    if "hard".contains(filter) || filter.is_empty() {
+        refine::hard(opts)?;
+    }
     if "conic".contains(filter) || filter.is_empty() {
         conic::run(opts)?;
     }

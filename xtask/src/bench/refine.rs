@@ -397,6 +397,81 @@ fn factored_energy(
     out
 }
 
+/// The `hard` group: interpolation on the noisy star of the `cli` group (jittered angles,
+/// alternating radii with noise; closed, k = 7, centripetal) through `Problem::solve` — points,
+/// energy, reactions and the independent certificate — against scipy's periodic `CubicSpline`
+/// fit + evaluation at the same (k + 1)n parameters on the same points (the `cli` group's peer,
+/// in memory), measured in the same run (issue 14 §1: target ≥ 5×); and Algorithm 4.1's default
+/// three knot updates against one solve (§4: target ≤ 2×).
+pub fn hard(opts: Opts) -> anyhow::Result<()> {
+    let k = 7;
+    let reps = if opts.quick { 3 } else { 7 };
+    let sizes: &[usize] = if opts.quick {
+        &[10_000]
+    } else {
+        &[10_000, 100_000]
+    };
+    let dir = std::env::temp_dir().join(format!("curvefit-bench-hard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    println!("hard: interpolation, closed noisy star, d = 2, k = {k}, centripetal; Problem::solve (certified); medians of {reps}");
+    println!(
+        "  {:>8} {:>9} {:>10} {:>10} {:>10} {:>12} {:>14} {:>12}",
+        "n",
+        "N",
+        "solve ms",
+        "ns/vertex",
+        "scipy ms",
+        "scipy/solve",
+        "3 updates ms",
+        "updates/solve"
+    );
+    for &n in sizes {
+        let json = super::cli::star_problem(n, k);
+        let file = dir.join(format!("star-{n}.json"));
+        std::fs::write(&file, serde_json::to_vec(&json)?)?;
+        let coords: Vec<f64> = json["points"]
+            .as_array()
+            .ok_or_else(|| anyhow::anyhow!("points"))?
+            .iter()
+            .flat_map(|p| {
+                p.as_array()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|x| x.as_f64())
+            })
+            .collect();
+        let q = Points::new(2, coords)?;
+        let problem = Problem::new(q)
+            .with_topology(divdiff::Topology::Closed)
+            .with_parametrization(divdiff::Parametrization::Centripetal)
+            .with_k(k)
+            .with_knot_iterations(0);
+        let one = time_median(reps, || problem.solve().expect("interpolation solves"));
+        let updates = problem.clone().with_knot_iterations(3);
+        let three = time_median(reps.min(3), || {
+            updates
+                .solve()
+                .expect("interpolation with knot updates solves")
+        });
+        let scipy = super::cli::peer(&file, reps);
+        let nv = (k + 1) * n;
+        println!(
+            "  {:>8} {:>9} {:>10.2} {:>10.1} {:>10} {:>12} {:>14.2} {:>12.2}",
+            n,
+            nv,
+            ms(one),
+            one.as_secs_f64() * 1e9 / nv as f64,
+            scipy.map_or("-".into(), |s| format!("{:.2}", s * 1e3)),
+            scipy.map_or("-".into(), |s| format!("{:.2}x", s / one.as_secs_f64())),
+            ms(three),
+            three.as_secs_f64() / one.as_secs_f64()
+        );
+    }
+    println!("  (targets: scipy/solve >= 5x; updates/solve <= 2x)");
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
 /// Runs this group and prints its table.
 pub fn run(opts: Opts) -> anyhow::Result<()> {
     let k = 7;

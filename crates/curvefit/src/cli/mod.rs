@@ -10,6 +10,7 @@ pub mod export;
 pub mod format;
 pub mod input;
 pub mod output;
+pub mod progress;
 
 pub use self::commands::{natural, refine, strip, surface};
 /// The JSON types of `refine` (kept at this path for existing callers; the home is
@@ -34,6 +35,14 @@ pub trait Command {
     type Solution: serde::Serialize;
     /// Validates and solves; errors name the field path and index.
     fn solve(problem: &Self::Problem) -> Result<Self::Solution, InputError>;
+    /// [`Command::solve`], telling `progress` how a long solve goes (the default: a command
+    /// with no progress events solves without).
+    fn solve_observed(
+        problem: &Self::Problem,
+        _progress: ::refine::Observer,
+    ) -> Result<Self::Solution, InputError> {
+        Self::solve(problem)
+    }
     /// The picture for `--svg`, or `None`.
     fn svg(problem: &Self::Problem, solution: &Self::Solution) -> Option<String>;
     /// Puts the points of `--points FILE.csv` into the problem.
@@ -194,9 +203,16 @@ pub struct JsonArgs {
     /// `--export FILE` (refine): the limit curve as CSV, SVG, DXF or JSON.
     #[command(flatten)]
     pub export: export::ExportArgs,
+    /// No progress line on standard error (by default a solve running past a second shows its
+    /// stage, iteration, residual and time there when standard error is a terminal).
+    #[arg(short = 'q', long)]
+    pub quiet: bool,
     /// Whether standard input is a terminal (then no problem file is an error, not a wait).
     #[arg(skip)]
     pub stdin_is_terminal: bool,
+    /// Whether standard error is a terminal (then a long solve shows a progress line).
+    #[arg(skip)]
+    pub stderr_is_terminal: bool,
 }
 
 /// Options of `curvefit scheme`.
@@ -312,6 +328,40 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
+    run_with_terminals(
+        args,
+        stdin,
+        Terminals {
+            stdin: stdin_is_terminal,
+            stderr: false,
+        },
+        stdout,
+        stderr,
+    )
+}
+
+/// Which of the process's streams are terminals.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Terminals {
+    /// Standard input: a JSON subcommand without a problem file refuses instead of waiting.
+    pub stdin: bool,
+    /// The process's standard error: a long solve shows a progress line there
+    /// ([`progress`]; written to the process's standard error, not to `stderr`).
+    pub stderr: bool,
+}
+
+/// [`run`], told which streams are terminals.
+pub fn run_with_terminals<I, T>(
+    args: I,
+    stdin: &mut dyn Read,
+    terminals: Terminals,
+    stdout: &mut dyn Write,
+    stderr: &mut dyn Write,
+) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
@@ -354,7 +404,7 @@ where
         }
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        dispatch(cli, stdin, stdin_is_terminal, stdout, stderr)
+        dispatch(cli, stdin, terminals, stdout, stderr)
     }));
     match result {
         Ok(Ok(())) => 0,
@@ -375,15 +425,19 @@ where
 fn dispatch(
     cli: Cli,
     stdin: &mut dyn Read,
-    stdin_is_terminal: bool,
+    terminals: Terminals,
     stdout: &mut dyn Write,
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
     let mut command = cli.command;
-    match &mut command {
-        Cmd::Refine(a) | Cmd::Strip(a) | Cmd::Natural(a) => a.stdin_is_terminal = stdin_is_terminal,
-        Cmd::Surface(a) => a.json.stdin_is_terminal = stdin_is_terminal,
-        _ => {}
+    let json = match &mut command {
+        Cmd::Refine(a) | Cmd::Strip(a) | Cmd::Natural(a) => Some(a),
+        Cmd::Surface(a) => Some(&mut a.json),
+        _ => None,
+    };
+    if let Some(a) = json {
+        a.stdin_is_terminal = terminals.stdin;
+        a.stderr_is_terminal = terminals.stderr;
     }
     match command {
         Cmd::Refine(a) => run_json::<refine::RefineCmd>(&a, "refine", stdin, stdout, stderr),
@@ -486,7 +540,14 @@ pub fn run_json_with<C: Command>(
     args.export.check()?;
     let problem: C::Problem = parse_problem::<C>(args, stdin)?;
     let t1 = Instant::now();
-    let solution = C::solve(&problem)?;
+    let solution = if args.stderr_is_terminal && !args.quiet {
+        let line = progress::Line::new(name_static(name));
+        let solution = C::solve_observed(&problem, line.observer());
+        line.finish();
+        solution?
+    } else {
+        C::solve(&problem)?
+    };
     let t2 = Instant::now();
     let svg = match &args.svg {
         Some(_) => C::svg(&problem, &solution),
@@ -540,6 +601,15 @@ pub fn run_json_with<C: Command>(
         })?;
     }
     Ok(())
+}
+
+/// The subcommand's name for the progress line.
+fn name_static(name: &str) -> &'static str {
+    crate::spec::SUBCOMMANDS
+        .iter()
+        .copied()
+        .find(|s| *s == name)
+        .unwrap_or("curvefit")
 }
 
 /// Reads and parses the problem (streamed: the text is never held); `--points FILE.csv`

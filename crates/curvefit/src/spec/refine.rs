@@ -360,8 +360,20 @@ pub fn to_result(r: refine::Refinement) -> RefineResult {
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
 pub fn solve(problem: &RefineProblem) -> Result<RefineResult, InputError> {
+    solve_observed(problem, None)
+}
+
+/// [`solve`], telling `progress` (when given) of each fixed-knot solve and solver iteration.
+///
+/// # Errors
+/// An [`InputError`] naming the user's field and index.
+pub fn solve_observed(
+    problem: &RefineProblem,
+    progress: Option<refine::Observer>,
+) -> Result<RefineResult, InputError> {
     validate(problem)?;
-    let prob = to_library(problem)?;
+    let mut prob = to_library(problem)?;
+    prob.options.progress = progress;
     let r = prob.solve().map_err(|e| match e {
         refine::Error::TooLarge { field, limit } => InputError::new(
             field,

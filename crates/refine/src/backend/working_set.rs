@@ -167,6 +167,7 @@ pub(crate) fn solve<C>(
     start: Option<&[bool]>,
     certify: Certify<'_, C>,
     target: f64,
+    progress: Option<&crate::Observer>,
 ) -> Result<WorkingSetSolution<C>, Error> {
     let n = q.len();
     let constrained = sets.iter().filter(|s| s.is_some()).count();
@@ -179,7 +180,7 @@ pub(crate) fn solve<C>(
         (n / options.start_points).clamp(1, options.start_step)
     };
     solve_from(
-        knots, stencil, q, sets, stride, conic, options, step, start, certify, target,
+        knots, stencil, q, sets, stride, conic, options, step, start, certify, target, progress,
     )
 }
 
@@ -198,6 +199,7 @@ pub(crate) fn solve_from<C>(
     start: Option<&[bool]>,
     certify: Certify<'_, C>,
     target: f64,
+    progress: Option<&crate::Observer>,
 ) -> Result<WorkingSetSolution<C>, Error> {
     let n = q.len();
     let d = q.dim();
@@ -296,6 +298,7 @@ pub(crate) fn solve_from<C>(
                 (k, (c, all))
             },
             target,
+            progress,
         );
         prev = Some(cond);
         let round = match round {
@@ -406,6 +409,7 @@ fn run_round<C>(
     near: &mut Vec<(usize, f64)>,
     certify: Certify<'_, C>,
     target: f64,
+    progress: Option<&crate::Observer>,
 ) -> Result<Round<C>, Error> {
     let mut be = Condensed::new(cond, knots, qw, wsets.clone(), d)?;
     let mut start = be.ball_start();
@@ -420,7 +424,17 @@ fn run_round<C>(
     let mut judged = false;
     let sol = loop {
         let tol = options.round_tolerance;
-        let mut monitor = |it: &conic::Iterate<'_>| judged || it.residuals.total > tol;
+        let mut monitor = |it: &conic::Iterate<'_>| {
+            crate::progress::report(
+                progress,
+                crate::Progress::Iteration {
+                    solver: "condensed working set",
+                    iteration: it.iteration,
+                    residual: it.residuals.total,
+                },
+            );
+            judged || it.residuals.total > tol
+        };
         let sol = conic::solve_with(&mut be, &ipm_opts, start.take(), &mut monitor)?;
         iterations += sol.iterations;
         if sol.status != Status::Stopped {
@@ -618,6 +632,7 @@ mod tests {
             start,
             &mut judge,
             EXACT,
+            None,
         )
         .unwrap();
         (sol.points, sol.certificate)

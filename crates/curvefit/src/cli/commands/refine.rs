@@ -75,6 +75,13 @@ impl super::super::Command for RefineCmd {
         crate::spec::refine(problem)
     }
 
+    fn solve_observed(
+        problem: &RefineProblem,
+        progress: refine::Observer,
+    ) -> Result<RefineResult, InputError> {
+        crate::spec::refine::solve_observed(problem, Some(progress))
+    }
+
     fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {
         Some(picture(problem, solution))
     }

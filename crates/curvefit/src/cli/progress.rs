@@ -1,0 +1,119 @@
+//! The progress line of a long solve: once a solve has run for [`QUIET_FOR`], one line on
+//! standard error (stage, knot iteration, solver iteration, residual, elapsed time), rewritten in
+//! place at most every [`EVERY`] and cleared when the solve ends. Only when standard error is a
+//! terminal and `--quiet` is not given; the events come from the library's observer
+//! ([`refine::Progress`]), the printing is the binary's.
+
+use std::io::Write;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A solve shorter than this prints nothing.
+pub const QUIET_FOR: Duration = Duration::from_secs(1);
+/// The line is rewritten at most this often.
+pub const EVERY: Duration = Duration::from_millis(100);
+
+#[derive(Default)]
+struct State {
+    /// (stage, knot iteration, knot iterations) of the current fixed-knot solve.
+    solve: Option<(usize, usize, usize)>,
+    last: Option<Instant>,
+    printed: bool,
+}
+
+/// The line of one command's solve.
+pub struct Line {
+    label: &'static str,
+    start: Instant,
+    state: Mutex<State>,
+}
+
+impl Line {
+    /// A line for the subcommand `label`, its clock started now.
+    pub fn new(label: &'static str) -> Arc<Line> {
+        Arc::new(Line {
+            label,
+            start: Instant::now(),
+            state: Mutex::new(State::default()),
+        })
+    }
+
+    /// The observer that updates this line.
+    pub fn observer(self: &Arc<Self>) -> refine::Observer {
+        let line = Arc::clone(self);
+        refine::Observer::new(move |e| line.event(e))
+    }
+
+    /// The text for `event` (no terminal control characters), given the current solve.
+    pub fn text(
+        label: &str,
+        solve: Option<(usize, usize, usize)>,
+        event: &refine::Progress,
+        elapsed: Duration,
+    ) -> String {
+        let mut s = format!("{label}:");
+        if let Some((stage, it, of)) = solve {
+            s += &format!(" stage {stage}, knot iteration {it}/{of},");
+        }
+        if let refine::Progress::Iteration {
+            solver,
+            iteration,
+            residual,
+        } = event
+        {
+            s += &format!(" {solver} iteration {iteration}, residual {residual:.1e},");
+        }
+        s + &format!(" {:.1} s", elapsed.as_secs_f64())
+    }
+
+    fn event(&self, event: &refine::Progress) {
+        let Ok(mut st) = self.state.lock() else {
+            return;
+        };
+        if let refine::Progress::Solve {
+            stage,
+            knot_iteration,
+            knot_iterations,
+        } = *event
+        {
+            st.solve = Some((stage, knot_iteration, knot_iterations));
+        }
+        let now = Instant::now();
+        let elapsed = now - self.start;
+        if elapsed < QUIET_FOR || st.last.is_some_and(|t| now - t < EVERY) {
+            return;
+        }
+        st.last = Some(now);
+        let text = Self::text(self.label, st.solve, event, elapsed);
+        // Carriage return, the text, erase to the end of the line. A failed write to the
+        // terminal only loses the line.
+        let _ = write!(std::io::stderr().lock(), "\r{text}\x1b[K");
+        st.printed = true;
+    }
+
+    /// Clears the line, if one was printed.
+    pub fn finish(&self) {
+        if self.state.lock().is_ok_and(|st| st.printed) {
+            let _ = write!(std::io::stderr().lock(), "\r\x1b[K");
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_line_names_stage_iteration_residual_and_time() {
+        let e = refine::Progress::Iteration {
+            solver: "condensed working set",
+            iteration: 12,
+            residual: 3.14e-5,
+        };
+        let t = Line::text("refine", Some((0, 1, 3)), &e, Duration::from_millis(2345));
+        assert_eq!(
+            t,
+            "refine: stage 0, knot iteration 1/3, condensed working set iteration 12, residual 3.1e-5, 2.3 s"
+        );
+    }
+}
