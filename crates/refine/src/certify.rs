@@ -17,11 +17,14 @@
 //! The largest of:
 //! - **stationarity** ‖Hp + Σ (constraint gradient × multiplier)‖_∞ over all vertices, divided
 //!   by the force scale F = ‖H‖_∞ · δ (δ the largest coordinate step between consecutive
-//!   vertices: Hp is formed from such differences, so this is its rounding scale);
+//!   vertices: Hp is formed from such differences, so this is its rounding scale); at a data
+//!   vertex with smoothing weight w, the part beyond w·ε·max(|p_{i_k}|_∞, |q_i|_∞, L), the force
+//!   one rounding of the vertex's coordinates exerts (stiff weights, w ≫ ‖H‖);
 //! - **complementarity** (|multiplier × slack|) and **negative multipliers**, over F;
 //! - **primal violation** over the length scale L, the largest coordinate distance of a vertex
 //!   or a data point from the data's centroid; a derivative constraint's violation relative to
-//!   its own scale (max(|L p|, the set's size));
+//!   its own scale (max(|L p|, the set's size, Σ_u |c_u||p_u − p_v|_∞ — the rounding scale of
+//!   the stencil, which a zero target lacks));
 //! - the **duality gap** Σ (multiplier × slack) over E (it bounds the relative excess E(p) − E*
 //!   of a feasible p over the optimum; E* = 0 is measured against the rounding level ε F L).
 
@@ -208,13 +211,17 @@ pub(crate) fn certify(
                 *rc += f;
             }
         }
+        let mut rounding = 0.0;
         if data_index[j] != usize::MAX {
             let i = data_index[j];
             for (rc, f) in r.iter_mut().zip(&terms.force_data[i * d..(i + 1) * d]) {
                 *rc += f;
             }
+            rounding = terms.rounding_data[i];
         }
-        stat = r.iter().fold(stat, |a, x| a.max(x.abs()));
+        stat = r
+            .iter()
+            .fold(stat, |a, x| a.max((x.abs() - rounding).max(0.0)));
     }
     // The duality gap bounds E(p) − E* for a feasible p; relative to E (or, for E ≈ 0, to the
     // rounding level of the force scale times the length scale).
