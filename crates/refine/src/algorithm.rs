@@ -225,9 +225,39 @@ fn constant_points(n: usize, c: &[f64]) -> Points {
     Points::new(c.len(), coords).expect("a finite common point")
 }
 
+/// The updated knots `t` mapped affinely onto the span [a, b] of the knots they replace:
+/// t'_j = a + (b − a)(t_j − t_0)/(t_N − t_0). Every stage starts from the k-level split of the
+/// data parameters (or of the previous stage, itself on the data span), so all knots of a
+/// refinement span the data parameters u_0 … u_n whatever k and the number of updates: a
+/// derivative Df (clamped and near-clamped ends, tangent constraints) is a derivative with
+/// respect to the data's parameter at every k, and E of (2.1) is measured in that parameter.
+/// Without it the chords of the refined vertices set the scale (knots 0…36 at k = 30 where the
+/// data span 0…3.2), and a clamped end derivative meant a different curve at every k.
+fn rescale_to(t: &Knots, like: &Knots, stage: usize) -> Result<Knots, Error> {
+    let (v, w) = (t.values(), like.values());
+    let (t0, tn) = (v[0], v[v.len() - 1]);
+    let (a, b) = (w[0], w[w.len() - 1]);
+    let ratio = (b - a) / (tn - t0);
+    let mut out: Vec<f64> = v.iter().map(|&x| a + (x - t0) * ratio).collect();
+    // The ends exactly (rounding of the ratio must not move the span).
+    out[0] = a;
+    let last = out.len() - 1;
+    out[last] = b;
+    let vertices = t.vertex_count();
+    Knots::new(t.topology(), out).map_err(|e| match e {
+        divdiff::Error::NonIncreasingKnots { index } => Error::DegenerateRefinedSpan {
+            stage,
+            index: index - 1,
+            next: index % vertices,
+        },
+        e => Error::Divdiff(e),
+    })
+}
+
 /// Solve on the initial knots, then `knot_iterations` times: update the knots from the refined
-/// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e) and solve again — so the returned points are
-/// the solution for the returned knots.
+/// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e), mapped back onto the data parameters' span
+/// ([`rescale_to`]), and solve again — so the returned points are the solution for the returned
+/// knots.
 #[allow(clippy::too_many_arguments)]
 fn stage_loop(
     stage: usize,
@@ -245,13 +275,14 @@ fn stage_loop(
     let mut working_set: Option<Vec<bool>> = None;
     for _ in 0..=problem.knot_iterations {
         if let Some(FixedSolution { points, .. }) = &sol {
-            *knots =
+            let updated =
                 divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::DegenerateRefinedSpan { stage, index, next }
                     }
                     e => Error::Divdiff(e),
                 })?;
+            *knots = rescale_to(&updated, knots, stage)?;
             iterations.knot_updates += 1;
         }
         let fp = FixedProblem {
