@@ -99,7 +99,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     // Part 1: the near-interpolatory k-level step.
     let k = problem.k;
     let mut data_vertex: Vec<usize> = (0..q.len()).map(|i| (k + 1) * i).collect();
-    let mut knots = split_knots(&u, k)?;
+    let mut knots = split_knots(&u, k).map_err(|e| split_error(e, problem, k))?;
     let (mut p, multipliers, cert) = if let Some(c) = &constant {
         // The constant curve on the split knots; no knot update is possible (zero spans).
         let pts = constant_points(knots.vertex_count(), &c.point);
@@ -207,6 +207,31 @@ pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
     Ok(Knots::new(u.topology(), t)?)
 }
 
+/// The user's view of a failed split of the data knots: a data span too short, against the
+/// knot values, to be cut into k + 1 increasing sub-spans — `knots[i]` when given, else the
+/// data points (or the exponent) that made it.
+fn split_error(e: Error, problem: &Problem, k: usize) -> Error {
+    let Error::Divdiff(divdiff::Error::NonIncreasingKnots { index }) = e else {
+        return e;
+    };
+    // Refined knot `index` lies in data span (index − 1)/(k + 1).
+    let span = (index - 1) / (k + 1);
+    if problem.knots.is_some() {
+        Error::InvalidKnots {
+            index: span + 1,
+            reason:
+                "too close to the previous knot to split the span into k + 1 increasing sub-spans",
+        }
+    } else {
+        Error::InvalidValue {
+            field: "points",
+            index: (span + 1) % problem.points.len(),
+            value: f64::NAN,
+            reason: "so close to the previous point, against the curve's parameter length, that its span cannot be split into k + 1 sub-spans (or the parametrization's exponent is too large)",
+        }
+    }
+}
+
 fn stage_report(k: usize, vertices: usize, cert: &Certificate) -> Stage {
     Stage {
         k,
@@ -279,6 +304,14 @@ fn stage_loop(
                 divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::DegenerateRefinedSpan { stage, index, next }
+                    }
+                    // A span |p_{j+1} − p_j|^e lost to rounding or overflowing: the exponent.
+                    divdiff::Error::NonIncreasingKnots { .. } | divdiff::Error::NonFinite { .. } => {
+                        Error::InvalidParameter {
+                            field: "parametrization.exponent",
+                            value: param.exponent(),
+                            reason: "the knot update's spans |p_{j+1} - p_j|^e over- or underflow, or vanish against the knot values, at this exponent; use a smaller exponent or knot_iterations 0",
+                        }
                     }
                     e => Error::Divdiff(e),
                 })?;

@@ -136,7 +136,8 @@ pub use options::{
     CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
 };
 pub use problem::{
-    Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
+    Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, EXTENT_RANGE,
+    MAX_CONIC_COORDS,
 };
 pub use slots::halfplane_polygon;
 pub use split::{data_vertex, split};

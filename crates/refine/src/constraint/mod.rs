@@ -464,14 +464,8 @@ pub(crate) fn check_halfspaces(
     Ok(())
 }
 
-/// The Euclidean distance |a − b|.
-pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt()
-}
+/// The Euclidean distance |a − b| (scaled: no overflow or underflow of the squares).
+pub(crate) use banded::vector::dist;
 
 /// The half-spaces as the conic model's polytope.
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
