@@ -28,7 +28,7 @@ impl Parametrization {
 }
 
 /// Knots for `points` by Algorithm 4.1 step (iv): u_0 = 0, u_{i+1} = u_i + |q_{i+1} − q_i|^e
-/// (Euclidean norm), **not** normalized. A closed curve gets the closing span |q_0 − q_{N−1}|^e as
+/// (Euclidean norm, computed without overflow or underflow of the squares), **not** normalized. A closed curve gets the closing span |q_0 − q_{N−1}|^e as
 /// its knot N + 1, so N points give N knots (open) or N + 1 knots (closed).
 ///
 /// # Errors
@@ -87,13 +87,9 @@ pub fn parametrize(
     t.push(0.0);
     for i in 0..spans {
         let next = if i + 1 == n { 0 } else { i + 1 };
-        let dist = points
-            .point(i)
-            .iter()
-            .zip(points.point(next))
-            .map(|(a, b)| (b - a) * (b - a))
-            .sum::<f64>()
-            .sqrt();
+        // Scaled (Blue's algorithm, `banded::vector`): squares of coordinates at 1e±300 would
+        // overflow to ∞ or underflow to 0 where the distance itself is representable.
+        let dist = banded::vector::dist(points.point(next), points.point(i));
         if dist <= 0.0 {
             return Err(Error::ZeroLengthSpan { index: i, next });
         }

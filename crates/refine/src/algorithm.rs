@@ -99,7 +99,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     // Part 1: the near-interpolatory k-level step.
     let k = problem.k;
     let mut data_vertex: Vec<usize> = (0..q.len()).map(|i| (k + 1) * i).collect();
-    let mut knots = split_knots(&u, k)?;
+    let mut knots = split_knots(&u, k).map_err(|e| split_error(e, problem, k))?;
     let (mut p, multipliers, cert) = if let Some(c) = &constant {
         // The constant curve on the split knots; no knot update is possible (zero spans).
         let pts = constant_points(knots.vertex_count(), &c.point);
@@ -207,6 +207,31 @@ pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
     Ok(Knots::new(u.topology(), t)?)
 }
 
+/// The user's view of a failed split of the data knots: a data span too short, against the
+/// knot values, to be cut into k + 1 increasing sub-spans — `knots[i]` when given, else the
+/// data points (or the exponent) that made it.
+fn split_error(e: Error, problem: &Problem, k: usize) -> Error {
+    let Error::Divdiff(divdiff::Error::NonIncreasingKnots { index }) = e else {
+        return e;
+    };
+    // Refined knot `index` lies in data span (index − 1)/(k + 1).
+    let span = (index - 1) / (k + 1);
+    if problem.knots.is_some() {
+        Error::InvalidKnots {
+            index: span + 1,
+            reason:
+                "too close to the previous knot to split the span into k + 1 increasing sub-spans",
+        }
+    } else {
+        Error::InvalidValue {
+            field: "points",
+            index: (span + 1) % problem.points.len(),
+            value: f64::NAN,
+            reason: "so close to the previous point, against the curve's parameter length, that its span cannot be split into k + 1 sub-spans (or the parametrization's exponent is too large)",
+        }
+    }
+}
+
 fn stage_report(k: usize, vertices: usize, cert: &Certificate) -> Stage {
     Stage {
         k,
@@ -225,9 +250,39 @@ fn constant_points(n: usize, c: &[f64]) -> Points {
     Points::new(c.len(), coords).expect("a finite common point")
 }
 
+/// The updated knots `t` mapped affinely onto the span [a, b] of the knots they replace:
+/// t'_j = a + (b − a)(t_j − t_0)/(t_N − t_0). Every stage starts from the k-level split of the
+/// data parameters (or of the previous stage, itself on the data span), so all knots of a
+/// refinement span the data parameters u_0 … u_n whatever k and the number of updates: a
+/// derivative Df (clamped and near-clamped ends, tangent constraints) is a derivative with
+/// respect to the data's parameter at every k, and E of (2.1) is measured in that parameter.
+/// Without it the chords of the refined vertices set the scale (knots 0…36 at k = 30 where the
+/// data span 0…3.2), and a clamped end derivative meant a different curve at every k.
+fn rescale_to(t: &Knots, like: &Knots, stage: usize) -> Result<Knots, Error> {
+    let (v, w) = (t.values(), like.values());
+    let (t0, tn) = (v[0], v[v.len() - 1]);
+    let (a, b) = (w[0], w[w.len() - 1]);
+    let ratio = (b - a) / (tn - t0);
+    let mut out: Vec<f64> = v.iter().map(|&x| a + (x - t0) * ratio).collect();
+    // The ends exactly (rounding of the ratio must not move the span).
+    out[0] = a;
+    let last = out.len() - 1;
+    out[last] = b;
+    let vertices = t.vertex_count();
+    Knots::new(t.topology(), out).map_err(|e| match e {
+        divdiff::Error::NonIncreasingKnots { index } => Error::DegenerateRefinedSpan {
+            stage,
+            index: index - 1,
+            next: index % vertices,
+        },
+        e => Error::Divdiff(e),
+    })
+}
+
 /// Solve on the initial knots, then `knot_iterations` times: update the knots from the refined
-/// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e) and solve again — so the returned points are
-/// the solution for the returned knots.
+/// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e), mapped back onto the data parameters' span
+/// ([`rescale_to`]), and solve again — so the returned points are the solution for the returned
+/// knots.
 #[allow(clippy::too_many_arguments)]
 fn stage_loop(
     stage: usize,
@@ -253,13 +308,22 @@ fn stage_loop(
             },
         );
         if let Some(FixedSolution { points, .. }) = &sol {
-            *knots =
+            let updated =
                 divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::DegenerateRefinedSpan { stage, index, next }
                     }
+                    // A span |p_{j+1} − p_j|^e lost to rounding or overflowing: the exponent.
+                    divdiff::Error::NonIncreasingKnots { .. } | divdiff::Error::NonFinite { .. } => {
+                        Error::InvalidParameter {
+                            field: "parametrization.exponent",
+                            value: param.exponent(),
+                            reason: "the knot update's spans |p_{j+1} - p_j|^e over- or underflow, or vanish against the knot values, at this exponent; use a smaller exponent or knot_iterations 0",
+                        }
+                    }
                     e => Error::Divdiff(e),
                 })?;
+            *knots = rescale_to(&updated, knots, stage)?;
             iterations.knot_updates += 1;
         }
         let fp = FixedProblem {

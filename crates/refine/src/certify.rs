@@ -19,10 +19,14 @@
 //!   by the force scale F = max(‖Hp‖_∞, R / [`ROUNDING_COUNTS_AS`]): the largest force the
 //!   curve actually carries (the reactions of its active constraints), but no smaller than
 //!   the scale on which the rounding level R (below) is [`ROUNDING_COUNTS_AS`] = 1e-9 of it;
+//!   at a data vertex with smoothing weight w, only the part beyond w·ε·max(|p_{i_k}|_∞,
+//!   |q_i|_∞, L) counts, the force one rounding of the vertex's coordinates exerts (stiff
+//!   weights, w ≫ ‖H‖);
 //! - **complementarity** (|multiplier × slack|) and **negative multipliers**, over F;
 //! - **primal violation** over the length scale L, the largest coordinate distance of a vertex
 //!   or a data point from the data's centroid; a derivative constraint's violation relative to
-//!   its own scale (max(|L p|, the set's size));
+//!   its own scale (max(|L p|, the set's size, Σ_u |c_u||p_u − p_v|_∞ — the rounding scale of
+//!   the stencil, which a zero target lacks));
 //! - the **duality gap** Σ (multiplier × slack) over E (it bounds the relative excess E(p) − E*
 //!   of a feasible p over the optimum; E* = 0 is measured against the rounding level ε F L).
 //!
@@ -384,7 +388,11 @@ pub(crate) fn certify(
         hp_data
             .iter()
             .zip(&terms.force_data)
-            .fold(pass.free_stat, |a, (h, f)| a.max((h + f).abs()))
+            .enumerate()
+            .fold(pass.free_stat, |a, (k, (h, f))| {
+                // what one rounding of a stiffly weighted vertex exerts is not a residual
+                a.max(((h + f).abs() - terms.rounding_data[k / d]).max(0.0))
+            })
     } else {
         // Summed into Hp's own buffer (Hp is not needed after this).
         let mut r = std::mem::take(&mut pass.hp);
@@ -399,6 +407,11 @@ pub(crate) fn certify(
                 .zip(&terms.force_data[i * d..(i + 1) * d])
             {
                 *rc += f;
+            }
+            // what one rounding of a stiffly weighted vertex exerts is not a residual
+            let rounding = terms.rounding_data[i];
+            for rc in &mut r[v * d..(v + 1) * d] {
+                *rc = (rc.abs() - rounding).max(0.0);
             }
         }
         r.iter().fold(0.0f64, |a, x| a.max(x.abs()))

@@ -25,8 +25,11 @@
 //! - **Smoothing (3.6)**: minimize E + ½Σ w_i |p_{i_k} − q_i|², i.e. (H + W)p = W q̃.
 //! - **Open curves (§3.6)**: zero first and last rows of A; natural ends.
 //! - **Algorithm 4.1**: part 1 is one k-level step alternating a fixed-knot solve with knot
-//!   updates t_{j+1} = t_j + |p_{j+1} − p_j|^e on the refined vertices (`knot_iterations` times,
-//!   then a final solve, so the points always belong to the returned knots); part 2 is `levels`
+//!   updates t_{j+1} = t_j + |p_{j+1} − p_j|^e on the refined vertices, each mapped affinely
+//!   back onto the span of the knots it replaces — so every stage's knots span the data
+//!   parameters, and derivatives (clamped and near-clamped ends, tangents) and E are with
+//!   respect to the data parameter at every k (`knot_iterations` times, then a final solve, so
+//!   the points always belong to the returned knots); part 2 is `levels`
 //!   further interpolatory `level_k`-level steps, each re-initialized from the previous result.
 //!
 //! # Layout
@@ -141,7 +144,8 @@ pub use options::{
     CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
 };
 pub use problem::{
-    Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, MAX_CONIC_COORDS,
+    Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, EXTENT_RANGE,
+    MAX_CONIC_COORDS,
 };
 pub use progress::{Observer, Progress};
 pub use slots::halfplane_polygon;

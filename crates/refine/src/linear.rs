@@ -21,16 +21,29 @@ pub(crate) fn hessian_system(knots: &Knots, dim: usize) -> Result<System, Error>
     )?)
 }
 
+/// The weight from which smoothing is interpolation to rounding: w ≥ ‖H‖_∞/ε. At the optimum
+/// w(p_{i_k} − q_i) = −(Hp)_{i_k}, and |Hp| ≤ ‖H‖_∞ L (H annihilates constants; L the extent
+/// about the centroid), so |p_{i_k} − q_i| ≤ ε L: the vertex is q_i to rounding, and fixing it
+/// there is exact to the certificate's stationarity allowance w·ε·L (`constraint/smoothing.rs`)
+/// while it keeps w·q (1e300 × 1e10) from overflowing and the factorization well scaled.
+fn stiff_weight(h: &Hessian) -> f64 {
+    let (d0, d1, d2) = h.bands();
+    let m = |b: &[f64]| b.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    (m(d0) + 2.0 * m(d1) + 2.0 * m(d2)) / f64::EPSILON
+}
+
 /// Interpolation at the data vertices whose `fixed` flag is set, plus weights `w` (0 = none) at
 /// the others: (H + W)p = W q̃ with p_v = q_i at fixed data vertices (3.3), (3.5), (3.6).
 pub(crate) fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result<Points, Error> {
     let n_vert = fp.knots.vertex_count();
     let d = fp.q.dim();
+    let h = Hessian::new(fp.knots);
+    let stiff = stiff_weight(&h);
     let mut sys = hessian_system(fp.knots, d)?;
     let mut rhs = vec![0.0; n_vert * d];
     for (i, &v) in fp.data_vertex.iter().enumerate() {
         let qi = fp.q.point(i);
-        if fixed[i] {
+        if fixed[i] || w[i] >= stiff {
             sys.fix(v)?;
             rhs[v * d..(v + 1) * d].copy_from_slice(qi);
         } else if w[i] > 0.0 {

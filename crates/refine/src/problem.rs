@@ -26,6 +26,15 @@ pub const MAX_CONIC_COORDS: usize = 2_000_000;
 
 /// Default number of intermediate points per span in the near-interpolatory step.
 pub const DEFAULT_K: usize = 3;
+
+/// The range of the data's extent (the largest distance of a data point from the first,
+/// computed with a scaled norm so that it does not overflow) that [`Problem::validate`] accepts;
+/// outside it the problem is refused naming `points` (rescale the data). Beyond 1e±150 the
+/// squares of coordinates and of the parameter spans h ~ L^e in E ~ L²/h³ and H ~ 1/h³ leave
+/// the floating-point range for every parametrization. Inside it a problem can still be too
+/// badly scaled — chordal spans of 1e-100 make H ~ 1e300 — and the solve then refuses with the
+/// singular or non-finite system it met (the command line names `points`).
+pub const EXTENT_RANGE: (f64, f64) = (1e-150, 1e150);
 /// Default number of knot updates per stage (Algorithm 4.1 step (v)).
 pub const DEFAULT_KNOT_ITERATIONS: usize = 3;
 /// Default number of multiplier updates of the paper's iteration (Algorithm 4.1 (iii)(c):
@@ -204,6 +213,22 @@ impl Problem {
                 return Err(Error::CoincidentPoints { index: i, next: j });
             }
         }
+        let (far, extent) = (0..n)
+            .map(|i| {
+                (
+                    i,
+                    banded::vector::dist(self.points.point(i), self.points.point(0)),
+                )
+            })
+            .fold((0, 0.0f64), |a, b| if b.1 > a.1 { b } else { a });
+        if !(EXTENT_RANGE.0..=EXTENT_RANGE.1).contains(&extent) {
+            return Err(Error::InvalidValue {
+                field: "points",
+                index: far,
+                value: extent,
+                reason: "the data's extent (distance from points[0]) must be within 1e-150 ..= 1e150; rescale the points",
+            });
+        }
         if self.k == 0 {
             return Err(Error::InvalidParameter {
                 field: "k",
@@ -311,6 +336,26 @@ impl Problem {
                 .map_err(|e| match e {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::CoincidentPoints { index, next }
+                    }
+                    // A span |q_{i+1} − q_i|^e that overflows, or vanishes against the knot
+                    // before it: the exponent when it is above 1, else the data's extent.
+                    divdiff::Error::NonIncreasingKnots { index }
+                    | divdiff::Error::NonFinite { index, .. } => {
+                        let e = self.parametrization.exponent();
+                        if e > 1.0 {
+                            Error::InvalidParameter {
+                                field: "parametrization.exponent",
+                                value: e,
+                                reason: "the data parameters' spans |q_{i+1} - q_i|^e over- or underflow, or vanish against the knot values, at this exponent; use a smaller one",
+                            }
+                        } else {
+                            Error::InvalidValue {
+                                field: "points",
+                                index,
+                                value: f64::NAN,
+                                reason: "the data parameters overflow, or this span vanishes against them: the points' extent is outside the floating-point range; rescale the points",
+                            }
+                        }
                     }
                     e => Error::Divdiff(e),
                 }),

@@ -374,14 +374,101 @@ pub fn solve_observed(
     validate(problem)?;
     let mut prob = to_library(problem)?;
     prob.options.progress = progress;
-    let r = prob.solve().map_err(|e| match e {
-        refine::Error::TooLarge { field, limit } => InputError::new(
+    let r = prob.solve().map_err(user_error)?;
+    Ok(to_result(r))
+}
+
+/// A library field and index as the JSON's path: `tangents.direction` at 1 is
+/// `tangents[1].direction`, `radii` at 2 `constraint.radii[2]`.
+fn path(field: &str, index: usize) -> String {
+    match field.split_once('.') {
+        Some(("tangents", rest)) => format!("tangents[{index}].{rest}"),
+        Some(("boundary", _)) => field.to_string(),
+        _ => match field {
+            "radii" | "weights" | "sets" => format!("constraint.{field}[{index}]"),
+            _ => format!("{field}[{index}]"),
+        },
+    }
+}
+
+/// The user's view of a library error: the JSON field and index it concerns (module docs of
+/// `refine::Error` for the variants), and what is wrong in words.
+fn user_error(e: refine::Error) -> InputError {
+    use refine::Error as E;
+    let whole = |field: &str| match field {
+        "radii" | "weights" | "sets" => format!("constraint.{field}"),
+        f => f.to_string(),
+    };
+    match e {
+        E::TooLarge { field, limit } => InputError::new(
             field,
             format!("the first stage would exceed {limit} coordinates, the limit of the general interior-point solver (tangents, end conditions, half-spaces); lower k"),
         ),
+        E::TooFewPoints { .. } => InputError::new("points", e),
+        E::CoincidentPoints { next, .. } => InputError::new(format!("points[{next}]"), e),
+        E::WrongLength {
+            field,
+            expected,
+            got,
+        } => InputError::new(
+            whole(field),
+            format!("has {got} entries, expected {expected}"),
+        ),
+        E::WrongDimension {
+            field,
+            index,
+            expected,
+            got,
+        } => InputError::new(
+            path(field, index),
+            format!("has {got} coordinates, expected {expected}"),
+        ),
+        E::InvalidValue {
+            field,
+            index,
+            reason,
+            ..
+        } => InputError::new(path(field, index), reason),
+        E::InvalidParameter { field, reason, .. } => InputError::new(field, reason),
+        E::InvalidHalfSpace {
+            field,
+            point,
+            index,
+            reason,
+        } => {
+            let f = if field.starts_with("tangents") {
+                format!("tangents[{point}].halfspaces[{index}]")
+            } else {
+                format!("constraint.sets[{point}][{index}]")
+            };
+            InputError::new(f, reason)
+        }
+        E::InvalidKnots { index, reason } => InputError::new(format!("knots[{index}]"), reason),
+        E::TooFewWeights { needed, got } => InputError::new(
+            "constraint.weights",
+            format!("at least {needed} weights must be positive, got {got}"),
+        ),
+        E::DegenerateRefinedSpan { .. } => InputError::new(
+            "knot_iterations",
+            format!("{e}; the refined curve doubles back on itself: use knot_iterations 0"),
+        ),
+        E::InfeasibleConstraint { field, point } => {
+            let f = match field {
+                "boundary" => ["boundary.start", "boundary.end"][point.min(1)].to_string(),
+                "tangents" => format!("tangents[{point}]"),
+                f => format!("constraint.{f}[{point}]"),
+            };
+            InputError::new(f, "cannot be satisfied together with the other constraints")
+        }
+        E::Unsupported { field, reason } => InputError::new(whole(field), reason),
+        // The linear algebra failed on valid input: the data's scale (or the spread of the
+        // spans) is beyond what the floating-point solve resolves.
+        E::Energy(_) | E::Divdiff(_) | E::NonFiniteInput { .. } => InputError::new(
+            "points",
+            format!("{e}: the points (or their parameter spans) are too badly scaled for a floating-point solve; rescale the points or use fewer intermediate points (k)"),
+        ),
         e => InputError::new("", e),
-    })?;
-    Ok(to_result(r))
+    }
 }
 
 #[cfg(test)]

@@ -229,6 +229,10 @@ pub(crate) struct Terms {
     /// smoothing weight's w_i, in force per length): rounding of size ε|p| in the points moves
     /// its forces by this times ε|p|, so it enters the certificate's rounding level beside ‖H‖.
     pub stiffness: f64,
+    /// The force that rounding the data vertex's coordinates to floating point can produce,
+    /// per data point (n): a stiff smoothing weight w times u |p_{i_k}| — the stationarity at
+    /// that vertex is judged beyond it (module docs of [`crate::certify`]).
+    pub rounding_data: Vec<f64>,
     /// Whether each data point's constraint is active.
     pub active: Vec<bool>,
     /// Data points that Corollary 3.3's inactive jumps do not concern (smoothing: a penalty,
@@ -249,6 +253,7 @@ impl Terms {
             comp: 0.0,
             gap: 0.0,
             stiffness: 0.0,
+            rounding_data: vec![0.0; n],
             active: vec![false; n],
             no_jump: vec![false; n],
             next_dual: 0,
@@ -464,14 +469,8 @@ pub(crate) fn check_halfspaces(
     Ok(())
 }
 
-/// The Euclidean distance |a − b|.
-pub(crate) fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt()
-}
+/// The Euclidean distance |a − b| (scaled: no overflow or underflow of the squares).
+pub(crate) use banded::vector::dist;
 
 /// The half-spaces as the conic model's polytope.
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
@@ -496,14 +495,26 @@ pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &C
         return;
     };
     let x = at.p.coords();
+    // L p in difference form, Σ_u c_u (p_u − p_v) (the coefficients sum to zero: a derivative
+    // of a constant vanishes), and its rounding scale Σ_u |c_u| |p_u − p_v|_∞: the size of the
+    // derivative the stencil sees. A zero or tiny target (clamped ends [0, 0], 1e-9) has no
+    // scale of its own, so the violation is measured against this one; relative to |L p|
+    // alone a curve that meets Df = 0 to rounding showed a relative violation of 1.
     let mut y = vec![0.0; d];
+    let mut rounding: f64 = 0.0;
     for &(u, c) in stencil.iter() {
+        let mut step: f64 = 0.0;
         for k in 0..d {
-            y[k] += c * x[u * d + k];
+            let diff = x[u * d + k] - x[v * d + k];
+            y[k] += c * diff;
+            step = step.max(diff.abs());
         }
+        rounding += c.abs() * step;
     }
     let (dist_y, scale) = crate::conic_problem::set_distance(set, &y);
-    let den = scale.max(y.iter().map(|a| a * a).sum::<f64>().sqrt());
+    let den = scale
+        .max(y.iter().map(|a| a * a).sum::<f64>().sqrt())
+        .max(rounding);
     if dist_y > 0.0 {
         terms.primal_rel = terms.primal_rel.max(if den > 0.0 {
             dist_y / den

@@ -68,6 +68,13 @@ impl Kind for Smoothing<'_> {
             for c in 0..d {
                 terms.force_data[i * d + c] += w * (pv[c] - qi[c]);
             }
+            // p_{i_k} is known to half an ulp of the larger of its coordinates and the length
+            // scale (the solve runs on centred data and translates back): a weight w turns that
+            // into a force w·u·|p|, which the stationarity cannot resolve below. For w ≫ ‖H‖
+            // the optimum sits within rounding of q_i (the interpolation limit) and this is
+            // what remains of w(p − q).
+            let size = pv.iter().chain(qi).fold(at.length, |a, x| a.max(x.abs()));
+            terms.rounding_data[i] = w * f64::EPSILON * size;
             terms.no_jump[i] = true;
             terms.stiffness = terms.stiffness.max(w.abs());
         }

@@ -20,7 +20,9 @@ use crate::Error;
 pub(crate) struct Tangents<'a>(pub &'a [Option<Tangent>]);
 
 fn unit(v: &[f64]) -> Vec<f64> {
-    let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    // Scaled norm: a direction like [1e-200, 0] has a representable length whose square
+    // underflows to 0 (it gave a non-finite axis).
+    let n = banded::vector::norm(v);
     v.iter().map(|x| x / n).collect()
 }
 

@@ -1,0 +1,93 @@
+//! Scale-free geometry and refusals that name the user's field (issue 17 §3, §5), through the
+//! binary: each input that used to be refused naming an internal quantity (`knots[1]` where no
+//! knots were given, `axis[0]`, `knots[5]` of the refined knots) is now either solved with its
+//! certificate or refused with exit code 2 and one line naming exactly the JSON field at fault.
+
+use curvefit_tests::run_cli;
+
+/// The field named by a refusal: the text between `error: ` and the next `: `.
+fn refused_field(doc: &str) -> String {
+    let (code, out, err) = run_cli(&["refine", "-"], doc);
+    assert_eq!(code, 2, "{doc}: {err}");
+    assert!(out.is_empty());
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    let line = err.trim_end();
+    let rest = line.strip_prefix("error: ").unwrap_or(line);
+    rest.split(": ").next().unwrap_or("").to_string()
+}
+
+fn solved(doc: &str) -> serde_json::Value {
+    let (code, out, err) = run_cli(&["refine", "-"], doc);
+    assert_eq!(code, 0, "{doc}: {err}");
+    assert!(!out.contains("null"), "{doc}: non-finite output");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let kkt = v["kkt_residual"].as_f64().unwrap();
+    assert!(kkt <= 1e-9, "{doc}: kkt {kkt}");
+    v
+}
+
+#[test]
+fn extreme_scales_are_refused_naming_points() {
+    // Squared distances overflow (was `knots[1] is not finite`) and underflow (was `points[0]
+    // and points[1] coincide`): beyond refine::EXTENT_RANGE, refused naming the farthest point.
+    for s in ["1e300", "1e-300", "1e200", "1e-200"] {
+        let doc = format!(r#"{{"points": [[{s}, -{s}], [-{s}, {s}], [{s}, {s}]]}}"#);
+        assert_eq!(refused_field(&doc), "points[1]", "{s}");
+    }
+}
+
+#[test]
+fn small_and_large_data_inside_the_range_are_solved() {
+    // Well inside refine::EXTENT_RANGE: solved with the certificate like data at 1.
+    for s in ["1e-40", "1e40"] {
+        let doc = format!(
+            r#"{{"points": [[0, 0], [{s}, {s}], [0, {s}], [{s}, 0]], "parametrization": "uniform"}}"#
+        );
+        solved(&doc);
+    }
+}
+
+#[test]
+fn a_tiny_wedge_direction_is_a_direction() {
+    // [1e-200, 0] has length 1e-200, whose square underflows (was `axis[0] is not finite`).
+    solved(
+        r#"{"points": [[0,0],[1,1],[2,0],[3,1]],
+            "tangents": [null, {"type": "wedge", "direction": [1e-200, 0], "half_angle": 0.3}, null, null]}"#,
+    );
+}
+
+#[test]
+fn knots_too_close_to_split_name_the_given_knot() {
+    // Valid (increasing) knots whose span 2.2e-16 cannot hold k + 1 increasing sub-spans: the
+    // refined knot index (was `knots[5]`) is mapped back to the data knot.
+    let doc = r#"{"points": [[0,0],[1,1],[2,0],[3,1]], "knots": [0, 1, 1.0000000000000002, 2]}"#;
+    assert_eq!(refused_field(doc), "knots[2]");
+}
+
+#[test]
+fn an_exponent_too_large_names_the_exponent() {
+    // |p_{j+1} − p_j|^50 of the refined vertices vanishes against the knot values (was
+    // `knots[3] is not greater than knots[2]`).
+    let doc = r#"{"points": [[0,0],[1,1],[2,0],[3,1]], "parametrization": {"exponent": 50}}"#;
+    assert_eq!(refused_field(doc), "parametrization.exponent");
+    // Without knot updates the data parameters (spans 2^25) are fine: solved.
+    solved(
+        r#"{"points": [[0,0],[1,1],[2,0],[3,1]], "parametrization": {"exponent": 50}, "knot_iterations": 0}"#,
+    );
+}
+
+#[test]
+fn badly_scaled_spans_inside_the_range_name_points() {
+    // Chordal spans of 1e-100 make H ~ 1e300 (was `singular system: non-positive pivot at
+    // vertex …` with no field).
+    let doc = r#"{"points": [[0,0],[1e-100,1e-100],[0,1e-100],[1e-100,0]], "parametrization": "chordal", "k": 7,
+                 "constraint": {"type": "smoothing", "weights": [1, 1, 1, 1]}}"#;
+    assert_eq!(refused_field(doc), "points");
+}
+
+#[test]
+fn library_fields_are_the_json_paths() {
+    // The library's `weights` is the JSON's `constraint.weights`.
+    let doc = r#"{"points": [[0,0],[1,1],[2,0]], "constraint": {"type": "smoothing", "weights": [1, 0, 0]}}"#;
+    assert_eq!(refused_field(doc), "constraint.weights");
+}
