@@ -58,7 +58,7 @@
 //! | Fig. 3.9 | open curves | not numeric; redrawn by `cargo xtask figures` |
 //! | Algorithm 4.1, part 1 (i)–(ii) | data knots, split (3.1), w = 1 | `kersey/alg4.1/unnormalized-centripetal-knots`, `kersey/3.1/split-sizes-and-data-vertices` |
 //! | Algorithm 4.1 (iii) | the multiplier iteration | `kersey/alg4.1/paper-iteration-vs-clarabel` (expected failure: measured gap after 10, 50, 200 updates), `kersey/alg4.1/paper-iteration-converges` (200 updates reach the optimum) |
-//! | Algorithm 4.1 (iv)–(v) | knot updates t_{i+1} = t_i + |Δp|^e, e = ½ (0 uniform, 1 chordal) | `kersey/alg4.1/knot-update-step-iv`, `kersey/alg4.1/parametrizations` |
+//! | Algorithm 4.1 (iv)–(v) | knot updates t_{i+1} = t_i + |Δp|^e, e = ½ (0 uniform, 1 chordal), mapped onto the data parameter span | `kersey/alg4.1/knot-update-step-iv`, `kersey/alg4.1/parametrizations` |
 //! | Algorithm 4.1, part 2 | further interpolatory levels | `kersey/alg4.1/levels-interpolate-and-certify` |
 //! | §4, chordal updates do not converge to smooth curves [9] | | not checked: a statement about limits of repeated refinement under chordal updates, quoted from [9] |
 //! | Fig. 4.1 | slots for polygonal constraints, w_ij := w_ij |p − z_ij|/ε_ij | `kersey/fig4.1/slot-iteration-vs-clarabel` (expected failure: measured gap at the default 50 updates), `kersey/fig4.1/slot-iteration-converges` (200 updates reach the optimum, so the slots intersect to K_i) |

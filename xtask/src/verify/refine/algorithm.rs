@@ -150,19 +150,27 @@ fn knot_update() -> anyhow::Result<Outcome> {
             let p = &before.points;
             let m = p.len();
             let spans = if topo == Topology::Closed { m } else { m - 1 };
-            let mut t = 0.0;
-            for j in 0..=spans {
-                w = worst([w, (after.knots.values()[j] - t).abs() / t.max(1.0)]);
-                if j < spans {
-                    t += dist(p.point((j + 1) % m), p.point(j)).powf(e);
-                }
+            // (iv)'s knots from the first solve's points, then mapped affinely onto the span of
+            // the knots they replace (the data parameter's span, so that derivatives keep their
+            // meaning; refine's docs, issue 19 §1)
+            let mut raw = vec![0.0];
+            for j in 0..spans {
+                let t = raw[j] + dist(p.point((j + 1) % m), p.point(j)).powf(e);
+                raw.push(t);
+            }
+            let old = before.knots.values();
+            let (a, b) = (old[0], old[old.len() - 1]);
+            let total = raw[spans];
+            for (j, r) in raw.iter().enumerate() {
+                let want = a + (b - a) * r / total;
+                w = worst([w, (after.knots.values()[j] - want).abs() / (b - a)]);
             }
         }
     }
     Ok(Outcome::check(
         w,
         1e-12,
-        "knot_iterations = 1 (balls): the returned knots are t_0 = 0, t_(j+1) = t_j + |p_(j+1) − p_j|^e of the first solve's points, e = ½, 0, 1, relative",
+        "knot_iterations = 1 (balls): the returned knots are t_0 = 0, t_(j+1) = t_j + |p_(j+1) − p_j|^e of the first solve's points, e = ½, 0, 1, mapped affinely onto the first knots' span; relative to the span",
     )
     .against(Oracle::ClosedForm))
 }
