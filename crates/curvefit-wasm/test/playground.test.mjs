@@ -254,8 +254,13 @@ check(!(await out()).error, "the pasted problem solves");
 async function frameTimes(label, prob, moves = 60) {
   await page.evaluate((p) => window.playground.load("refine", p), prob);
   await settle();
+  // A near miss of the 1e-9 certificate is refused by the library with its residual
+  // (ROBUSTNESS.md, open limit 10): the page must then show that message — never a curve with a
+  // certificate above 1e-9. Refusals are counted and printed.
+  const refusal = (o) => o.error && /did not converge/.test(o.error.text);
+  let refused = 0;
   const o = await out();
-  check(!o.error, `${label}: solves (${o.error && o.error.text})`);
+  check(!o.error || refusal(o), `${label}: solves or refuses with the certificate (${o.error && o.error.text})`);
   await page.evaluate(() => { window.playground.state.frames.length = 0; });
   const q = prob.points[100];
   const [ax, ay] = await client(...q);
@@ -264,8 +269,14 @@ async function frameTimes(label, prob, moves = 60) {
   for (let i = 1; i <= moves; i++) {
     await page.mouse.move(ax + 40 * Math.sin(i / 6), ay + 30 * Math.cos(i / 5));
     await settle();
-    const kkt = await shown("kkt");
-    check(kkt <= 1e-9, `${label}: certificate ${kkt} ≤ 1e-9 while dragging`);
+    const oi = await out();
+    if (oi.error) {
+      refused += 1;
+      check(refusal(oi), `${label}: only certificate refusals while dragging (${oi.error.text})`);
+    } else {
+      const kkt = await shown("kkt");
+      check(kkt <= 1e-9, `${label}: certificate ${kkt} ≤ 1e-9 while dragging`);
+    }
   }
   await page.mouse.up();
   await settle();
@@ -275,7 +286,7 @@ async function frameTimes(label, prob, moves = 60) {
     return { median: v[Math.floor(v.length / 2)], p95: v[Math.floor(v.length * 0.95)], max: v[v.length - 1] };
   };
   const t = stat("total"), s = stat("solve"), d = stat("draw");
-  console.log(`drag frame, ${label}: ${f.length} frames; total median ${t.median.toFixed(1)} ms, p95 ${t.p95.toFixed(1)}, max ${t.max.toFixed(1)} (solve median ${s.median.toFixed(1)}, draw median ${d.median.toFixed(1)})`);
+  console.log(`drag frame, ${label}: ${f.length} frames (${refused} refused with a near-miss certificate); total median ${t.median.toFixed(1)} ms, p95 ${t.p95.toFixed(1)}, max ${t.max.toFixed(1)} (solve median ${s.median.toFixed(1)}, draw median ${d.median.toFixed(1)})`);
   return f.length;
 }
 // 200 points on a noisy, unequally spaced closed-ish path (a seeded generator, so every run
