@@ -16,8 +16,10 @@ fuzz_target!(|data: &[u8]| {
         Err(e) => curvefit_fuzz::check_refusal(&e),
         Ok(p) => {
             let n = p.points.len();
+            // each further level multiplies the vertices by level_k + 1
+            let growth = (p.level_k + 1).saturating_pow(p.levels.min(8) as u32);
             let small = spec::refine::split_count(n, p.k, p.closed)
-                .is_some_and(|v| v.saturating_mul(p.levels.max(1) * 2) <= MAX_VERTICES)
+                .is_some_and(|v| v.saturating_mul(growth) <= MAX_VERTICES)
                 && p.levels <= 2
                 && p.knot_iterations <= 3;
             if !small {
