@@ -20,7 +20,7 @@
 //! P + AᵀΘA = Q + D with D block diagonal, D_j = A_jᵀΘ_jA_j (d × d per point), is solved
 //! through the augmented form [[D, Kᵀ], [K, −T]]: (T + K D⁻¹ Kᵀ) w = K D⁻¹ r, then
 //! Δy = D⁻¹(r − Kᵀ w) — a block pentadiagonal (cyclic) positive definite system of |W| blocks of
-//! size d ([`Banded`]). D vanishes along inactive constraints, where D⁻¹ would make
+//! size d (`banded::BlockBand<2>`, bordered for a closed curve). D vanishes along inactive constraints, where D⁻¹ would make
 //! T + K D⁻¹ Kᵀ as ill-conditioned as D⁻¹ is large (K annihilates constants), so D + ρI is
 //! inverted (ρ = [`REGULARIZATION`] × max Q_jj, grown by [`REGULARIZATION_GROWTH`] while the
 //! matrix does not factor) and the method's iterative refinement against Q + D removes ρ
@@ -42,10 +42,10 @@ use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
 use divdiff::{Knots, Points};
 use energy::{Factor, System};
 
-use super::banded::Banded;
 use crate::fast::Condensation;
 use crate::operator::Stencil;
 use crate::Error;
+use banded::{BlockBand, BlockFactor, FactorOptions, SymBand, SymBandFactor, Topology};
 
 /// ρ of the module docs, relative to the largest diagonal entry of Q.
 pub(crate) const REGULARIZATION: f64 = 1e-13;
@@ -103,13 +103,15 @@ pub(crate) struct Condensed<'a> {
     b: Vec<f64>,
     row_start: Vec<usize>,
     /// Q's machinery: T's factor and buffers.
-    t: Banded,
+    t: SymBandFactor<1>,
     u: Vec<f64>,
     s: Vec<f64>,
     y: Vec<f64>,
     g: Vec<f64>,
-    /// The Newton system T + K D⁻¹ Kᵀ, and the rows of K touching each point.
-    sm: Banded,
+    /// The Newton system T + K D⁻¹ Kᵀ (S = T ⊗ I_d plus d × d blocks, cyclic for a closed
+    /// curve), its factor, and the rows of K touching each point.
+    sm: BlockBand<2>,
+    sm_factor: BlockFactor<2>,
     touching: Vec<[(usize, f64); 3]>,
     ntouch: Vec<usize>,
     /// (D + ρI)⁻¹ and D per variable (d × d).
@@ -300,14 +302,21 @@ impl<'a> Condensed<'a> {
                 vertex: cond.vertices[j.min(n - 1)],
             })
         };
-        let mut t = Banded::new(size, 1, 1, closed, d);
+        let topology = if closed {
+            Topology::Cyclic
+        } else {
+            Topology::Open
+        };
+        let mut tm = SymBand::<1>::zeros(size, topology);
         for j in 0..size {
-            t.add_identity(j, j, cond.diag[j]);
+            let _ = tm.add(j, j, cond.diag[j]);
             if closed || j + 1 < size {
-                t.add_identity(j, (j + 1) % size, cond.off[j]);
+                let _ = tm.add(j, (j + 1) % size, cond.off[j]);
             }
         }
-        t.factor().map_err(|j| singular(cond.first + j))?;
+        let t = tm
+            .factor_with(&cholesky())
+            .map_err(|e| singular(cond.first + pivot_row(&e)))?;
         let mut touching: Vec<[(usize, f64); 3]> = vec![[(usize::MAX, 0.0); 3]; n];
         let mut ntouch = vec![0usize; n];
         for (j, kr) in cond.krows.iter().enumerate() {
@@ -391,7 +400,8 @@ impl<'a> Condensed<'a> {
             s: vec![0.0; size * d],
             y: vec![0.0; n * d],
             g: vec![0.0; n * d],
-            sm: Banded::new(size, d, 2, closed, 1),
+            sm: BlockBand::zeros(size, d, topology).map_err(|_| singular(0))?,
+            sm_factor: BlockFactor::default(),
             touching,
             ntouch,
             dinv: vec![0.0; nv * d * d],
@@ -474,7 +484,8 @@ impl<'a> Condensed<'a> {
         let d = self.d;
         self.cond.apply_k(&self.y, d, &mut self.u);
         self.s.copy_from_slice(&self.u);
-        self.t.solve(&mut self.s, d);
+        // (sizes fixed at construction: the solve cannot fail)
+        let _ = self.t.solve_in_place(&mut self.s, d);
         self.cond.apply_kt(&self.s, d, &mut self.g);
         0.5 * dot(&self.u, &self.s)
     }
@@ -535,11 +546,12 @@ impl<'a> Condensed<'a> {
         let size = self.cond.len();
         let closed = self.cond.closed;
         loop {
+            // (indices within the band by construction: the adds cannot fail)
             self.sm.clear();
             for j in 0..size {
-                self.sm.add_identity(j, j, self.cond.diag[j]);
+                let _ = self.sm.add_scalar(j, j, self.cond.diag[j]);
                 if closed || j + 1 < size {
-                    self.sm.add_identity(j, (j + 1) % size, self.cond.off[j]);
+                    let _ = self.sm.add_scalar(j, (j + 1) % size, self.cond.off[j]);
                 }
             }
             for v in 0..self.var_point.len() {
@@ -585,18 +597,19 @@ impl<'a> Condensed<'a> {
                 let nt = self.ntouch[j];
                 for x in 0..nt {
                     let (jx, kx) = self.touching[j][x];
-                    self.sm.add(jx, jx, kx * kx, di);
+                    let _ = self.sm.add_scaled(jx, jx, kx * kx, di);
                     for &(jy, ky) in &self.touching[j][x + 1..nt] {
                         // A row touching the point twice (a closed curve of two condensed
                         // points) meets itself: both (jx, jy) and (jy, jx) are its diagonal.
                         let f = if jx == jy { 2.0 * kx * ky } else { kx * ky };
-                        self.sm.add(jx, jy, f, di);
+                        let _ = self.sm.add_scaled(jx, jy, f, di);
                     }
                 }
             }
-            match self.sm.factor() {
+            match self.sm.factor_into(&cholesky(), &mut self.sm_factor) {
                 Ok(()) => return Ok(()),
-                Err(j) => {
+                Err(e) => {
+                    let j = pivot_row(&e);
                     if self.rho >= MAX_REGULARIZATION * self.qmax {
                         return Err(conic::Error::Singular {
                             index: self.cond.vertices[(self.cond.first + j).min(self.cond.n - 1)],
@@ -790,7 +803,7 @@ impl KktSystem for Condensed<'_> {
                     }
                 }
                 self.cond.apply_k(&self.wy, d, &mut self.wk);
-                self.sm.solve(&mut self.wk, 1);
+                let _ = self.sm_factor.solve_in_place(&mut self.wk, 1);
                 self.cond.apply_kt(&self.wk, d, &mut self.wkt);
                 for (v, &j) in self.var_point.iter().enumerate() {
                     let di = &self.dinv[v * d * d..(v + 1) * d * d];
@@ -827,6 +840,21 @@ impl KktSystem for Condensed<'_> {
                 }
             }
         }
+    }
+}
+
+/// T and S are factored as Cholesky does: any positive pivot is accepted (the interior-point
+/// method regularizes and retries on a failure, `factor_condensed`).
+fn cholesky() -> FactorOptions<'static> {
+    FactorOptions::default().pivot_rtol(0.0)
+}
+
+/// The row of a failing pivot (`banded` reports only `Singular` for a matrix of the sizes built
+/// here).
+fn pivot_row(e: &banded::Error) -> usize {
+    match e {
+        banded::Error::Singular { index } => *index,
+        _ => 0,
     }
 }
 
