@@ -1,91 +1,52 @@
-//! The banded linear algebra of `strip`, in one place: a tridiagonal solve (splines) and a
-//! symmetric banded LDLᵀ (Cholesky without square roots) for the outer Newton step. Every banded
-//! call of the crate goes through this module, so that a shared banded crate can replace it here.
+//! The banded linear algebra of `strip`, in one place: the symmetric band Hessian of the outer
+//! Newton step, factored by [`banded::SymBand`] (LDLᵀ without square roots). The spline's
+//! tridiagonal systems go to [`banded::TridiagonalLu`] directly (`spline.rs`).
 //!
 //! Φ is a sum of terms that each couple the unknowns of two neighbouring grid points, so its
-//! Hessian is banded: half-bandwidth 1 (tridiagonal) when only slopes are unknown, up to 3 when
-//! values at extra grid points are unknown too (§4). O(N w²) work.
+//! Hessian is banded: half-bandwidth 1 (tridiagonal) when only slopes are unknown, up to
+//! [`MAX_BAND`] when values at extra grid points are unknown too (§4). O(N w²) work.
 
-/// Solves the tridiagonal system a_i x_{i−1} + b_i x_i + c_i x_{i+1} = r_i (a_0 and c_{n−1}
-/// unused) by elimination without pivoting — for diagonally dominant matrices. `b` is
-/// overwritten by the elimination, `r` by the solution.
-pub(crate) fn solve_tridiagonal(a: &[f64], b: &mut [f64], c: &[f64], r: &mut [f64]) {
-    let n = b.len();
-    for i in 1..n {
-        let w = a[i] / b[i - 1];
-        b[i] -= w * c[i - 1];
-        r[i] -= w * r[i - 1];
-    }
-    r[n - 1] /= b[n - 1];
-    for i in (0..n - 1).rev() {
-        r[i] = (r[i] - c[i] * r[i + 1]) / b[i];
-    }
-}
+use banded::{FactorOptions, SymBand, Topology};
 
 /// Maximum half-bandwidth.
 pub(crate) const MAX_BAND: usize = 3;
 
-/// Symmetric band matrix: `a[i][k]` = A(i, i − k), k = 0..=MAX_BAND.
+/// Symmetric band matrix of half-bandwidth [`MAX_BAND`].
 #[derive(Clone, Debug)]
-pub(crate) struct Band {
-    pub a: Vec<[f64; MAX_BAND + 1]>,
-}
+pub(crate) struct Band(SymBand<MAX_BAND>);
 
 impl Band {
     pub fn zeros(n: usize) -> Self {
-        Band {
-            a: vec![[0.0; MAX_BAND + 1]; n],
-        }
+        Band(SymBand::zeros(n, Topology::Open))
     }
-    /// Adds v to A(i, j) (and A(j, i)); |i − j| ≤ MAX_BAND.
+    /// Adds v to A(i, j) (and A(j, i)); entries farther than [`MAX_BAND`] from the diagonal are
+    /// not stored (Φ's terms never make them).
     pub fn add(&mut self, i: usize, j: usize, v: f64) {
-        let (hi, lo) = if i >= j { (i, j) } else { (j, i) };
-        if hi - lo <= MAX_BAND {
-            self.a[hi][hi - lo] += v;
-        }
+        let _ = self.0.add(i, j, v);
     }
-    /// Solves A x = b in place by LDLᵀ; `None` when a pivot is not positive (A not SPD).
+    /// The diagonal A(i, i).
+    pub fn diagonal(&self) -> &[f64] {
+        self.0.diag()
+    }
+    /// max_i |A(i, i)|.
+    pub fn max_abs_diagonal(&self) -> f64 {
+        self.0.diag().iter().fold(0.0f64, |m, d| m.max(d.abs()))
+    }
+    /// Adds λ to every diagonal entry (a Levenberg–Marquardt shift).
+    pub fn shift_diagonal(&mut self, lambda: f64) {
+        self.0.diag_mut().iter_mut().for_each(|d| *d += lambda);
+    }
+    /// Solves A x = b by LDLᵀ; `None` when a pivot is not positive (A not SPD).
     pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
-        let n = self.a.len();
-        let w = MAX_BAND;
-        // l[i][k] = L(i, i − k), d[i]
-        let mut l = vec![[0.0; MAX_BAND + 1]; n];
-        let mut d = vec![0.0; n];
-        for i in 0..n {
-            for k in (1..=w.min(i)).rev() {
-                let j = i - k;
-                // L(i,j) = (A(i,j) − Σ_{m<j} L(i,m) D(m) L(j,m)) / D(j)
-                let mut s = self.a[i][k];
-                for m in (i.saturating_sub(w))..j {
-                    if j - m <= w {
-                        s -= l[i][i - m] * d[m] * l[j][j - m];
-                    }
-                }
-                l[i][k] = s / d[j];
-            }
-            let mut s = self.a[i][0];
-            for k in 1..=w.min(i) {
-                s -= l[i][k] * l[i][k] * d[i - k];
-            }
-            if s.is_nan() || s <= 0.0 || !s.is_finite() {
-                return None;
-            }
-            d[i] = s;
-        }
         let mut x = b.to_vec();
-        for i in 0..n {
-            for k in 1..=w.min(i) {
-                x[i] -= l[i][k] * x[i - k];
-            }
+        if x.is_empty() {
+            return Some(x);
         }
-        for i in 0..n {
-            x[i] /= d[i];
-        }
-        for i in (0..n).rev() {
-            for k in 1..=w.min(n - 1 - i) {
-                x[i] -= l[i + k][k] * x[i + k];
-            }
-        }
+        let f = self
+            .0
+            .factor_with(&FactorOptions::default().pivot_rtol(0.0))
+            .ok()?;
+        f.solve_in_place(&mut x, 1).ok()?;
         Some(x)
     }
 }

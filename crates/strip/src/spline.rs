@@ -9,7 +9,7 @@
 //! pivoting (its condition number is at most 3). By Holladay's theorem this spline has the least
 //! ∫f''² among all functions through the points (with the given end slopes).
 
-use crate::linalg::solve_tridiagonal;
+use banded::TridiagonalLu;
 
 /// A piecewise cubic: `coeffs[j]` = \[c0, c1, c2, c3\] on \[breaks\[j\], breaks\[j+1\]\] in
 /// s = t − breaks\[j\].
@@ -33,12 +33,12 @@ impl Curve {
     }
 }
 
-/// Scratch space of [`moments`].
+/// Scratch space of [`moments`]: the rows [sub, diagonal, super] and their LU factor (storage
+/// reused from solve to solve).
 #[derive(Default)]
 pub(crate) struct Work {
-    a: Vec<f64>,
-    b: Vec<f64>,
-    c: Vec<f64>,
+    rows: Vec<[f64; 3]>,
+    lu: TridiagonalLu,
 }
 
 /// The moments m of the spline through (x, v) with natural ends or the given end slopes, into
@@ -51,37 +51,35 @@ pub(crate) fn moments(
     w: &mut Work,
 ) {
     let k = x.len();
-    for buf in [&mut w.a, &mut w.c, &mut *m] {
-        buf.clear();
-        buf.resize(k, 0.0);
-    }
-    w.b.clear();
-    w.b.resize(k, 1.0);
-    let (a, b, c, r) = (&mut w.a, &mut w.b, &mut w.c, m);
+    m.clear();
+    m.resize(k, 0.0);
+    w.rows.clear();
+    w.rows.resize(k, [0.0, 1.0, 0.0]);
+    let (rows, r) = (&mut w.rows, m);
     let mut d_prev = 0.0;
     let mut h_prev = 0.0;
     for i in 0..k - 1 {
         let h = x[i + 1] - x[i];
         let d = (v[i + 1] - v[i]) / h;
         if i > 0 {
-            a[i] = h_prev / 6.0;
-            b[i] = (h_prev + h) / 3.0;
-            c[i] = h / 6.0;
+            rows[i] = [h_prev / 6.0, (h_prev + h) / 3.0, h / 6.0];
             r[i] = d - d_prev;
         } else if let Some(s) = ends[0] {
-            b[0] = h / 3.0;
-            c[0] = h / 6.0;
+            rows[0] = [0.0, h / 3.0, h / 6.0];
             r[0] = d - s;
         }
         d_prev = d;
         h_prev = h;
     }
     if let Some(s) = ends[1] {
-        a[k - 1] = h_prev / 6.0;
-        b[k - 1] = h_prev / 3.0;
+        rows[k - 1] = [h_prev / 6.0, h_prev / 3.0, 0.0];
         r[k - 1] = s - d_prev;
     }
-    solve_tridiagonal(a, b, c, r);
+    // Diagonally dominant (module docs): only a non-finite input makes a pivot fail, and then
+    // the moments are NaN, as the elimination itself would leave them.
+    if w.lu.refactor(rows, 0.0).is_err() || w.lu.solve_in_place(r, 1).is_err() {
+        r.fill(f64::NAN);
+    }
 }
 
 /// A cubic spline through (x_k, v_k) with moments m_k.

@@ -49,15 +49,10 @@ pub(crate) fn newton(
         let rhs: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
         newton_decrement = f64::INFINITY;
         let mut lambda = 0.0;
-        let maxdiag =
-            hb.a.iter()
-                .fold(0.0f64, |m, r| m.max(r[0].abs()))
-                .max(1e-300);
+        let maxdiag = hb.max_abs_diagonal().max(1e-300);
         let dir = loop {
             let mut hl = hb.clone();
-            for r in hl.a.iter_mut() {
-                r[0] += lambda;
-            }
+            hl.shift_diagonal(lambda);
             if let Some(d) = hl.solve(&rhs) {
                 break d;
             }
@@ -98,11 +93,11 @@ pub(crate) fn newton(
         // backtracking line search along the Newton direction; if it cannot decrease
         // Φ (a Hessian that jumps across candidate regions), along the diagonally scaled and
         // then the plain negative gradient
-        let diag_dir: Vec<f64> = (0..nv)
-            .map(|k| {
-                let d = band.a[k][0];
-                -ev.grad[k] / if d > 0.0 { d } else { 1.0 }
-            })
+        let diag_dir: Vec<f64> = band
+            .diagonal()
+            .iter()
+            .zip(&ev.grad)
+            .map(|(&d, g)| -g / if d > 0.0 { d } else { 1.0 })
             .collect();
         let grad_dir: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
         let mut accepted = polish;
