@@ -62,9 +62,9 @@
 //! |---|---|---|
 //! | `energy::System` (interpolation, smoothing) | H ⊗ I_d + weights, open or closed, fixed vertices | [`SymBand`]`<2>`, d columns, `eliminated` |
 //! | `energy::System` (interior-point Newton systems, tangent stencils) | H ⊗ I_d + d×d blocks | [`BlockBand`]`<2>`, `eliminated`, small `pivot_rtol` |
-//! | `refine` interpolation by span condensation (`kersey::fast`, `kersey::uniform`) | data-row system T, cyclic tridiagonal, d columns | [`SymBand`]`<1>` |
-//! | `refine` span condensation (`kersey::fast::span_lu`, `span_gh`) | α-row span matrices B_i, nonsymmetric tridiagonal; first and last rows of B⁻¹ | [`TridiagonalLu`] (`solve_transposed_in_place` on e₀, e_{k−1}) |
-//! | `refine` condensed balls (`kersey::condensed::Banded`) | T (d columns) and S = T ⊗ I_d + K D⁻¹ Kᵀ, cyclic block pentadiagonal | [`SymBand`]`<1>`; [`BlockBand`]`<2>` with `add_scalar`, `add_scaled`, `clear` |
+//! | `refine` interpolation by span condensation (`refine::fast`, `refine::uniform`) | data-row system T, cyclic tridiagonal, d columns | [`SymBand`]`<1>` |
+//! | `refine` span condensation (`refine::fast::span_lu`, `span_gh`) | α-row span matrices B_i, nonsymmetric tridiagonal; first and last rows of B⁻¹ | [`TridiagonalLu`] (`solve_transposed_in_place` on e₀, e_{k−1}) |
+//! | `refine` condensed backend (`backend::condensed`: balls, half-space sets) | T (d columns) and S = T ⊗ I_d + K D⁻¹ Kᵀ, cyclic block pentadiagonal | [`SymBand`]`<1>`; [`BlockBand`]`<2>` with `add_scalar`, `add_scaled`, `clear` |
 //! | `strip` Newton on Φ (`strip::linalg::Band`) | Hessian of half-bandwidth ≤ 3, one column | [`SymBand`]`<3>`, `pivot_rtol(0.0)` |
 //! | `strip` spline moments (`strip::spline::moments`, every step of the exchange) | symmetric diagonally dominant tridiagonal | [`TridiagonalLu`] |
 //! | every crate | dot, norm, distance, axpy | [`vector`] |
