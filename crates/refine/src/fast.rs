@@ -20,7 +20,7 @@
 //!   + s_{i+1} α_{v_i,3} α_{v_{i+1},1} g_i·h_i = α_{v_i,2} q_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i,
 //!
 //! after which every span is recovered independently, x_i = B_i⁻¹(e_i − c_i). The cyclic system
-//! is solved by Sherman–Morrison on a tridiagonal LDLᵀ.
+//! is solved by `banded`'s tridiagonal LDLᵀ (bordered when cyclic).
 
 use divdiff::{Knots, Points};
 
@@ -463,8 +463,7 @@ pub(crate) fn interpolate(
     let mut s = vec![0.0; size * d];
     if size > 0 {
         cond.apply_k(q.coords(), d, &mut s);
-        let (mut diag, mut off) = (cond.diag.clone(), cond.off.clone());
-        solve_tridiagonal(&mut diag, &mut off, &mut s, d, cond.closed && size >= 3).map_err(
+        solve_tridiagonal(&cond.diag, &cond.off, &mut s, d, cond.closed && size >= 3).map_err(
             |j| {
                 Error::from(energy::Error::Singular {
                     vertex: (cond.first + j) * stride,
@@ -477,147 +476,30 @@ pub(crate) fn interpolate(
 
 /// Solves the symmetric tridiagonal (or, with `cyclic`, cyclic tridiagonal: `off[len−1]`
 /// couples the last unknown with the first) positive definite system in place, for `d`
-/// right-hand-side columns stored row-major in `rhs`. Returns the index of a non-positive pivot.
+/// right-hand-side columns stored row-major in `rhs`, by [`banded::SymBand`]`<1>` (root-free
+/// LDLᵀ, pivots from the determinant recurrence; a cyclic system bordered). Returns the index of
+/// a non-positive pivot.
 pub(super) fn solve_tridiagonal(
-    diag: &mut [f64],
-    off: &mut [f64],
+    diag: &[f64],
+    off: &[f64],
     rhs: &mut [f64],
     d: usize,
     cyclic: bool,
 ) -> Result<(), usize> {
-    let size = diag.len();
-    if !cyclic {
-        return ldl_solve(diag, &off[..size.saturating_sub(1)], rhs, d, None);
-    }
-    // Sherman–Morrison: A = T + v vᵀ with v = (γ, 0, …, 0, corner/γ) and T the tridiagonal part
-    // with its first and last diagonal entries reduced by γ and corner²/γ.
-    let corner = off[size - 1];
-    let gamma = -diag[0];
-    diag[0] -= gamma;
-    diag[size - 1] -= corner * corner / gamma;
-    let mut v = vec![0.0; size];
-    v[0] = gamma;
-    v[size - 1] = corner;
-    ldl_solve(diag, &off[..size - 1], rhs, d, Some(&mut v))?;
-    // v now holds T⁻¹v (with v = (γ, 0, …, corner)); vᵀ(·) uses the same v.
-    let vt = |y0: f64, yl: f64| y0 + corner / gamma * yl;
-    let denom = 1.0 + vt(v[0], v[size - 1]);
-    for c in 0..d {
-        let f = vt(rhs[c], rhs[(size - 1) * d + c]) / denom;
-        for j in 0..size {
-            rhs[j * d + c] -= f * v[j];
-        }
-    }
-    Ok(())
-}
-
-/// L D Lᵀ x = b for the D columns of `x` (row-major) and, if not empty, the column `e`, given
-/// the multipliers `lm` and the reciprocal pivots `inv`. The columns' recurrences run side by
-/// side with their running values in registers (reading back a value just stored would put
-/// store forwarding on each chain).
-#[inline]
-fn substitute<const D: usize>(lm: &[f64], inv: &[f64], x: &mut [f64], e: &mut [f64]) {
-    let size = inv.len();
-    if size == 0 {
-        return;
-    }
-    let has_e = !e.is_empty();
-    let mut prev: [f64; D] = std::array::from_fn(|c| x[c]);
-    let mut pe = if has_e { e[0] } else { 0.0 };
-    for j in 1..size {
-        let l = lm[j];
-        for c in 0..D {
-            prev[c] = x[j * D + c] - l * prev[c];
-            x[j * D + c] = prev[c];
-        }
-        if has_e {
-            pe = e[j] - l * pe;
-            e[j] = pe;
-        }
-    }
-    let last = size - 1;
-    for c in 0..D {
-        prev[c] = x[last * D + c] * inv[last];
-        x[last * D + c] = prev[c];
-    }
-    if has_e {
-        pe = e[last] * inv[last];
-        e[last] = pe;
-    }
-    for j in (0..last).rev() {
-        let (l, iv) = (lm[j + 1], inv[j]);
-        for c in 0..D {
-            prev[c] = x[j * D + c] * iv - l * prev[c];
-            x[j * D + c] = prev[c];
-        }
-        if has_e {
-            pe = e[j] * iv - l * pe;
-            e[j] = pe;
-        }
-    }
-}
-
-/// LDLᵀ of a symmetric positive definite tridiagonal matrix (diagonal `diag`, overwritten with
-/// the reciprocal pivots; off-diagonal `off`), solving for the `d` columns of `rhs` and, if
-/// given, one extra column `extra`. Returns the row of a pivot that is not positive.
-///
-/// The pivots come from the determinant recurrence P_j = a_j P_{j−1} − b_{j−1}² P_{j−2}
-/// (P_{−1} = 1) as D_j = P_j / P_{j−1}: the continued fraction D_j = a_j − b_{j−1}²/D_{j−1} puts
-/// a division on the dependency chain of every row, the recurrence only a multiply-add (the
-/// divisions overlap). P is rescaled by a power of two, which is exact, whenever it leaves
-/// [1e-150, 1e150].
-fn ldl_solve(
-    diag: &mut [f64],
-    off: &[f64],
-    rhs: &mut [f64],
-    d: usize,
-    extra: Option<&mut Vec<f64>>,
-) -> Result<(), usize> {
-    let size = diag.len();
-    let mut lm = vec![0.0; size];
-    let (mut p2, mut p1) = (0.0f64, 1.0f64);
-    for j in 0..size {
-        let b = if j > 0 { off[j - 1] } else { 0.0 };
-        let p = diag[j] * p1 - b * b * p2;
-        let inv = p1 / p;
-        if !(inv > 0.0 && inv.is_finite()) {
-            return Err(j);
-        }
-        diag[j] = inv;
-        if j > 0 {
-            lm[j] = b * diag[j - 1];
-        }
-        (p2, p1) = (p1, p);
-        if !(1e-150..=1e150).contains(&p1) {
-            // P_j > 0 here (D_j > 0 and P_{j−1} > 0): scale both by 2^(−exponent of P_j).
-            let e = ((p1.to_bits() >> 52) & 0x7ff) as i32 - 1023;
-            let scale = 2f64.powi(-e);
-            (p2, p1) = (p2 * scale, p1 * scale);
-        }
-    }
-    // Forward and backward substitution, one column at a time with the running value kept in
-    // a register (reading back the value just stored would put store forwarding on the chain).
-    let mut none: Vec<f64> = Vec::new();
-    let e: &mut [f64] = match extra {
-        Some(e) => e,
-        None => &mut none,
+    use banded::{FactorOptions, SymBand, Topology};
+    let topology = if cyclic {
+        Topology::Cyclic
+    } else {
+        Topology::Open
     };
-    match d {
-        1 => substitute::<1>(&lm, diag, rhs, e),
-        2 => substitute::<2>(&lm, diag, rhs, e),
-        3 => substitute::<3>(&lm, diag, rhs, e),
-        _ => {
-            for c in 0..d {
-                let mut col: Vec<f64> = (0..size).map(|j| rhs[j * d + c]).collect();
-                substitute::<1>(&lm, diag, &mut col, &mut []);
-                for (j, v) in col.into_iter().enumerate() {
-                    rhs[j * d + c] = v;
-                }
-            }
-            if !e.is_empty() {
-                substitute::<1>(&lm, diag, e, &mut []);
-            }
-        }
-    }
-    Ok(())
+    let row = |e: banded::Error| match e {
+        banded::Error::Singular { index } => index,
+        _ => 0,
+    };
+    let a = SymBand::<1>::from_bands(topology, diag.to_vec(), off.iter().map(|&v| [v]).collect())
+        .map_err(row)?;
+    a.factor_with(&FactorOptions::default().pivot_rtol(0.0))
+        .map_err(row)?
+        .solve_in_place(rhs, d)
+        .map_err(row)
 }

@@ -108,12 +108,13 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                 rhs[j * d + c] = (a1 * (yp - yi) + a3 * (ynx - yi)) / mf;
             }
         }
-        crate::fast::solve_tridiagonal(&mut diag, &mut off, &mut rhs, d, closed && size >= 3)
-            .map_err(|j| {
+        crate::fast::solve_tridiagonal(&diag, &off, &mut rhs, d, closed && size >= 3).map_err(
+            |j| {
                 Error::from(energy::Error::Singular {
                     vertex: (first + j) * m,
                 })
-            })?;
+            },
+        )?;
         s[first * d..last * d].copy_from_slice(&rhs);
     }
 
