@@ -27,6 +27,7 @@
 // Per-vertex kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
 
+use banded::vector::{dot, norm};
 use conic::{Cone, Residuals, Start};
 use divdiff::{Knots, Points, Topology};
 use energy::{Hessian, System};
@@ -158,14 +159,6 @@ pub struct ConicProblem {
     pub(crate) fixed: Vec<Option<Vec<f64>>>,
     pub(crate) smoothing: Vec<(usize, f64, Vec<f64>)>,
     pub(crate) constraints: Vec<ConicConstraint>,
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn inf_norm(v: &[f64]) -> f64 {

@@ -22,6 +22,7 @@
 //! after which every span is recovered independently, x_i = B_i⁻¹(e_i − c_i). The cyclic system
 //! is solved by `banded`'s tridiagonal LDLᵀ (bordered when cyclic).
 
+use banded::vector::dot;
 use divdiff::{Knots, Points};
 
 use crate::operator::Stencil;
@@ -72,10 +73,6 @@ fn span_gh(rows: &[[f64; 3]], l: &[f64], u: &[f64], g: &mut [f64], h: &mut [f64]
     for j in (0..k - 1).rev() {
         h[j] = -l[j + 1] * h[j + 1];
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The data-row condensation of the energy on fixed knots (module docs): with the data vertices

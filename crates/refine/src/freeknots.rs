@@ -65,6 +65,7 @@
 //!   optimum: the exact condition reads −Df(t_i)·(Hp)_i + |Δ_{i,2} f|² − |Δ_{i−2,2} f|² ≈ 0 (see
 //!   [`energy::orthogonality_residuals`]).
 
+use banded::vector::dot;
 use divdiff::{Knots, Points, Topology};
 
 use crate::{Boundary, Constraint, Error, Problem, Refinement, Solver};
@@ -316,10 +317,6 @@ fn penalty(problem: &Problem, points: &Points) -> f64 {
         }
         _ => 0.0,
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The L-BFGS two-loop recursion: −H_k g from the stored pairs (s, y), oldest first.

@@ -38,6 +38,7 @@
 // The per-point kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
 
+use banded::vector::dot;
 use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
 use divdiff::{Knots, Points};
 use energy::{Factor, System};
@@ -131,10 +132,6 @@ pub(crate) struct Condensed<'a> {
     wy: Vec<f64>,
     wk: Vec<f64>,
     wkt: Vec<f64>,
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// (D + ρ I)⁻¹ for D = a I + b w wᵀ, inverted per eigenspace: 1/(a + ρ + b|w|²) along w,

@@ -25,6 +25,7 @@
 // The block kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
 
+use banded::vector::{dot, norm};
 use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
 use energy::{Factor, System};
 
@@ -93,14 +94,6 @@ pub(crate) fn merge_stencil(st: &[(usize, f64)]) -> Vec<(usize, f64)> {
 
 fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Householder basis of the orthogonal complement of the unit vector `a`: d − 1 rows.

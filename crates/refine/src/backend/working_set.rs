@@ -22,6 +22,7 @@
 //! condensation reuses the spans of the previous one that no new point splits. The multipliers
 //! of the constraints outside W are 0.
 
+use banded::vector::dot;
 use conic::{Start, Status};
 use divdiff::{Knots, Points};
 
@@ -120,10 +121,6 @@ impl PointSet {
             }
         }
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The result of the working-set method.

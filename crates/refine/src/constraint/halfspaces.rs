@@ -10,6 +10,7 @@
 //! complementarity as for balls); violation g; complementarity and gap |w |n| g|.
 //! Common point: projection onto each half-space in turn. Translation by a: c ↦ c + n·a.
 
+use banded::vector::{dot, norm};
 use divdiff::Points;
 
 use super::{At, CommonPoint, HalfSpace, Kind, Projections, Rows, Terms};
@@ -21,14 +22,6 @@ use crate::{Constraint, Error};
 
 /// One set per data point.
 pub(crate) struct HalfSpaces<'a>(pub &'a [Vec<HalfSpace>]);
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
 
 impl Kind for HalfSpaces<'_> {
     fn validate(&self, problem: &Problem) -> Result<(), Error> {
