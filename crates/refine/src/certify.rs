@@ -83,6 +83,7 @@ pub(crate) struct Certificate {
 }
 
 /// What one streaming pass over the vertices yields.
+#[derive(Default)]
 pub(crate) struct Pass {
     /// Hp at every vertex (N × d) when the pass was not given the data vertices; else empty.
     pub hp: Vec<f64>,
@@ -112,15 +113,7 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     let (n, d) = (p.len(), p.dim());
     let mut hp = vec![0.0; if data.is_some() { 0 } else { n * d }];
     let mut hp_data = vec![0.0; data.map_or(0, |v| v.len() * d)];
-    let mut out = Pass {
-        hp: Vec::new(),
-        hp_data: Vec::new(),
-        free_stat: 0.0,
-        energy: 0.0,
-        h_norm: 0.0,
-        extent: 0.0,
-        magnitude: 0.0,
-    };
+    let mut out = Pass::default();
     // Blocks of up to three coordinates per sweep (the first one also forms ‖H‖_∞).
     let mut first = 0;
     while first < d {
@@ -244,15 +237,7 @@ fn sweep<const D: usize>(
     };
     let mut row = g0.norm_terms();
     let c_mid: [f64; D] = std::array::from_fn(|c| center[first + c]);
-    let mut out = Pass {
-        hp: Vec::new(),
-        hp_data: Vec::new(),
-        free_stat: 0.0,
-        energy: 0.0,
-        h_norm: 0.0,
-        extent: 0.0,
-        magnitude: 0.0,
-    };
+    let mut out = Pass::default();
     // The next data vertex (when Hp is kept only there).
     let mut next_data = 0;
     for i in 0..n {
