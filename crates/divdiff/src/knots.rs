@@ -98,6 +98,11 @@ impl Knots {
         &self.t
     }
 
+    /// The knot values (as [`Knots::values`]), moved out without a copy.
+    pub fn into_values(self) -> Vec<f64> {
+        self.t
+    }
+
     /// Number of vertices N.
     pub fn vertex_count(&self) -> usize {
         match self.topology {

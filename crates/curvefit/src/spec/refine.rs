@@ -340,7 +340,7 @@ pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
 pub fn to_result(r: refine::Refinement) -> RefineResult {
     RefineResult {
         points: Rows(r.points),
-        knots: r.knots.values().to_vec(),
+        knots: r.knots.into_values(),
         data_vertex: r.data_vertex,
         energy: r.energy,
         multipliers: r.multipliers,
