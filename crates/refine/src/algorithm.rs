@@ -297,18 +297,21 @@ fn constant_points(n: usize, c: &[f64]) -> Points {
 /// respect to the data's parameter at every k, and E of (2.1) is measured in that parameter.
 /// Without it the chords of the refined vertices set the scale (knots 0…36 at k = 30 where the
 /// data span 0…3.2), and a clamped end derivative meant a different curve at every k.
-fn rescale_to(t: &Knots, like: &Knots, stage: usize) -> Result<Knots, Error> {
-    let (v, w) = (t.values(), like.values());
-    let (t0, tn) = (v[0], v[v.len() - 1]);
+fn rescale_to(t: Knots, like: &Knots, stage: usize) -> Result<Knots, Error> {
+    let (topology, vertices) = (t.topology(), t.vertex_count());
+    let mut out = t.into_values(); // mapped in place: no second N-sized buffer per update
+    let (t0, tn) = (out[0], out[out.len() - 1]);
+    let w = like.values();
     let (a, b) = (w[0], w[w.len() - 1]);
     let ratio = (b - a) / (tn - t0);
-    let mut out: Vec<f64> = v.iter().map(|&x| a + (x - t0) * ratio).collect();
+    for x in &mut out {
+        *x = a + (*x - t0) * ratio;
+    }
     // The ends exactly (rounding of the ratio must not move the span).
     out[0] = a;
     let last = out.len() - 1;
     out[last] = b;
-    let vertices = t.vertex_count();
-    Knots::new(t.topology(), out).map_err(|e| match e {
+    Knots::new(topology, out).map_err(|e| match e {
         divdiff::Error::NonIncreasingKnots { index } => Error::DegenerateRefinedSpan {
             stage,
             index: index - 1,
@@ -362,7 +365,7 @@ fn stage_loop(
                     }
                     e => Error::Divdiff(e),
                 })?;
-            *knots = rescale_to(&updated, knots, stage)?;
+            *knots = rescale_to(updated, knots, stage)?;
             iterations.knot_updates += 1;
         }
         let fp = FixedProblem {

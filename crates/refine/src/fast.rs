@@ -25,7 +25,7 @@
 use banded::vector::dot;
 use divdiff::{Knots, Points};
 
-use crate::operator::Stencil;
+use crate::operator::{alpha_row, Stencil};
 use crate::Error;
 
 /// Tridiagonal LU of the span matrix B (sub `a`, diagonal `b`, super `c`, each of length k):
@@ -107,6 +107,7 @@ pub(crate) struct Condensation {
 }
 
 impl Condensation {
+    #[cfg(test)]
     /// Pass 1 over the spans of `knots` (α-rows in `stencil`), n data points every `stride`
     /// vertices.
     ///
@@ -441,13 +442,211 @@ impl Condensation {
     }
 }
 
-/// Solves the interpolation problem (3.3) on `knots` with q_i fixed at vertex `stride · i`,
-/// using the α-rows in `stencil` (built from the same knots).
+/// Solves the interpolation problem (3.3) on `knots` with q_i fixed at vertex `stride · i`, by
+/// the condensation of the module docs in two streaming passes over the spans, without the
+/// N-row stencil or per-vertex factors of [`Condensation`] (the working-set method keeps those
+/// to reuse spans between rounds; interpolation solves once): pass 1 builds each span's α-rows,
+/// its LU and the summaries g·g, g·h, h·h in a span-sized buffer and assembles T s = K y; pass 2
+/// builds them again and writes the span's free vertices. The arithmetic is that of
+/// [`Condensation`] operation for operation (the α-rows as [`Stencil::new`] computes them), so
+/// the results are the same to the last bit (tested) — at about half the memory traffic, which
+/// is what the knot updates of Algorithm 4.1 paid for at N = 8·10⁵.
 ///
 /// # Errors
 /// [`Error::Energy`] (`Singular`) naming a vertex whose pivot is not of the sign and size the
 /// structure guarantees (impossible for valid knots; reported rather than assumed).
-pub(crate) fn interpolate(
+pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Points, Error> {
+    let d = q.dim();
+    let n = q.len();
+    let nv = knots.vertex_count();
+    let closed = knots.is_closed();
+    let spans = if closed { n } else { n - 1 };
+    let singular = |v: usize| Error::from(energy::Error::Singular { vertex: v });
+    if stride < 2 || spans * stride + usize::from(!closed) != nv {
+        return Err(singular(0));
+    }
+    let t = knots.values();
+    let k = stride - 1;
+    let mut work = SpanWork::new(k);
+    // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`).
+    let mut span = vec![[0.0; 7]; spans];
+    for (i, sp) in span.iter_mut().enumerate() {
+        let a = i * stride;
+        work.factor(t, a).map_err(|j| singular(a + 1 + j))?;
+        let SpanWork { rows, g, h, .. } = &work;
+        let (c0, c1) = (rows[0][0], rows[k - 1][2]);
+        *sp = [
+            dot(g, g),
+            dot(g, h),
+            dot(h, h),
+            c0 * g[0],
+            c1 * g[k - 1],
+            c0 * h[0],
+            c1 * h[k - 1],
+        ];
+    }
+    let data_row = |i: usize| data_alpha_row(t, i * stride, nv, closed);
+    let first = usize::from(!closed);
+    let last = if closed { n } else { n - 1 }; // exclusive
+    let size = last.saturating_sub(first);
+    let y = q.coords();
+    let mut s = vec![0.0; size * d];
+    if size > 0 {
+        let mut diag = vec![0.0; size];
+        let mut off = vec![0.0; size];
+        for (j, i) in (first..last).enumerate() {
+            let ar = data_row(i);
+            let prev = if i == 0 { spans - 1 } else { i - 1 };
+            let cur = i % spans;
+            diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
+            let next = i + 1;
+            if next < last || closed {
+                let an = data_row(next % n);
+                off[j] = ar[2] * an[0] * span[cur][1];
+            }
+            // (Ky)_i in difference form (as `Condensation::apply_k`).
+            let kr = [
+                -ar[0] * span[prev][5],
+                ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
+                -ar[2] * span[cur][4],
+            ];
+            let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, next % n);
+            for c in 0..d {
+                let yb = y[i * d + c];
+                s[j * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
+            }
+        }
+        solve_tridiagonal(&diag, &off, &mut s, d, closed && size >= 3)
+            .map_err(|j| singular((first + j) * stride))?;
+    }
+    // The data-row value of data point i (zero for the end rows of an open curve).
+    let srow = |i: usize, c: usize| {
+        if i >= first && i - first < size {
+            s[(i - first) * d + c]
+        } else {
+            0.0
+        }
+    };
+    // Pass 2: one span (its data vertex, then its free vertices) per chunk of the output.
+    let mut failed = None;
+    let p = Points::from_chunks(d, nv, stride, |i, x| {
+        if i == spans {
+            x.copy_from_slice(q.point(n - 1));
+            return;
+        }
+        let a = i * stride;
+        x[..d].copy_from_slice(q.point(i));
+        if let Err(j) = work.factor(t, a) {
+            failed.get_or_insert(a + 1 + j);
+            return;
+        }
+        let right = if i + 1 == n { 0 } else { i + 1 };
+        let mu_row = data_row(i)[2];
+        let nu_row = data_row(right)[0];
+        let (qa, qb) = (q.point(i), q.point(right));
+        work.solve_free(&mut x[d..], qa, qb, d, |c| {
+            (mu_row * srow(i, c), nu_row * srow(right, c))
+        });
+    })?;
+    match failed {
+        Some(v) => Err(singular(v)),
+        None => Ok(p),
+    }
+}
+
+/// α-row of data vertex `v` as [`Stencil::new`] computes it (zero at the ends of an open curve).
+#[inline]
+fn data_alpha_row(t: &[f64], v: usize, nv: usize, closed: bool) -> [f64; 3] {
+    if closed {
+        let hl = if v == 0 {
+            t[nv] - t[nv - 1]
+        } else {
+            t[v] - t[v - 1]
+        };
+        alpha_row(hl, t[v + 1] - t[v])
+    } else if v == 0 || v + 1 == nv {
+        [0.0; 3]
+    } else {
+        alpha_row(t[v] - t[v - 1], t[v + 1] - t[v])
+    }
+}
+
+/// One span's α-rows and factors, in buffers of the span's k free vertices reused span after
+/// span.
+struct SpanWork {
+    rows: Vec<[f64; 3]>,
+    l: Vec<f64>,
+    u: Vec<f64>,
+    g: Vec<f64>,
+    h: Vec<f64>,
+}
+
+impl SpanWork {
+    fn new(k: usize) -> Self {
+        SpanWork {
+            rows: vec![[0.0; 3]; k],
+            l: vec![0.0; k],
+            u: vec![0.0; k],
+            g: vec![0.0; k],
+            h: vec![0.0; k],
+        }
+    }
+
+    /// The α-rows of the free vertices a + 1 … a + k (knots `t`, as [`Stencil::new`]: their
+    /// neighbours are in the same span, so no wrap-around), their LU, g and h. Err: the index
+    /// in the span of a pivot that is not negative and finite.
+    fn factor(&mut self, t: &[f64], a: usize) -> Result<(), usize> {
+        for (j, r) in self.rows.iter_mut().enumerate() {
+            let v = a + 1 + j;
+            *r = alpha_row(t[v] - t[v - 1], t[v + 1] - t[v]);
+        }
+        span_lu(&self.rows, &mut self.l, &mut self.u)?;
+        span_gh(&self.rows, &self.l, &self.u, &mut self.g, &mut self.h);
+        Ok(())
+    }
+
+    /// The free vertices x = B⁻¹(e − c) of the factored span into `f` (k × d), e = −μ g − ν h
+    /// with (μ, ν) = `mu_nu(coordinate)`, c from the span's ends `qa`, `qb` (as
+    /// `Condensation::reconstruct`).
+    fn solve_free(
+        &self,
+        f: &mut [f64],
+        qa: &[f64],
+        qb: &[f64],
+        d: usize,
+        mu_nu: impl Fn(usize) -> (f64, f64),
+    ) {
+        let SpanWork { rows, l, u, g, h } = self;
+        let k = rows.len();
+        let (c0, c1) = (rows[0][0], rows[k - 1][2]);
+        for c in 0..d {
+            let (mu, nu) = mu_nu(c);
+            for j in 0..k {
+                f[j * d + c] = -mu * g[j] - nu * h[j];
+            }
+            f[c] -= c0 * qa[c];
+            f[(k - 1) * d + c] -= c1 * qb[c];
+        }
+        for j in 1..k {
+            for c in 0..d {
+                f[j * d + c] -= l[j] * f[(j - 1) * d + c];
+            }
+        }
+        for c in 0..d {
+            f[(k - 1) * d + c] *= u[k - 1];
+        }
+        for j in (0..k - 1).rev() {
+            for c in 0..d {
+                f[j * d + c] = (f[j * d + c] - rows[j][2] * f[(j + 1) * d + c]) * u[j];
+            }
+        }
+    }
+}
+
+/// The interpolation of [`interpolate`] through [`Condensation`] (the working-set method's
+/// path): the reference the streaming passes are tested against.
+#[cfg(test)]
+pub(crate) fn interpolate_condensed(
     knots: &Knots,
     stencil: &Stencil,
     q: &Points,

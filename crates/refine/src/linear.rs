@@ -4,7 +4,6 @@
 use divdiff::{Knots, Points};
 use energy::{Hessian, System};
 
-use crate::operator::Stencil;
 use crate::stage::{FixedProblem, FixedSolution};
 use crate::Error;
 
@@ -68,8 +67,7 @@ pub(crate) fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error>
             1,
         ));
     }
-    let stencil = Stencil::new(fp.knots);
-    let p = crate::fast::interpolate(fp.knots, &stencil, fp.q, fp.stride)?;
+    let p = crate::fast::interpolate(fp.knots, fp.q, fp.stride)?;
     Ok(FixedSolution::new(p, None, 1))
 }
 

@@ -234,7 +234,10 @@ mod tests {
             let q = Points::new(d, (0..n * d).map(|_| 4.0 * rnd() - 2.0).collect()).unwrap();
             let knots = split_knots(&u, m, closed);
             let ours = interpolate(&knots, &q, m).unwrap();
-            let reference = crate::fast::interpolate(&knots, &Stencil::new(&knots), &q, m).unwrap();
+            let reference = crate::fast::interpolate_condensed(&knots, &Stencil::new(&knots), &q, m).unwrap();
+            let streamed = crate::fast::interpolate(&knots, &q, m).unwrap();
+            // The streaming passes do the condensation's arithmetic operation for operation.
+            prop_assert_eq!(streamed.coords(), reference.coords());
             prop_assert_eq!(ours.len(), reference.len());
             let scale = q.coords().iter().fold(1.0f64, |a, v| a.max(v.abs()));
             for (a, b) in ours.coords().iter().zip(reference.coords()) {

@@ -553,7 +553,7 @@ mod tests {
     use super::{solve_from, WorkingSetOptions};
     use crate::certify::{certify, Certificate};
     use crate::conic_problem::{ConicProblem, ConvexSet};
-    use crate::fast::{interpolate, Condensation};
+    use crate::fast::{interpolate_condensed as interpolate, Condensation};
     use crate::operator::Stencil;
     use crate::{Constraint, HalfSpace};
 
