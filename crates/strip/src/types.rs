@@ -132,15 +132,38 @@ pub enum Method {
     #[default]
     Newton,
     /// argmin's BFGS with a Moré–Thuente line search, as in the seed (dense n×n inverse Hessian:
-    /// for small n; cubic pieces only — polyline bounds with BFGS are refused).
+    /// for small n; cubic pieces only — polyline bounds with BFGS are refused). It stops when Φ
+    /// no longer changes, with f'' still jumping at the sites by ~1e-8 of its size; Newton's
+    /// method then finishes the jumps to rounding from its point (same iteration limit).
     Bfgs,
 }
 
 /// Default iteration limit of Newton's method (then the exchange takes over) or BFGS.
 pub const DEFAULT_MAX_ITERATIONS: usize = 200;
-/// Default gradient tolerance: stop when ‖∇Φ‖∞ ≤ tol · (1 + ‖∇Φ(z₀)‖∞), in the normalized frame
-/// of [`solve()`](crate::solve()) (where Φ and its gradient are of unit order).
-pub const DEFAULT_GRADIENT_TOL: f64 = 1e-11;
+/// Default gradient tolerance of Newton's method on Φ: stop when ‖∇Φ‖∞ ≤ tol · 2 max|f''| (each
+/// component ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)) is twice the f'' jump at a data site, so this is
+/// the C² defect relative to the size of f''), in the normalized frame of [`solve()`](crate::solve()).
+/// The default asks for the rounding level itself ([`C2_ROUNDING`]): Newton's method then runs
+/// until a full step no longer reduces the jumps. An answer is accepted only when its jumps are
+/// at their rounding level, whatever this tolerance (see [`C2_ROUNDING`]).
+pub const DEFAULT_GRADIENT_TOL: f64 = C2_ROUNDING;
+/// The rounding level of an f'' jump, relative to the terms it is computed from. At a break b
+/// (a data site or an extra knot) f'' is computed from each side from the Hermite data of the
+/// piece there (values v₀, v₁ and slopes m₀, m₁ at its ends, length L):
+/// f''(b+) = (6(v₁ − v₀)/L − 4m₀ − 2m₁)/L. Each datum is a floating-point number, known to a
+/// relative u = 2⁻⁵³ at best (the data, a bound evaluated at a contact, a slope), and the formula
+/// adds a rounding of u per operation on terms of the same size, so a computed f''(b±) is only
+/// determined to about 8u·R± with R = (6(|v₀| + |v₁|)/L + 4|m₀| + 2|m₁|)/L (the magnitudes of
+/// its terms), and the jump to 8u·(R₋ + R₊). The jump is *C² to rounding* when
+/// |f''(b−) − f''(b+)| ≤ `C2_ROUNDING` · (max|f''| + R₋ + R₊), `C2_ROUNDING` = 8u = 4ε; the
+/// max|f''| term covers the scaling and summation of the two sides (a few u of max|f''|). For
+/// pieces of unit order R is of the order of max|f''| and the test asks for ~1e-15 relative; a
+/// piece of length L next to a contact close to a site (Remark 4.2's margin ε puts a contact
+/// ~√ε from a shifted site) is resolved only to u·|v|/L², and the test allows that much.
+/// Answers of Newton on Φ are returned only when every jump passes this test and the gap is at
+/// most 1e-9; the exchange's splines share one f'' value (moment) per knot, so they are C² by
+/// construction.
+pub const C2_ROUNDING: f64 = 4.0 * f64::EPSILON;
 /// Default margin ε of Remark 4.2, relative to the local strip width: data on a bound are moved
 /// inside by ε·width.
 pub const DEFAULT_BOUNDARY_MARGIN: f64 = 1e-7;

@@ -41,6 +41,20 @@ pub(crate) struct Eval {
     pub(crate) phi: f64,
     pub(crate) grad: Vec<f64>,
     pub(crate) sols: Vec<CellSolution>,
+    /// max|f''| over the whole solution (normalized frame): the scale of the gradient, whose
+    /// components are twice the f'' jumps at the sites.
+    pub(crate) f2: f64,
+}
+
+/// The C² defect of a solution of the cells: its f'' jumps at the data sites with a free slope
+/// (half the gradient of Φ; at a natural end, f'' itself) and at the extra knots.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct C2Defect {
+    /// The largest jump over max|f''|.
+    pub relative: f64,
+    /// The largest jump over its rounding level ([`crate::types::C2_ROUNDING`]): at most 1 when
+    /// the solution is C² to rounding.
+    pub rounding: f64,
 }
 
 /// The shape and knots of each cell's last solution, tried first at the next evaluation.
@@ -72,6 +86,7 @@ impl Outer {
         let mut phi = 0.0;
         let mut grad = vec![0.0; self.nvar];
         let mut sols = Vec::with_capacity(self.cells.len());
+        let mut f2 = 0.0f64;
         let mut hb = hess;
         for j in 0..self.cells.len() {
             let h = self.cells[j].h;
@@ -82,6 +97,7 @@ impl Outer {
             hints[j] = Some((sol.shape, sol.tau));
             let h3 = h * h * h;
             phi += sol.energy / h3;
+            f2 = f2.max(sol.pw.f2_max() / (h * h));
             // the unknowns are the slopes, components 1 and 3 of θ (scaled by h)
             let g = sol.pw.grad();
             let ids = [(1, self.zv[j]), (3, self.zv[j + 1])];
@@ -104,7 +120,55 @@ impl Outer {
             }
             sols.push(sol);
         }
-        Ok(Eval { phi, grad, sols })
+        Ok(Eval {
+            phi,
+            grad,
+            sols,
+            f2,
+        })
+    }
+
+    /// The C² defect of the cells' solutions `sols` with gradient `grad` (see [`C2Defect`]).
+    pub(crate) fn c2_defect(&self, sols: &[CellSolution], grad: &[f64]) -> C2Defect {
+        let f2 = sols
+            .iter()
+            .zip(&self.cells)
+            .fold(0.0f64, |m, (s, c)| m.max(s.pw.f2_max() / (c.h * c.h)));
+        let (mut relative, mut rounding) = (0.0f64, 0.0f64);
+        let mut add = |jump: f64, floor: f64| {
+            let jump = jump.abs();
+            if jump.is_nan() || floor.is_nan() {
+                relative = f64::NAN;
+                rounding = f64::NAN;
+            } else if !relative.is_nan() {
+                relative = relative.max(jump / f2.max(f64::MIN_POSITIVE));
+                rounding = rounding.max(if jump == 0.0 { 0.0 } else { jump / floor });
+            }
+        };
+        // the extra knots, in each cell's units (f'' there is h² times the normalized one)
+        for (s, c) in sols.iter().zip(&self.cells) {
+            let h2 = c.h * c.h;
+            let (jumps, floors) = (s.pw.jumps2(), s.pw.jumps2_floor(f2 * h2));
+            for k in 0..s.pw.n - 2 {
+                add(jumps[k] / h2, floors[k] / h2);
+            }
+        }
+        // the data sites with a free slope: ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+))
+        let m = sols.len();
+        for (i, zv) in self.zv.iter().enumerate() {
+            let Some(k) = *zv else { continue };
+            let mut terms = 0.0;
+            if i > 0 {
+                let (s, h) = (&sols[i - 1], self.cells[i - 1].h);
+                terms += s.pw.terms(s.pw.n - 2).1 / (h * h);
+            }
+            if i < m {
+                let (s, h) = (&sols[i], self.cells[i].h);
+                terms += s.pw.terms(0).0 / (h * h);
+            }
+            add(0.5 * grad[k], crate::types::C2_ROUNDING * (f2 + terms));
+        }
+        C2Defect { relative, rounding }
     }
 
     /// The error for cell `j` without a feasible candidate (a cubic bound whose solution needs

@@ -201,6 +201,101 @@ pub fn c2_jump(s: &Solution) -> [f64; 3] {
     std::array::from_fn(|d| jump[d] / scale[d].max(f64::MIN_POSITIVE))
 }
 
+/// The f'' jumps of a solution at its interior breaks against their rounding level, from the
+/// returned pieces alone (caller's frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct C2Rounding {
+    /// The largest |f''(b−) − f''(b+)| over max|f''|.
+    pub relative: f64,
+    /// The largest jump over its rounding level (≤ 1: C² to rounding; NaN propagates).
+    pub rounding: f64,
+    /// Where the largest ratio is.
+    pub at: f64,
+}
+
+/// [`C2Rounding`] of `s`. The rounding level of the jump at a break b, derived from how the
+/// returned pieces can represent a C² function (not from the solver's code):
+/// * b is a double: the exact knot lies within ulp(b) of it, and pieces expanded about the
+///   rounded abscissa differ there by |Δf'''|·ulp(b) (Δf''' the jump of f''' at b);
+/// * f'' from each side is computed from a cubic whose coefficients are themselves computed from
+///   Hermite data (values and slopes at the piece's ends, length h): that carries a few u times
+///   T = (6|f(end) − f(start)|/h + 4|f'(b)| + 2|f'(other end)|)/h, and evaluating 2c₂ + 6c₃h a
+///   few u of max|f''|;
+/// * at a contact (a break that is not a data site) the value f(b) is a bound's value, computed
+///   from its polynomial's terms: u·E, E = Σ|c_k|(b − t_i)^k, moves f'' on each side by 6u·E/h².
+///
+/// So the level is 16u·(max|f''| + T₋ + T₊) + |Δf'''|·ulp(b) (u = 2⁻⁵³; 16u leaves a factor of
+/// two over the ~8u the operations count), with 6E/h added to each side's 6|Δf|/h in T.
+pub fn c2_rounding(p: &Problem, s: &Solution) -> C2Rounding {
+    let u = f64::EPSILON / 2.0;
+    let k = s.coefficients.len();
+    let mut f2 = 0.0f64;
+    for j in 0..k {
+        let c = &s.coefficients[j];
+        let r = taylor(c, s.breaks[j + 1] - s.breaks[j]);
+        f2 = f2.max((2.0 * c[2]).abs()).max((2.0 * r[2]).abs());
+    }
+    let mut out = C2Rounding {
+        relative: 0.0,
+        rounding: 0.0,
+        at: s.breaks[0],
+    };
+    // E at break j (0 at the data sites and the ends)
+    let magnitude = |j: usize| {
+        let b = s.breaks[j];
+        if j == 0 || j == k || p.t.iter().any(|t| t.total_cmp(&b).is_eq()) {
+            return 0.0;
+        }
+        let n = p.t.len();
+        let i = p.t.partition_point(|v| *v <= b).clamp(1, n - 1) - 1;
+        [&p.lower, &p.upper]
+            .iter()
+            .map(|bd| match bd {
+                Bound::None => 0.0,
+                Bound::Pieces(c) => {
+                    let (c, x) = (c[i], (b - p.t[i]).abs());
+                    c[0].abs() + x * (c[1].abs() + x * (c[2].abs() + x * c[3].abs()))
+                }
+                Bound::Polyline(v) => {
+                    let q = v.partition_point(|q| q[0] <= b).clamp(1, v.len() - 1);
+                    v[q - 1][1].abs().max(v[q][1].abs())
+                }
+            })
+            .fold(0.0, f64::max)
+    };
+    // (T at the left end, T at the right end) of piece j
+    let terms = |j: usize| {
+        let c = &s.coefficients[j];
+        let h = s.breaks[j + 1] - s.breaks[j];
+        let r = taylor(c, h);
+        let dv = 6.0 * ((r[0] - c[0]).abs() + magnitude(j) + magnitude(j + 1)) / h;
+        (
+            (dv + 4.0 * c[1].abs() + 2.0 * r[1].abs()) / h,
+            (dv + 2.0 * c[1].abs() + 4.0 * r[1].abs()) / h,
+        )
+    };
+    for j in 1..k {
+        let (a, b) = (&s.coefficients[j - 1], &s.coefficients[j]);
+        let h = s.breaks[j] - s.breaks[j - 1];
+        let jump = (2.0 * a[2] + 6.0 * a[3] * h - 2.0 * b[2]).abs();
+        let ulp = s.breaks[j].abs() * f64::EPSILON;
+        let level = 16.0 * u * (f2 + terms(j - 1).1 + terms(j).0) + 6.0 * (b[3] - a[3]).abs() * ulp;
+        let ratio = if jump == 0.0 { 0.0 } else { jump / level };
+        if ratio.is_nan() {
+            out.rounding = f64::NAN;
+            out.relative = f64::NAN;
+            out.at = s.breaks[j];
+            return out;
+        }
+        out.relative = out.relative.max(jump / f2.max(f64::MIN_POSITIVE));
+        if ratio > out.rounding {
+            out.rounding = ratio;
+            out.at = s.breaks[j];
+        }
+    }
+    out
+}
+
 /// The necessary conditions of Lemma 1.1 of the seed, evaluated on the returned pieces (with
 /// Theorem 2.1 they are also sufficient): f'' continuous, f''(t_1) = f''(t_n) = 0 at natural
 /// ends, and f''' = l_i + ∫d(μ₁ − μ₂) with μ₁, μ₂ ≥ 0 supported on the contacts — so between data

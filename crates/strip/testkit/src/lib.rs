@@ -20,7 +20,10 @@ pub mod examples;
 pub mod lower_bound;
 
 pub use channel::{BoundKind, Channel};
-pub use exact::{c2_jump, interpolation_error, lemma_1_1, strip_violation, Lemma11, Violation};
+pub use exact::{
+    c2_jump, c2_rounding, interpolation_error, lemma_1_1, strip_violation, C2Rounding, Lemma11,
+    Violation,
+};
 pub use lower_bound::{fine_grid, lower_bound, lower_bound_qp, LowerBound, LowerBoundQp};
 
 /// The value at `x` of a bound in data interval `i` (the interval containing `x`; the right one
