@@ -280,13 +280,24 @@ async function frameTimes(label, prob, moves = 60) {
   }
   await page.mouse.up();
   await settle();
-  const f = await page.evaluate(() => window.playground.state.frames.filter((f) => f.dragging));
+  const all = await page.evaluate(() => window.playground.state.frames);
+  // Every move changes the problem: one solve per frame (the press may share the first move's
+  // frame or have its own, which reuses the reply: nothing moved yet).
+  const f = all.filter((x) => x.dragging && x.solves > 0);
+  check(all.every((x) => !x.dragging || (x.solves === 1 && x.reused === 0) || (x.solves === 0 && x.reused === 1)), `${label}: a drag frame solves once or reuses its reply (${JSON.stringify(all.find((x) => x.solves + x.reused !== 1))})`);
+  check(f.length >= moves, `${label}: every move's frame solves (${f.length} frames for ${moves} moves)`);
+  // The frame after the button is released shows the same problem: its reply is reused.
+  const last = all[all.length - 1];
+  check(!last.dragging && last.solves === 0 && last.reused === 1, `${label}: the frame after the drag reuses the reply (${last.solves} solves, ${last.reused} reused)`);
   const stat = (k) => {
     const v = f.map((x) => x[k]).sort((a, b) => a - b);
     return { median: v[Math.floor(v.length / 2)], p95: v[Math.floor(v.length * 0.95)], max: v[v.length - 1] };
   };
-  const t = stat("total"), s = stat("solve"), d = stat("draw");
-  console.log(`drag frame, ${label}: ${f.length} frames (${refused} refused with a near-miss certificate); total median ${t.median.toFixed(1)} ms, p95 ${t.p95.toFixed(1)}, max ${t.max.toFixed(1)} (solve median ${s.median.toFixed(1)}, draw median ${d.median.toFixed(1)})`);
+  const ms = (x) => x.toFixed(1);
+  const line = (k) => { const x = stat(k); return `median ${ms(x.median)}, p95 ${ms(x.p95)}, max ${ms(x.max)}`; };
+  const med = (k) => stat(k).median.toFixed(2);
+  console.log(`drag frame, ${label}: ${f.length} frames (${refused} refused with a near-miss certificate), ms:\n` +
+    `  total ${line("total")}\n  solve ${line("solve")} (of it: JSON in ${med("stringify")}, wasm ${med("wasm")}, JSON out ${med("parse")} median)\n  draw  ${line("draw")}`);
   return f.length;
 }
 // 200 points on a noisy, unequally spaced closed-ish path (a seeded generator, so every run
