@@ -251,7 +251,7 @@ check(await page.evaluate(() => window.playground.state.mode) === "strip", "a pa
 check(!(await out()).error, "the pasted problem solves");
 
 // ---- the drag frame with 200 points (solve + redraw, measured in the page)
-async function frameTimes(label, prob, moves = 60) {
+async function frameTimes(label, prob, shot = null, moves = 60) {
   await page.evaluate((p) => window.playground.load("refine", p), prob);
   await settle();
   // A near miss of the 1e-9 certificate is refused by the library with its residual
@@ -278,6 +278,8 @@ async function frameTimes(label, prob, moves = 60) {
       check(kkt <= 1e-9, `${label}: certificate ${kkt} ≤ 1e-9 while dragging`);
     }
   }
+  // Mid-drag: the stats show the last solving frame's time and its split.
+  if (shot) await page.screenshot({ path: path.join(shots, shot) });
   await page.mouse.up();
   await settle();
   const all = await page.evaluate(() => window.playground.state.frames);
@@ -314,7 +316,7 @@ for (let i = 0; i < 200; i++) {
 const radii = noisy.map(() => Math.round((0.02 + 0.1 * rand()) * 1000) / 1000);
 check(await frameTimes("200 points, interpolate, open", { points: noisy, k: 3 }) > 10, "frames were measured");
 check(await frameTimes("200 points, balls, open", { points: noisy, k: 3, constraint: { type: "balls", radii } }) > 10, "frames were measured");
-check(await frameTimes("200 points, balls, closed", { points: noisy, closed: true, k: 3, constraint: { type: "balls", radii } }) > 10, "frames were measured");
+check(await frameTimes("200 points, balls, closed", { points: noisy, closed: true, k: 3, constraint: { type: "balls", radii } }, "refine-200-drag.png") > 10, "frames were measured");
 await page.screenshot({ path: path.join(shots, "refine-200.png") });
 
 check(problems.length === 0, `no console errors or exceptions:\n${problems.join("\n")}`);

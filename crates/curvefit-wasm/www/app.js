@@ -110,7 +110,10 @@ function showStats() {
   dl.textContent = "";
   const rows = out.result ? mode().stats(out) : [];
   const last = state.frames[state.frames.length - 1];
-  rows.push(["frame", `${last.total.toFixed(1)} ms (solve ${last.solve.toFixed(1)}, draw ${last.draw.toFixed(1)})`, null, "frame"]);
+  const ms = (x) => x.toFixed(1);
+  rows.push(["frame", last.solves > 0
+    ? `${ms(last.total)} ms (solve ${ms(last.solve)}: wasm ${ms(last.wasm)}, JSON ${ms(last.stringify + last.parse)}; draw ${ms(last.draw)})`
+    : `${ms(last.total)} ms (problem unchanged: reply reused; draw ${ms(last.draw)})`, null, "frame"]);
   for (const [k, v, cls, id] of rows) {
     const dt = document.createElement("dt");
     dt.textContent = k;
