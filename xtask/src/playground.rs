@@ -1,12 +1,20 @@
 //! `cargo xtask playground [--out DIR]`: the interactive page of issue 20, written to `DIR`
 //! (default `target/playground`) as static files that any web server can serve.
 //!
-//! Steps: build `curvefit-wasm` for `wasm32-unknown-unknown` (release), bind it with the
-//! `wasm-bindgen` command line (`--target web`: an ES module the page imports, no bundler) into
-//! `DIR/pkg/`, and copy the page's sources (`crates/curvefit-wasm/www/`: HTML, plain JS, CSS)
-//! next to it. The command line must be exactly the version of the `wasm-bindgen` crate that
-//! `Cargo.lock` records (the two generate and read the same glue); both prerequisites are checked
-//! first, and a missing one is reported with the command that installs it.
+//! Steps: build `curvefit-wasm` for `wasm32-unknown-unknown` (the workspace's `wasm` profile:
+//! release without debug info; its `Cargo.toml` comment says which settings were measured), bind
+//! it with the `wasm-bindgen` command line (`--target web`: an ES module the page imports, no
+//! bundler) into `DIR/pkg/`, optimise the bound module with `wasm-opt -O3` when Binaryen's
+//! command line is there, and copy the page's sources (`crates/curvefit-wasm/www/`: HTML, plain
+//! JS, CSS) next to it. The command line must be exactly the version of the `wasm-bindgen` crate
+//! that `Cargo.lock` records (the two generate and read the same glue); both prerequisites are
+//! checked first, and a missing one is reported with the command that installs it.
+//!
+//! `wasm-opt` is optional: it makes a 200-point balls solve 6–12% faster in Chromium (measured
+//! A/B in one page on the browser test's drag problems, replies byte-identical: Binaryen keeps
+//! IEEE semantics unless told `--fast-math`), and the page is the same without it. It is taken
+//! from `$WASM_OPT`, else `wasm-opt` on the `PATH` (Debian's `binaryen`, or npm's `binaryen`,
+//! which `.ci/run` installs with the browser test's packages).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -15,6 +23,19 @@ use anyhow::{bail, Context};
 
 /// The WebAssembly target the page's module is built for (no WASI, no Emscripten: the browser).
 const WASM_TARGET: &str = "wasm32-unknown-unknown";
+/// The Cargo profile of the module (`[profile.wasm]` in the workspace `Cargo.toml`).
+const PROFILE: &str = "wasm";
+/// The WebAssembly features rustc emits for `wasm32-unknown-unknown` by default (and every
+/// browser the page targets runs); `wasm-opt` is told them so that it neither rejects the module
+/// nor uses a feature beyond them.
+const WASM_FEATURES: [&str; 6] = [
+    "--enable-bulk-memory",
+    "--enable-multivalue",
+    "--enable-mutable-globals",
+    "--enable-nontrapping-float-to-int",
+    "--enable-reference-types",
+    "--enable-sign-ext",
+];
 /// The page's sources in the tree.
 const WWW: &str = "crates/curvefit-wasm/www";
 
@@ -44,7 +65,8 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
             "build",
             "-p",
             "curvefit-wasm",
-            "--release",
+            "--profile",
+            PROFILE,
             "--target",
             WASM_TARGET,
         ])
@@ -54,7 +76,7 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
 
     let wasm = target_dir(&cargo)?
         .join(WASM_TARGET)
-        .join("release")
+        .join(PROFILE)
         .join("curvefit_wasm.wasm");
     let pkg = out.join("pkg");
     std::fs::create_dir_all(&pkg)?;
@@ -73,6 +95,7 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
         wasm.display()
     );
 
+    optimise(&pkg.join("curvefit_wasm_bg.wasm"))?;
     copy_dir(Path::new(WWW), &out)?;
     println!(
         "wrote the playground to {} (serve it, e.g. `python3 -m http.server -d {}`, and open /index.html)",
@@ -80,6 +103,37 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
         out.display()
     );
     Ok(true)
+}
+
+/// `wasm-opt -O3` on the bound module, in place, when Binaryen's command line is found (see the
+/// module docs); otherwise says so and leaves the module as bound.
+fn optimise(wasm: &Path) -> anyhow::Result<()> {
+    let cmd = std::env::var_os("WASM_OPT").unwrap_or_else(|| "wasm-opt".into());
+    let found = Command::new(&cmd)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        println!(
+            "note: no wasm-opt ({}): the module is not optimised after binding (6–12% slower \
+             balls solves; install Debian's binaryen or npm's binaryen, or set WASM_OPT)",
+            cmd.to_string_lossy()
+        );
+        return Ok(());
+    }
+    let tmp = wasm.with_extension("opt.wasm");
+    let status = Command::new(&cmd)
+        .arg("-O3")
+        .args(WASM_FEATURES)
+        .arg(wasm)
+        .arg("-o")
+        .arg(&tmp)
+        .status()
+        .context("running wasm-opt")?;
+    anyhow::ensure!(status.success(), "wasm-opt failed on {}", wasm.display());
+    std::fs::rename(&tmp, wasm)
+        .with_context(|| format!("replacing {} by its optimised copy", wasm.display()))?;
+    Ok(())
 }
 
 /// The wasm target's standard library is installed (rustup puts it under the sysroot).

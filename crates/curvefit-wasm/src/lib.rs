@@ -16,8 +16,10 @@
 //!   [`InputError`] (`T` is `"F: M"`, the line the command line prints after `error: `).
 //!
 //! Text in and out keeps the boundary to one string each way; at the playground's sizes
-//! (hundreds of points) the JSON is a small part of a frame (the browser test reports the
-//! frame times).
+//! (hundreds of points) the JSON is a small part of a frame: the browser test splits each drag
+//! frame's time, and with 200 points and balls the page's `JSON.stringify` and `JSON.parse`
+//! take about 0.3 ms of a 17–20 ms frame, the module's serde parse and write under 1% of its
+//! time (a native profile of the same problems) — the rest is the solve.
 //!
 //! ```
 //! let reply = curvefit_wasm::reply("refine", r#"{"points": [[0, 0], [1, 0], [0, 1]]}"#);

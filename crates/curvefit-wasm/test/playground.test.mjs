@@ -251,7 +251,7 @@ check(await page.evaluate(() => window.playground.state.mode) === "strip", "a pa
 check(!(await out()).error, "the pasted problem solves");
 
 // ---- the drag frame with 200 points (solve + redraw, measured in the page)
-async function frameTimes(label, prob, moves = 60) {
+async function frameTimes(label, prob, shot = null, moves = 60) {
   await page.evaluate((p) => window.playground.load("refine", p), prob);
   await settle();
   // A near miss of the 1e-9 certificate is refused by the library with its residual
@@ -278,15 +278,28 @@ async function frameTimes(label, prob, moves = 60) {
       check(kkt <= 1e-9, `${label}: certificate ${kkt} ≤ 1e-9 while dragging`);
     }
   }
+  // Mid-drag: the stats show the last solving frame's time and its split.
+  if (shot) await page.screenshot({ path: path.join(shots, shot) });
   await page.mouse.up();
   await settle();
-  const f = await page.evaluate(() => window.playground.state.frames.filter((f) => f.dragging));
+  const all = await page.evaluate(() => window.playground.state.frames);
+  // Every move changes the problem: one solve per frame (the press may share the first move's
+  // frame or have its own, which reuses the reply: nothing moved yet).
+  const f = all.filter((x) => x.dragging && x.solves > 0);
+  check(all.every((x) => !x.dragging || (x.solves === 1 && x.reused === 0) || (x.solves === 0 && x.reused === 1)), `${label}: a drag frame solves once or reuses its reply (${JSON.stringify(all.find((x) => x.solves + x.reused !== 1))})`);
+  check(f.length >= moves, `${label}: every move's frame solves (${f.length} frames for ${moves} moves)`);
+  // The frame after the button is released shows the same problem: its reply is reused.
+  const last = all[all.length - 1];
+  check(!last.dragging && last.solves === 0 && last.reused === 1, `${label}: the frame after the drag reuses the reply (${last.solves} solves, ${last.reused} reused)`);
   const stat = (k) => {
     const v = f.map((x) => x[k]).sort((a, b) => a - b);
     return { median: v[Math.floor(v.length / 2)], p95: v[Math.floor(v.length * 0.95)], max: v[v.length - 1] };
   };
-  const t = stat("total"), s = stat("solve"), d = stat("draw");
-  console.log(`drag frame, ${label}: ${f.length} frames (${refused} refused with a near-miss certificate); total median ${t.median.toFixed(1)} ms, p95 ${t.p95.toFixed(1)}, max ${t.max.toFixed(1)} (solve median ${s.median.toFixed(1)}, draw median ${d.median.toFixed(1)})`);
+  const ms = (x) => x.toFixed(1);
+  const line = (k) => { const x = stat(k); return `median ${ms(x.median)}, p95 ${ms(x.p95)}, max ${ms(x.max)}`; };
+  const med = (k) => stat(k).median.toFixed(2);
+  console.log(`drag frame, ${label}: ${f.length} frames (${refused} refused with a near-miss certificate), ms:\n` +
+    `  total ${line("total")}\n  solve ${line("solve")} (of it: JSON in ${med("stringify")}, wasm ${med("wasm")}, JSON out ${med("parse")} median)\n  draw  ${line("draw")}`);
   return f.length;
 }
 // 200 points on a noisy, unequally spaced closed-ish path (a seeded generator, so every run
@@ -303,7 +316,7 @@ for (let i = 0; i < 200; i++) {
 const radii = noisy.map(() => Math.round((0.02 + 0.1 * rand()) * 1000) / 1000);
 check(await frameTimes("200 points, interpolate, open", { points: noisy, k: 3 }) > 10, "frames were measured");
 check(await frameTimes("200 points, balls, open", { points: noisy, k: 3, constraint: { type: "balls", radii } }) > 10, "frames were measured");
-check(await frameTimes("200 points, balls, closed", { points: noisy, closed: true, k: 3, constraint: { type: "balls", radii } }) > 10, "frames were measured");
+check(await frameTimes("200 points, balls, closed", { points: noisy, closed: true, k: 3, constraint: { type: "balls", radii } }, "refine-200-drag.png") > 10, "frames were measured");
 await page.screenshot({ path: path.join(shots, "refine-200.png") });
 
 check(problems.length === 0, `no console errors or exceptions:\n${problems.join("\n")}`);
