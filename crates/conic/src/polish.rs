@@ -8,9 +8,10 @@
 //!
 //! - an orthant row k with z_k/s_k ≥ F/L (or a slack within [`crate::PolishOptions::active_rtol`]
 //!   of 0) becomes the equality c(x) = s_k(x) = b_k − A_k x = 0 with multiplier y = z_k;
-//! - a second-order block with |s||z| ≥ [`crate::PolishOptions::soc_ratio`] · sᵀz (or near its
-//!   boundary) becomes c(x) = ½ J(s(x)) / |J s| = 0 (the boundary |s̄| = s_0, scaled to unit
-//!   normal in row space) with z = y J s/|J s|;
+//! - a second-order block with |s||z| ≥ [`crate::PolishOptions::soc_ratio`] · sᵀz and
+//!   y/(s_0 − |s̄|) ≥ F/L, y = z_0|s|/s_0 (or near its boundary) becomes
+//!   c(x) = ½ J(s(x)) / |J s| = 0 (the boundary |s̄| = s_0, scaled to unit normal in row space)
+//!   with z = y J s/|J s|;
 //! - every zero-cone row stays an equality.
 //!
 //! With the unit row-space normals u_j (e_k, or J s/|J s|), G̃_j = u_jᵀA_b and the Lagrangian
@@ -143,22 +144,24 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
             Kind::SecondOrder => {
                 let boundary = s[0] - norm(&s[1..]);
-                if norm(s) * norm(z) >= po.soc_ratio * dot(s, z)
-                    || boundary <= po.active_rtol * s[0]
-                {
+                // y, the multiplier on the unit row-space normal J s/|J s| (|J s| = |s|), against
+                // the distance to the boundary, as an orthant row's z/s against F/L: the ratio
+                // test alone also takes blocks whose dual is negligible (z = 0 passes
+                // |s||z| ≥ r·sᵀz: a polished point's inactive block), and pulling such a block
+                // onto its boundary moves the point away from the optimum, which the few steps
+                // left after dropping it again do not recover.
+                let y = z[0] / s[0].max(f64::MIN_POSITIVE) * norm(s);
+                let engaged =
+                    norm(s) * norm(z) >= po.soc_ratio * dot(s, z) && y * length >= boundary * force;
+                if engaged || boundary <= po.active_rtol * s[0] {
                     if norm(s) <= 1e-9 * length {
                         // The apex: J s carries no direction.
                         return None;
                     }
-                    let js = {
-                        let mut u = s.to_vec();
-                        u[1..].iter_mut().for_each(|v| *v = -*v);
-                        norm(&u)
-                    };
                     cons.push(Con {
                         block: bi,
                         row: None,
-                        y: z[0] / s[0] * js,
+                        y,
                     });
                     for k in r {
                         member[k] = true;
