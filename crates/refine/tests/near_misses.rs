@@ -76,6 +76,39 @@ fn noisy(seed: u64, d: usize, topology: Topology) -> Case {
     }
 }
 
+/// The smooth wavy circle of the benches (`xtask/src/bench/refine.rs`, `curvefit-py/bench`):
+/// r(θ) = 1 + 0.3 sin 5θ + 0.1 cos 17θ at θ_i = 2πi/n, closed, radii (0.2 … 0.7) × the mean
+/// spacing — most balls inactive. Its first strategy entry ended at 2.2e-9 (n = 10³, no knot
+/// update: 251
+/// iterations through the strict entry instead of 60); here with the default knot updates.
+fn wavy(n: usize) -> Case {
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let y: Vec<f64> = (0..n)
+        .flat_map(|i| {
+            let t = std::f64::consts::TAU * i as f64 / n as f64;
+            let r = 1.0 + 0.3 * (5.0 * t).sin() + 0.1 * (17.0 * t).cos();
+            [r * t.cos(), r * t.sin()]
+        })
+        .collect();
+    let q = Points::new(2, y).unwrap();
+    let spacing = (0..n)
+        .map(|i| {
+            let (a, b) = (q.point(i), q.point((i + 1) % n));
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+        })
+        .sum::<f64>()
+        / n as f64;
+    let radii = (0..n)
+        .map(|_| (0.2 + 0.5 * rng.uniform()) * spacing)
+        .collect();
+    Case {
+        name: format!("wavy circle n={n}"),
+        q,
+        topology: Topology::Closed,
+        radii,
+    }
+}
+
 /// The house example of `kersey.rs`, open, radii [1, 1, 0.02, 1, 1].
 fn house() -> Case {
     Case {
@@ -118,15 +151,15 @@ fn moved(c: &Case, angle: f64, shift: f64) -> Case {
     }
 }
 
-/// Noisy 2-D problems per topology (measured before the fix of the polish's second-order active
-/// set: 95 of the 369 cases of 60 seeds refused at 1.0e-9 … 7.4e-9; after it none, the largest
-/// certificate 7.5e-11).
+/// Noisy 2-D problems per topology. Measured with 60 seeds (369 cases with the helices and the
+/// house; `conic`'s polish as of ROBUSTNESS.md limit 10): 95 refused at 1.0e-9 … 7.4e-9 before,
+/// none after, the largest certificate 7.6e-11.
 const SEEDS: u64 = 6;
 
-/// The house, noisy 2-D problems open and closed, a noisy helix open and closed, and two rotated
+/// The house, the wavy circle, noisy 2-D problems open and closed, a noisy helix open and closed, and two rotated
 /// and translated copies of each.
 fn cases() -> Vec<Case> {
-    let mut base = vec![house()];
+    let mut base = vec![house(), wavy(1000)];
     for seed in 1..=SEEDS {
         base.push(noisy(seed, 2, Topology::Closed));
         base.push(noisy(seed, 2, Topology::Open));
@@ -144,9 +177,9 @@ fn cases() -> Vec<Case> {
 
 /// The relative KKT residual of a ball refinement recomputed from its curve and multipliers:
 /// stationarity (Hp from `energy::Hessian`, dense, plus w(p − q) at the data vertices) and
-/// complementarity over the largest |Hp|, feasibility over the extent. An independent check of
-/// the solver's own certificate, less strict near the rounding level (no floor): used only
-/// where the forces are far above it.
+/// complementarity over the largest |Hp| (floored by rounding), feasibility over the extent. An
+/// independent check of the solver's own certificate (on the 372 cases of 60 seeds it read at
+/// most 1.0e-10).
 fn recheck(r: &Refinement, q: &Points, radii: &[f64]) -> f64 {
     let (d, nv) = (q.dim(), r.points.len());
     let h = energy::Hessian::new(&r.knots).to_dense();
@@ -164,7 +197,17 @@ fn recheck(r: &Refinement, q: &Points, radii: &[f64]) -> f64 {
             }
         }
     }
-    let force = hp.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    // The force scale: the largest |Hp|, but no less than what rounding the stored coordinates
+    // (max |p|) exerts through H (‖H‖∞ from the dense rows) counted as 1e-9 — a translated copy's
+    // coordinates of 25 carry that much.
+    let h_norm = (0..nv)
+        .map(|i| (0..nv).map(|j| h[(i, j)].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let magnitude = r.points.coords().iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let force = hp
+        .iter()
+        .fold(0.0f64, |a, v| a.max(v.abs()))
+        .max(16.0 * f64::EPSILON * h_norm * magnitude / 1e-9);
     let mut res = hp.clone();
     let mut comp = 0.0f64;
     let mut primal = 0.0f64;
@@ -190,8 +233,7 @@ fn recheck(r: &Refinement, q: &Points, radii: &[f64]) -> f64 {
 }
 
 /// Every case is returned certified ≤ 1e-9 (ROBUSTNESS.md, limit 10), and the recomputed
-/// residual agrees that the curve balances its forces (≤ 1e-8 without a rounding floor, on
-/// forces of O(1)…O(10⁴) where rounding leaves ~1e-12).
+/// residual agrees (≤ 1e-9 too).
 #[test]
 fn near_misses_certify() {
     let mut failures = Vec::new();
@@ -222,7 +264,7 @@ fn near_misses_certify() {
                     "{:<48} ok   kkt {:.2e}  recheck {:.2e}  {ms:7.1} ms  [{ran}]",
                     c.name, r.kkt_residual, again
                 );
-                if r.kkt_residual > 1e-9 || !(again <= 1e-8) {
+                if r.kkt_residual > 1e-9 || !(again <= 1e-9) {
                     failures.push(format!(
                         "{}: kkt {:e}, recheck {again:e}",
                         c.name, r.kkt_residual
