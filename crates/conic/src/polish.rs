@@ -8,9 +8,11 @@
 //!
 //! - an orthant row k with z_k/s_k ≥ F/L (or a slack within [`crate::PolishOptions::active_rtol`]
 //!   of 0) becomes the equality c(x) = s_k(x) = b_k − A_k x = 0 with multiplier y = z_k;
-//! - a second-order block with |s||z| ≥ [`crate::PolishOptions::soc_ratio`] · sᵀz (or near its
-//!   boundary) becomes c(x) = ½ J(s(x)) / |J s| = 0 (the boundary |s̄| = s_0, scaled to unit
-//!   normal in row space) with z = y J s/|J s|;
+//! - a second-order block with |s||z| ≥ [`crate::PolishOptions::soc_ratio`] · sᵀz whose
+//!   stiffness y/(s_0 − |s̄|), y = z_0|s|/s_0, competes with P's
+//!   ([`crate::KktSystem::diagonal_scale`]) (or near its boundary) becomes
+//!   c(x) = ½ J(s(x)) / |J s| = 0 (the boundary |s̄| = s_0, scaled to unit normal in row space)
+//!   with z = y J s/|J s|;
 //! - every zero-cone row stays an equality.
 //!
 //! With the unit row-space normals u_j (e_k, or J s/|J s|), G̃_j = u_jᵀA_b and the Lagrangian
@@ -31,7 +33,11 @@
 //! multiplier turned negative leaves it (a primal active-set method started from the
 //! interior-point iterate), the step being retried from the previous point, at most
 //! [`crate::PolishOptions::active_changes`] times. Every step's point is certified
-//! ([`crate::Residuals`]) and the best is kept. (Nocedal & Wright, *Numerical Optimization*,
+//! ([`crate::Residuals`]) and the best is kept. The steps go on (at most
+//! [`crate::PolishOptions::steps`]) until the point is certified at the tolerance *and* its
+//! stationarity residual is at the tolerance of the largest force it actually carries
+//! ([`crate::Residuals::reaction`]) or at rounding: F's floor can exceed the reactions by orders
+//! of magnitude, and one more Newton step costs less than a caller's refusal. (Nocedal & Wright, *Numerical Optimization*,
 //! §18.1 for the Newton–KKT step; §16.5 for the active-set changes.)
 
 use crate::cone::{distance_to_cone, soc_residual, Kind};
@@ -143,22 +149,26 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
             Kind::SecondOrder => {
                 let boundary = s[0] - norm(&s[1..]);
-                if norm(s) * norm(z) >= po.soc_ratio * dot(s, z)
-                    || boundary <= po.active_rtol * s[0]
-                {
+                // y, the multiplier on the unit row-space normal J s/|J s| (|J s| = |s|), over the
+                // distance to the boundary is the stiffness with which the block holds the point;
+                // it is engaged when that competes with P's (`diagonal_scale`, in the block's own
+                // row units), as an orthant row's z/s against F/L. The ratio test alone is, on the
+                // central path, only "within 1/ratio of the boundary", and it passes z = 0 (a
+                // polished point's inactive block): pulling such a block onto its boundary moves
+                // the point away from the optimum, which the steps left after dropping it again do
+                // not recover (ROBUSTNESS.md, limit 10).
+                let y = z[0] / s[0].max(f64::MIN_POSITIVE) * norm(s);
+                let engaged = norm(s) * norm(z) >= po.soc_ratio * dot(s, z)
+                    && y >= boundary * kkt.diagonal_scale(bi);
+                if engaged || boundary <= po.active_rtol * s[0] {
                     if norm(s) <= 1e-9 * length {
                         // The apex: J s carries no direction.
                         return None;
                     }
-                    let js = {
-                        let mut u = s.to_vec();
-                        u[1..].iter_mut().for_each(|v| *v = -*v);
-                        norm(&u)
-                    };
                     cons.push(Con {
                         block: bi,
                         row: None,
-                        y: z[0] / s[0] * js,
+                        y,
                     });
                     for k in r {
                         member[k] = true;
@@ -316,7 +326,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
         }
         let (cert, s_out, objective) = certify(kkt, &x, &z, floors);
-        let done = cert.total <= opts.tolerance;
+        let done = cert.total <= opts.tolerance && settled(&cert, opts.tolerance);
         let hopeless = inactive_violation > opts.tolerance
             && inactive_violation > po.abandon_ratio * cert.stationarity.max(active_violation);
         if best
@@ -377,6 +387,24 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
         }
     }
     best
+}
+
+/// The multiple of ε F that bounds the rounding in g + Aᵀz (F with its floor: the size of the
+/// terms the residual is summed from).
+const ROUNDING_MULTIPLE: f64 = 16.0;
+
+/// Whether the stationarity residual is at `tolerance` of the forces the point actually carries
+/// ([`Residuals::reaction`]), or is rounding: the polish's Newton steps go on until then.
+/// [`Residuals::stationarity`] is relative to F, whose floor F₀ (the backend's force scale,
+/// ‖q‖∞) can exceed the reactions of a finely refined curve by orders of magnitude — stopping
+/// there left 1e-9 of the largest reaction unbalanced, which a certificate relative to that
+/// reaction (refine's) refuses (ROBUSTNESS.md, limit 10). A residual of ROUNDING_MULTIPLE ε F
+/// counts as `tolerance`.
+fn settled(cert: &Residuals, tolerance: f64) -> bool {
+    let scale = cert
+        .reaction
+        .max(ROUNDING_MULTIPLE * f64::EPSILON * cert.force / tolerance);
+    cert.stationarity * cert.force <= tolerance * scale
 }
 
 /// Solves [H_L G̃ᵀ; G̃ 0][dx; dy] = [b1; c] with the factorization of H_L + G̃ᵀΔ⁻¹G̃ and

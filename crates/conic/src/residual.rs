@@ -35,6 +35,9 @@ pub struct Residuals {
     pub total: f64,
     /// F.
     pub force: f64,
+    /// max(‖g‖∞, ‖Aᵀz‖∞): F without its floor F₀, the largest force the point actually carries
+    /// (the polish stops relative to it, [`crate::polish`]).
+    pub reaction: f64,
     /// L.
     pub length: f64,
 }
@@ -66,7 +69,7 @@ pub(crate) struct Parts<'a> {
 
 /// The residuals of an interior iterate (s, z in the interior; primal = ‖Ax + s − b‖∞ / L).
 pub(crate) fn iterate(p: &Parts<'_>, cones: &Cones) -> Residuals {
-    let (force, length) = scales(p);
+    let (force, length, reaction) = scales(p);
     let mut stat: f64 = 0.0;
     for (a, b) in p.g.iter().zip(p.atz) {
         stat = stat.max((a + b).abs());
@@ -83,6 +86,7 @@ pub(crate) fn iterate(p: &Parts<'_>, cones: &Cones) -> Residuals {
         total: 0.0,
         force,
         length,
+        reaction,
     }
     .fold()
 }
@@ -90,7 +94,7 @@ pub(crate) fn iterate(p: &Parts<'_>, cones: &Cones) -> Residuals {
 /// The certificate of a returned point: s = b − Ax (its distance to K is the primal part), z
 /// as given (its distance to K* is the dual-cone part).
 pub(crate) fn certificate(p: &Parts<'_>, cones: &Cones) -> Residuals {
-    let (force, length) = scales(p);
+    let (force, length, reaction) = scales(p);
     let mut stat: f64 = 0.0;
     for (a, b) in p.g.iter().zip(p.atz) {
         stat = stat.max((a + b).abs());
@@ -119,20 +123,20 @@ pub(crate) fn certificate(p: &Parts<'_>, cones: &Cones) -> Residuals {
         total: 0.0,
         force,
         length,
+        reaction,
     }
     .fold()
 }
 
-fn scales(p: &Parts<'_>) -> (f64, f64) {
-    let force = inf_norm(p.g)
-        .max(inf_norm(p.atz))
-        .max(p.floors.force)
-        .max(f64::MIN_POSITIVE);
+/// (F, L, max(‖g‖∞, ‖Aᵀz‖∞)).
+fn scales(p: &Parts<'_>) -> (f64, f64, f64) {
+    let reaction = inf_norm(p.g).max(inf_norm(p.atz));
+    let force = reaction.max(p.floors.force).max(f64::MIN_POSITIVE);
     let length = inf_norm(p.b)
         .max(inf_norm(p.ax))
         .max(p.floors.length)
         .max(f64::MIN_POSITIVE);
-    (force, length)
+    (force, length, reaction)
 }
 
 fn gap(p: &Parts<'_>, cones: &Cones, force: f64, length: f64) -> f64 {

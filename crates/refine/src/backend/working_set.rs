@@ -468,14 +468,14 @@ fn run_round<C>(
     let mult = multipliers(&be, &wsets, &sol.z, &g, d);
     let (mut k, mut cert) = certify(&points, &mult);
     let (mut sol, mut points) = (sol, points);
-    // Polish to the aim: each call takes Newton steps on the active set until the method's own
-    // residual is at its tolerance, and that residual is relative to a force floor (‖Q‖ times
-    // the largest step, `Condensed::new`) far above the forces of a finely refined curve — so
-    // one call can stop at 1e-10 of the floor while the caller's certificate, relative to the
-    // largest force, is still 1e-9…1e-10. The calls repeat from the polished point while the
-    // certificate is above `target` and falls (F(t) of the free-knot optimizer and its envelope
-    // gradient are only as accurate as this curve). Each polished curve is judged again (it
-    // moves a little).
+    // Polish to the aim: each call takes Newton steps on the active set until the method's
+    // stationarity is at its tolerance of the reactions (`conic::Residuals::reaction`, not only
+    // of its force floor ‖Q‖ times the largest step, `Condensed::new`, far above the forces of
+    // a finely refined curve) or at rounding, at most `PolishOptions::steps`. The calls repeat
+    // from the polished point while the caller's certificate is above `target` and falls (F(t)
+    // of the free-knot optimizer and its envelope gradient are only as accurate as this curve;
+    // a call that ran out of steps after an active-set change goes on from its best point).
+    // Each polished curve is judged again (it moves a little).
     for _ in 0..POLISH_ROUNDS {
         if k <= target || conic_opts.polish.is_none() {
             break;
@@ -560,12 +560,6 @@ mod tests {
     /// The exact acceptance level of the refinement (the independent certificate).
     const EXACT: f64 = 1e-9;
 
-    /// A certificate above the exact level by less than 1e-7: what the solver refuses with its
-    /// residual (ROBUSTNESS.md, open limit 10) — not an answer to compare; the property tests
-    /// count such a case as a reject.
-    fn near_miss(k: f64) -> bool {
-        k > EXACT && k <= 1e-7
-    }
     /// Energies below this times the interpolation energy count as E* = 0.
     const ZERO_ENERGY_RTOL: f64 = 1e-12;
 
@@ -719,7 +713,6 @@ mod tests {
                 // E* = 0 (data within reach of a straight open curve): both at rounding level.
                 prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp, "condensed {e} vs full {e_full} (E* = 0)");
             } else {
-                prop_assume!(!near_miss(cert.kkt_residual));
                 prop_assert!(cert.kkt_residual <= EXACT, "kkt {:e}", cert.kkt_residual);
                 prop_assert!((e - e_full).abs() <= 1e-8 * e_full, "condensed {e} vs full {e_full}");
             }
@@ -784,7 +777,6 @@ mod tests {
             if full.energy <= ZERO_ENERGY_RTOL * e_interp {
                 prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp, "condensed {e} vs full {} (E* = 0)", full.energy);
             } else {
-                prop_assume!(!near_miss(cert.kkt_residual));
                 prop_assert!(cert.kkt_residual <= EXACT, "kkt {:e}", cert.kkt_residual);
                 prop_assert!((e - full.energy).abs() <= 1e-8 * full.energy, "condensed {e} vs full {}", full.energy);
             }
@@ -836,8 +828,6 @@ mod tests {
             let sets = ball_sets(&radii);
             let (_, ca) = run(&kn, &q, &sets, &c, m, 1, None);
             let (pw, cw) = run(&kn, &q, &sets, &c, m, step, None);
-            prop_assume!(!near_miss(ca.kkt_residual));
-            prop_assume!(!near_miss(cw.kkt_residual));
             prop_assert!(ca.kkt_residual <= EXACT, "all: kkt {:e}", ca.kkt_residual);
             prop_assert!(cw.kkt_residual <= EXACT, "working set: kkt {:e}", cw.kkt_residual);
             prop_assert!((ca.energy - cw.energy).abs() <= 1e-9 * ca.energy,
@@ -845,7 +835,6 @@ mod tests {
             // A start set (as the previous knot iteration's active balls give it): any set works.
             let start: Vec<bool> = (0..n).map(|_| uniform() < 0.2).collect();
             let (_, ch) = run(&kn, &q, &sets, &c, m, step, Some(&start));
-            prop_assume!(!near_miss(ch.kkt_residual));
             prop_assert!(ch.kkt_residual <= EXACT, "started: kkt {:e}", ch.kkt_residual);
             prop_assert!((ca.energy - ch.energy).abs() <= 1e-9 * ca.energy,
                 "all {} vs started working set {}", ca.energy, ch.energy);
