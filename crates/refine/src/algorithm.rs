@@ -379,6 +379,9 @@ fn stage_loop(
             // Until the first knot update the knots are those of `split_knots`.
             uniform_spans: sol.is_none(),
             working_set: working_set.as_deref(),
+            warm: sol
+                .as_ref()
+                .and_then(|s| Some((&s.points, s.multipliers.as_deref()?))),
             options: &problem.options,
         };
         let s = dispatch(&fp)?;
@@ -408,6 +411,7 @@ fn stage_loop(
         stride,
         uniform_spans: false,
         working_set: None,
+        warm: None,
         options: &problem.options,
     };
     // (The exact solver's certificate, when it computed one to accept the points, is this one.)

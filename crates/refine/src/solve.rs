@@ -108,6 +108,7 @@ impl Problem {
             stride,
             uniform_spans: true,
             working_set: None,
+            warm: None,
             options: &self.options,
         };
         let mut rows = crate::constraint::Rows::new(&fp)?;
@@ -163,6 +164,7 @@ pub(crate) fn solve_stage0_on(
         stride,
         uniform_spans: false,
         working_set: None,
+        warm: None,
         options: &problem.options,
     };
     let s = strategy::exact(&fp)?;

@@ -219,8 +219,10 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         &opts,
         &fp.options.working_set,
         fp.working_set,
+        fp.warm,
         &mut judge,
         fp.options.polish_above,
+        fp.options.accept_kkt,
         fp.options.progress.as_ref(),
     )?;
     Ok(FixedSolution {

@@ -425,6 +425,49 @@ impl<'a> Condensed<'a> {
         self.row_start[v]..self.row_start[v] + self.cones.blocks()[v].dim()
     }
 
+    /// A point for the active-set polish from a known answer (the previous knot iteration's,
+    /// Algorithm 4.1): x the given positions of the variables' points (d each, in variable
+    /// order), s = b − A x = (ε, q − x) per ball, and z from the balls' multipliers `w` (one per
+    /// condensed point, Kersey (3.5): w = z₀/ε): z = (wε, −wε s̄/|s̄|) where w > 0 and s̄ ≠ 0 —
+    /// complementary to s when s is on its boundary, which is what the polish reads its active
+    /// set from — and 0 elsewhere. `None` when a polytope is present.
+    pub(crate) fn warm_solution(&self, x: Vec<f64>, w: &[f64]) -> Option<conic::Solution> {
+        let d = self.d;
+        let m = self.cones.rows();
+        if x.len() != self.var_point.len() * d || w.len() != self.sets.len() {
+            return None;
+        }
+        let (mut s, mut z) = (vec![0.0; m], vec![0.0; m]);
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let PointSet::Ball(r) = self.sets[j] else {
+                return None;
+            };
+            let rows = self.rows(v);
+            s[rows.start] = r;
+            for c in 0..d {
+                s[rows.start + 1 + c] = self.q[j * d + c] - x[v * d + c];
+            }
+            let len = banded::vector::norm(&s[rows.start + 1..rows.end]);
+            let z0 = w[j] * r;
+            if z0 > 0.0 && z0.is_finite() && len > 0.0 {
+                z[rows.start] = z0;
+                for c in 0..d {
+                    z[rows.start + 1 + c] = -z0 * s[rows.start + 1 + c] / len;
+                }
+            }
+        }
+        Some(conic::Solution {
+            x,
+            s,
+            z,
+            residuals: conic::Residuals::default(),
+            objective: 0.0,
+            iterations: 0,
+            status: conic::Status::Converged,
+            polished: false,
+        })
+    }
+
     /// The start of the method for balls alone: y = q, s = (ε, 0) (the centre of each cone),
     /// z = (F, 0) with F the largest force |Qq| (or ‖Q‖δ): strictly feasible and centred. `None`
     /// when a polytope is present (its data point need not lie inside it).

@@ -162,10 +162,19 @@ pub(crate) fn solve<C>(
     conic: &conic::Options,
     options: &WorkingSetOptions,
     start: Option<&[bool]>,
+    warm: Option<(&Points, &[Vec<f64>])>,
     certify: Certify<'_, C>,
     target: f64,
+    accept: f64,
     progress: Option<&crate::Observer>,
 ) -> Result<WorkingSetSolution<C>, Error> {
+    if let Some(warm) = warm {
+        if let Some(sol) = polish_from_warm(
+            knots, stencil, q, sets, stride, conic, warm, certify, accept,
+        )? {
+            return Ok(sol);
+        }
+    }
     let n = q.len();
     let constrained = sets.iter().filter(|s| s.is_some()).count();
     let dense_start = start.is_some_and(|s| {
@@ -179,6 +188,87 @@ pub(crate) fn solve<C>(
     solve_from(
         knots, stencil, q, sets, stride, conic, options, step, start, certify, target, progress,
     )
+}
+
+/// The knot iterations of Algorithm 4.1 move the knots a little and the active set rarely: the
+/// previous iteration's answer (`warm`: its points and data multipliers), put on the new knots
+/// with every data point in W, is polished ([`conic::polish::polish_solution`]: Newton steps on
+/// the active set read off its complementary s and z, with active-set changes) and returned when
+/// `certify` accepts it (≤ `accept`) — a few banded factorizations instead of an interior-point
+/// solve from the centre. Anything else (a polytope, a point without a set, a polish that does
+/// not get there) returns `None` and the method runs as usual.
+#[allow(clippy::too_many_arguments)]
+fn polish_from_warm<C>(
+    knots: &Knots,
+    stencil: &Stencil,
+    q: &Points,
+    sets: &[Option<PointSet>],
+    stride: usize,
+    conic_opts: &conic::Options,
+    (points, wmult): (&Points, &[Vec<f64>]),
+    certify: Certify<'_, C>,
+    accept: f64,
+) -> Result<Option<WorkingSetSolution<C>>, Error> {
+    let (n, d) = (q.len(), q.dim());
+    if conic_opts.polish.is_none()
+        || points.len() != knots.vertex_count()
+        || points.dim() != d
+        || wmult.len() != n
+    {
+        return Ok(None);
+    }
+    let Some(wsets) = sets
+        .iter()
+        .map(|s| match s {
+            Some(s @ (PointSet::Ball(_) | PointSet::Fixed)) => Some(s.clone()),
+            _ => None,
+        })
+        .collect::<Option<Vec<PointSet>>>()
+    else {
+        return Ok(None);
+    };
+    let need = if knots.is_closed() { 2 } else { 3 };
+    if n < need {
+        return Ok(None);
+    }
+    let vertices: Vec<usize> = (0..n).map(|i| i * stride).collect();
+    let cond = Condensation::at_vertices_reusing(knots, stencil, vertices, None)?;
+    let mut be = Condensed::new(&cond, knots, q.coords().to_vec(), wsets.clone(), d)?;
+    let x: Vec<f64> = (0..n)
+        .filter(|&i| matches!(wsets[i], PointSet::Ball(_)))
+        .flat_map(|i| points.point(i * stride).to_vec())
+        .collect();
+    let w: Vec<f64> = wmult
+        .iter()
+        .map(|m| m.first().copied().unwrap_or(0.0))
+        .collect();
+    let Some(mut from) = be.warm_solution(x, &w) else {
+        return Ok(None);
+    };
+    let mut best = f64::INFINITY;
+    for calls in 1..=POLISH_ROUNDS {
+        let Some(p) = conic::polish::polish_solution(&mut be, &from, conic_opts) else {
+            break;
+        };
+        let (curve, g) = be.curve(&p.x, stencil)?;
+        let mult = multipliers(&be, &wsets, &p.z, &g, d);
+        let (k, certificate) = certify(&curve, &mult);
+        if k <= accept {
+            return Ok(Some(WorkingSetSolution {
+                points: curve,
+                multipliers: mult,
+                iterations: calls,
+                certificate,
+            }));
+        }
+        // (NaN is never better.)
+        if k.is_nan() || k >= best {
+            break;
+        }
+        best = k;
+        from = p;
+    }
+    Ok(None)
 }
 
 /// [`solve`] with W started from every `step`-th constraint (1: all, a single round) and the
@@ -550,7 +640,7 @@ mod tests {
     use proptest::prelude::*;
 
     use super::super::condensed::{Face, PointSet};
-    use super::{solve_from, WorkingSetOptions};
+    use super::{solve, solve_from, WorkingSetOptions, POLISH_ROUNDS};
     use crate::certify::{certify, Certificate};
     use crate::conic_problem::{ConicProblem, ConvexSet};
     use crate::fast::{interpolate_condensed as interpolate, Condensation};
@@ -869,5 +959,93 @@ mod tests {
             let e = energy::energy(&kn, &p).unwrap();
             prop_assert!(e <= ZERO_ENERGY_RTOL * e_interp.max(f64::MIN_POSITIVE), "E = {e} (interpolation {e_interp})");
         }
+    }
+
+    /// A knot update's warm start: the answer on knots A, polished on knots B (sub-spans scaled
+    /// by up to ±4 %, as a knot iteration moves them), is the answer a cold solve on B finds —
+    /// same energy to 1e-9, both certified — and it took the polish path (at most
+    /// POLISH_ROUNDS calls, where the interior-point method takes tens of iterations).
+    #[test]
+    fn a_warm_polish_finds_the_cold_answer_on_moved_knots() {
+        let (n, m) = (60, 4);
+        let q = Points::new(
+            2,
+            (0..n)
+                .flat_map(|i| {
+                    let t = std::f64::consts::TAU * (i as f64 + 0.3 * (i as f64 * 1.7).sin())
+                        / n as f64;
+                    let r = 1.0 + 0.3 * (i % 2) as f64 + 0.04 * (i as f64 * 2.3).cos();
+                    [r * t.cos(), r * t.sin()]
+                })
+                .collect(),
+        )
+        .unwrap();
+        let spacing = std::f64::consts::TAU / n as f64;
+        let radii: Vec<f64> = (0..n)
+            .map(|i| spacing * (0.2 + 0.5 * (0.5 + 0.5 * (i as f64 * 0.9).sin())))
+            .collect();
+        let sets = ball_sets(&radii);
+        let constraint = Constraint::Balls(radii.clone());
+        let knots = |wobble: f64| {
+            let mut t = vec![0.0];
+            for j in 0..n * m {
+                let h = (1.0 + 0.2 * ((j / m) as f64 * 0.7).cos()) / m as f64;
+                t.push(t[j] + h * (1.0 + wobble * (j as f64 * 0.37).sin()));
+            }
+            Knots::new(Topology::Closed, t).unwrap()
+        };
+        let solve_on = |kn: &Knots, warm: Option<(&Points, &[Vec<f64>])>| {
+            let stencil = Stencil::new(kn);
+            let dv: Vec<usize> = (0..n).map(|i| i * m).collect();
+            let kinds = [constraint.kind()];
+            let mut judge = |p: &Points, mult: &[Vec<f64>]| {
+                let (c, _) = certify(
+                    kn,
+                    p,
+                    &q,
+                    &dv,
+                    &kinds,
+                    Some(mult.to_vec()),
+                    &[],
+                    divdiff::DerivativeRule::Bessel,
+                    1e-7,
+                );
+                (c.kkt_residual, c)
+            };
+            solve(
+                kn,
+                &stencil,
+                &q,
+                &sets,
+                m,
+                &conic::Options::default(),
+                &WorkingSetOptions::default(),
+                None,
+                warm,
+                &mut judge,
+                1e-11,
+                EXACT,
+                None,
+            )
+            .unwrap()
+        };
+        let (a, b) = (knots(0.0), knots(0.04));
+        let first = solve_on(&a, None);
+        let cold = solve_on(&b, None);
+        let warm = solve_on(&b, Some((&first.points, &first.multipliers)));
+        assert!(cold.certificate.kkt_residual <= EXACT && warm.certificate.kkt_residual <= EXACT);
+        let (ec, ew) = (cold.certificate.energy, warm.certificate.energy);
+        assert!(
+            (ec - ew).abs() <= 1e-9 * ec,
+            "energies {ec} (cold) vs {ew} (warm)"
+        );
+        assert!(
+            warm.iterations <= POLISH_ROUNDS && cold.iterations > POLISH_ROUNDS,
+            "warm {} and cold {} iterations",
+            warm.iterations,
+            cold.iterations
+        );
+        let active = first.multipliers.iter().filter(|w| w[0] > 0.0).count();
+        assert!(active > 5, "{active} balls active: a test of nothing");
     }
 }
