@@ -25,7 +25,7 @@
 use banded::vector::dot;
 use divdiff::{Knots, Points};
 
-use crate::operator::{alpha_row, Stencil};
+use crate::operator::{alpha_row, vertex_row, Stencil};
 use crate::Error;
 
 /// Tridiagonal LU of the span matrix B (sub `a`, diagonal `b`, super `c`, each of length k):
@@ -182,7 +182,6 @@ impl Condensation {
                     }
                 }
             }
-            let k = b - a - 1;
             let span_rows = &rows[a + 1..b];
             let (l, u, g, h) = (
                 &mut fl[a + 1..b],
@@ -192,41 +191,11 @@ impl Condensation {
             );
             span_lu(span_rows, l, u).map_err(|j| singular(a + 1 + j))?;
             span_gh(span_rows, l, u, g, h);
-            let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
-            span[i] = [
-                dot(g, g),
-                dot(g, h),
-                dot(h, h),
-                c0 * g[0],
-                c1 * g[k - 1],
-                c0 * h[0],
-                c1 * h[k - 1],
-            ];
+            span[i] = span_summary(span_rows, g, h);
         }
 
         let first = usize::from(!closed);
-        let last = if closed { n } else { n - 1 }; // exclusive
-        let size = last.saturating_sub(first);
-        let mut diag = vec![0.0; size];
-        let mut off = vec![0.0; size];
-        let mut krows = vec![[0.0; 3]; size];
-        for (j, i) in (first..last).enumerate() {
-            let ar = rows[vertices[i]];
-            let prev = if i == 0 { spans - 1 } else { i - 1 };
-            let cur = i % spans;
-            diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
-            let next = i + 1;
-            if next < last || closed {
-                let an = rows[vertices[next % n]];
-                off[j] = ar[2] * an[0] * span[cur][1];
-            }
-            // (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
-            krows[j] = [
-                -ar[0] * span[prev][5],
-                ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
-                -ar[2] * span[cur][4],
-            ];
-        }
+        let (diag, off, krows) = data_row_system(&span, n, closed, |i| rows[vertices[i]]);
         Ok(Condensation {
             n,
             vertices,
@@ -407,37 +376,24 @@ impl Condensation {
         }
         for i in 0..spans {
             let (a, b) = (vertices[i], end(i));
-            let k = b - a - 1;
             let span_rows = &rows[a + 1..b];
             let (l, u, g, h) = (&fl[a + 1..b], &fu[a + 1..b], &fg[a + 1..b], &fh[a + 1..b]);
-            let (c0, c1) = (span_rows[0][0], span_rows[k - 1][2]);
             let right = if i + 1 == n { 0 } else { i + 1 };
-            let (qa, qb) = (yp(i), yp(i + 1));
             let f = &mut x[(a + 1) * d..b * d];
-            for c in 0..d {
-                // x = B⁻¹(e − c), e = −μ g − ν h with μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1}.
-                let mu = rows[a][2] * srow(i, c);
-                let nu = rows[vertices[right]][0] * srow(right, c);
-                for j in 0..k {
-                    f[j * d + c] = -mu * g[j] - nu * h[j];
-                }
-                f[c] -= c0 * qa[c];
-                f[(k - 1) * d + c] -= c1 * qb[c];
-            }
-            // B x = f: forward with L, backward with U (super-diagonal = α_{·,3}).
-            for j in 1..k {
-                for c in 0..d {
-                    f[j * d + c] -= l[j] * f[(j - 1) * d + c];
-                }
-            }
-            for c in 0..d {
-                f[(k - 1) * d + c] *= u[k - 1];
-            }
-            for j in (0..k - 1).rev() {
-                for c in 0..d {
-                    f[j * d + c] = (f[j * d + c] - span_rows[j][2] * f[(j + 1) * d + c]) * u[j];
-                }
-            }
+            let factors = SpanFactors {
+                rows: span_rows,
+                l,
+                u,
+                g,
+                h,
+            };
+            factors.solve(f, yp(i), yp(i + 1), d, |c| {
+                // μ = α_{v_i,3} s_i, ν = α_{v_{i+1},1} s_{i+1}.
+                (
+                    rows[a][2] * srow(i, c),
+                    rows[vertices[right]][0] * srow(right, c),
+                )
+            });
         }
     }
 }
@@ -473,44 +429,19 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
     for (i, sp) in span.iter_mut().enumerate() {
         let a = i * stride;
         work.factor(t, a).map_err(|j| singular(a + 1 + j))?;
-        let SpanWork { rows, g, h, .. } = &work;
-        let (c0, c1) = (rows[0][0], rows[k - 1][2]);
-        *sp = [
-            dot(g, g),
-            dot(g, h),
-            dot(h, h),
-            c0 * g[0],
-            c1 * g[k - 1],
-            c0 * h[0],
-            c1 * h[k - 1],
-        ];
+        *sp = span_summary(&work.rows, &work.g, &work.h);
     }
-    let data_row = |i: usize| data_alpha_row(t, i * stride, nv, closed);
+    let data_row = |i: usize| vertex_row(t, i * stride, nv, closed);
     let first = usize::from(!closed);
-    let last = if closed { n } else { n - 1 }; // exclusive
-    let size = last.saturating_sub(first);
+    let (diag, off, krows) = data_row_system(&span, n, closed, data_row);
+    let size = diag.len();
     let y = q.coords();
     let mut s = vec![0.0; size * d];
     if size > 0 {
-        let mut diag = vec![0.0; size];
-        let mut off = vec![0.0; size];
-        for (j, i) in (first..last).enumerate() {
-            let ar = data_row(i);
-            let prev = if i == 0 { spans - 1 } else { i - 1 };
-            let cur = i % spans;
-            diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
-            let next = i + 1;
-            if next < last || closed {
-                let an = data_row(next % n);
-                off[j] = ar[2] * an[0] * span[cur][1];
-            }
-            // (Ky)_i in difference form (as `Condensation::apply_k`).
-            let kr = [
-                -ar[0] * span[prev][5],
-                ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
-                -ar[2] * span[cur][4],
-            ];
-            let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, next % n);
+        // (Ky)_i in difference form (as `Condensation::apply_k`).
+        for (j, kr) in krows.iter().enumerate() {
+            let i = first + j;
+            let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, (i + 1) % n);
             for c in 0..d {
                 let yb = y[i * d + c];
                 s[j * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
@@ -544,30 +475,13 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
         let mu_row = data_row(i)[2];
         let nu_row = data_row(right)[0];
         let (qa, qb) = (q.point(i), q.point(right));
-        work.solve_free(&mut x[d..], qa, qb, d, |c| {
+        work.factors().solve(&mut x[d..], qa, qb, d, |c| {
             (mu_row * srow(i, c), nu_row * srow(right, c))
         });
     })?;
     match failed {
         Some(v) => Err(singular(v)),
         None => Ok(p),
-    }
-}
-
-/// α-row of data vertex `v` as [`Stencil::new`] computes it (zero at the ends of an open curve).
-#[inline]
-fn data_alpha_row(t: &[f64], v: usize, nv: usize, closed: bool) -> [f64; 3] {
-    if closed {
-        let hl = if v == 0 {
-            t[nv] - t[nv - 1]
-        } else {
-            t[v] - t[v - 1]
-        };
-        alpha_row(hl, t[v + 1] - t[v])
-    } else if v == 0 || v + 1 == nv {
-        [0.0; 3]
-    } else {
-        alpha_row(t[v] - t[v - 1], t[v + 1] - t[v])
     }
 }
 
@@ -592,7 +506,7 @@ impl SpanWork {
         }
     }
 
-    /// The α-rows of the free vertices a + 1 … a + k (knots `t`, as [`Stencil::new`]: their
+    /// The α-rows of the free vertices a + 1 … a + k (knots `t`, as [`vertex_row`]: their
     /// neighbours are in the same span, so no wrap-around), their LU, g and h. Err: the index
     /// in the span of a pivot that is not negative and finite.
     fn factor(&mut self, t: &[f64], a: usize) -> Result<(), usize> {
@@ -605,10 +519,32 @@ impl SpanWork {
         Ok(())
     }
 
-    /// The free vertices x = B⁻¹(e − c) of the factored span into `f` (k × d), e = −μ g − ν h
-    /// with (μ, ν) = `mu_nu(coordinate)`, c from the span's ends `qa`, `qb` (as
-    /// `Condensation::reconstruct`).
-    fn solve_free(
+    /// This span's factors.
+    fn factors(&self) -> SpanFactors<'_> {
+        SpanFactors {
+            rows: &self.rows,
+            l: &self.l,
+            u: &self.u,
+            g: &self.g,
+            h: &self.h,
+        }
+    }
+}
+
+/// One factored span (its α-rows, LU and g, h), wherever they are stored.
+struct SpanFactors<'s> {
+    rows: &'s [[f64; 3]],
+    l: &'s [f64],
+    u: &'s [f64],
+    g: &'s [f64],
+    h: &'s [f64],
+}
+
+impl SpanFactors<'_> {
+    /// The free vertices x = B⁻¹(e − c) into `f` (k × d), e = −μ g − ν h with (μ, ν) =
+    /// `mu_nu(coordinate)`, c from the span's ends `qa`, `qb` (module docs).
+    #[inline(always)]
+    fn solve(
         &self,
         f: &mut [f64],
         qa: &[f64],
@@ -616,7 +552,7 @@ impl SpanWork {
         d: usize,
         mu_nu: impl Fn(usize) -> (f64, f64),
     ) {
-        let SpanWork { rows, l, u, g, h } = self;
+        let SpanFactors { rows, l, u, g, h } = *self;
         let k = rows.len();
         let (c0, c1) = (rows[0][0], rows[k - 1][2]);
         for c in 0..d {
@@ -627,6 +563,7 @@ impl SpanWork {
             f[c] -= c0 * qa[c];
             f[(k - 1) * d + c] -= c1 * qb[c];
         }
+        // B x = f: forward with L, backward with U (super-diagonal = α_{·,3}).
         for j in 1..k {
             for c in 0..d {
                 f[j * d + c] -= l[j] * f[(j - 1) * d + c];
@@ -641,6 +578,61 @@ impl SpanWork {
             }
         }
     }
+}
+
+/// Per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] from its α-rows and g, h: G = g·g,
+/// X = g·h, Y = h·h and the weights of its two data points in g·c and h·c,
+/// c = α_{a+1,1} q_i e_0 + α_{b−1,3} q_{i+1} e_{k−1}.
+#[inline]
+fn span_summary(rows: &[[f64; 3]], g: &[f64], h: &[f64]) -> [f64; 7] {
+    let k = rows.len();
+    let (c0, c1) = (rows[0][0], rows[k - 1][2]);
+    [
+        dot(g, g),
+        dot(g, h),
+        dot(h, h),
+        c0 * g[0],
+        c1 * g[k - 1],
+        c0 * h[0],
+        c1 * h[k - 1],
+    ]
+}
+
+/// The data-row system T s = K y from the span summaries and the data rows' α (`row(i)` of data
+/// point i): T's diagonal and off-diagonal (`off[j]` couples rows j and j + 1, cyclic for a
+/// closed curve) and K's rows, one per data row first … last − 1 (n closed, 1 … n − 2 open):
+/// (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
+#[allow(clippy::type_complexity)]
+fn data_row_system(
+    span: &[[f64; 7]],
+    n: usize,
+    closed: bool,
+    row: impl Fn(usize) -> [f64; 3],
+) -> (Vec<f64>, Vec<f64>, Vec<[f64; 3]>) {
+    let spans = span.len();
+    let first = usize::from(!closed);
+    let last = if closed { n } else { n - 1 }; // exclusive
+    let size = last.saturating_sub(first);
+    let mut diag = vec![0.0; size];
+    let mut off = vec![0.0; size];
+    let mut krows = vec![[0.0; 3]; size];
+    for (j, i) in (first..last).enumerate() {
+        let ar = row(i);
+        let prev = if i == 0 { spans - 1 } else { i - 1 };
+        let cur = i % spans;
+        diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
+        let next = i + 1;
+        if next < last || closed {
+            let an = row(next % n);
+            off[j] = ar[2] * an[0] * span[cur][1];
+        }
+        krows[j] = [
+            -ar[0] * span[prev][5],
+            ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
+            -ar[2] * span[cur][4],
+        ];
+    }
+    (diag, off, krows)
 }
 
 /// The interpolation of [`interpolate`] through [`Condensation`] (the working-set method's

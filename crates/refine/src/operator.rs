@@ -21,20 +21,31 @@ pub(crate) fn alpha_row(hl: f64, hr: f64) -> [f64; 3] {
     [a1, -a1 - a3, a3]
 }
 
+/// Row `v` of A on the knot values `t` of an `nv`-vertex curve (as [`Stencil`] stores it): the
+/// spans on either side of vertex v, h_{−1} = h_{N−1} for a closed curve (the periodic extension,
+/// math.md §1), a zero row at the ends of an open one.
+#[inline]
+pub(crate) fn vertex_row(t: &[f64], v: usize, nv: usize, closed: bool) -> [f64; 3] {
+    if closed {
+        let hl = if v == 0 {
+            t[nv] - t[nv - 1]
+        } else {
+            t[v] - t[v - 1]
+        };
+        alpha_row(hl, t[v + 1] - t[v])
+    } else if v == 0 || v + 1 == nv {
+        [0.0; 3]
+    } else {
+        alpha_row(t[v] - t[v - 1], t[v + 1] - t[v])
+    }
+}
+
 impl Stencil {
     pub(crate) fn new(knots: &Knots) -> Self {
         let t = knots.values();
         let n = knots.vertex_count();
         let closed = knots.is_closed();
-        let mut rows = vec![[0.0; 3]; n];
-        for i in 1..n - 1 {
-            rows[i] = alpha_row(t[i] - t[i - 1], t[i + 1] - t[i]);
-        }
-        if closed {
-            // h_{−1} = h_{N−1}: the periodic extension (math.md §1).
-            rows[0] = alpha_row(t[n] - t[n - 1], t[1] - t[0]);
-            rows[n - 1] = alpha_row(t[n - 1] - t[n - 2], t[n] - t[n - 1]);
-        }
+        let rows = (0..n).map(|v| vertex_row(t, v, n, closed)).collect();
         Stencil { rows, closed }
     }
 
