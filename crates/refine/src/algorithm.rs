@@ -338,8 +338,6 @@ fn stage_loop(
     iterations: &mut Iterations,
 ) -> Result<(Points, Vec<Vec<f64>>, Certificate), Error> {
     let mut sol: Option<FixedSolution> = None;
-    // The balls active in the last solution (multiplier > 0) start the next working set.
-    let mut working_set: Option<Vec<bool>> = None;
     for knot_iteration in 0..=problem.knot_iterations {
         crate::progress::report(
             problem.options.progress.as_ref(),
@@ -378,20 +376,13 @@ fn stage_loop(
             stride,
             // Until the first knot update the knots are those of `split_knots`.
             uniform_spans: sol.is_none(),
-            working_set: working_set.as_deref(),
+            // The last solution starts the next solve (its active set, or all of it).
             warm: sol
                 .as_ref()
                 .and_then(|s| Some((&s.points, s.multipliers.as_deref()?))),
             options: &problem.options,
         };
         let s = dispatch(&fp)?;
-        // The data constraints active in this solution (a positive multiplier) start the next
-        // working set.
-        if matches!(constraint, Constraint::Balls(_) | Constraint::HalfSpaces(_)) {
-            if let Some(m) = &s.multipliers {
-                working_set = Some(m.iter().map(|w| w.iter().any(|&w| w > 0.0)).collect());
-            }
-        }
         iterations.solves += 1;
         iterations.solver += s.iterations;
         sol = Some(s);
@@ -410,7 +401,6 @@ fn stage_loop(
         derivatives: stage == 0,
         stride,
         uniform_spans: false,
-        working_set: None,
         warm: None,
         options: &problem.options,
     };

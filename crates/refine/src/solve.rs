@@ -107,7 +107,6 @@ impl Problem {
             derivatives: true,
             stride,
             uniform_spans: true,
-            working_set: None,
             warm: None,
             options: &self.options,
         };
@@ -163,7 +162,6 @@ pub(crate) fn solve_stage0_on(
         derivatives: true,
         stride,
         uniform_spans: false,
-        working_set: None,
         warm: None,
         options: &problem.options,
     };

@@ -25,11 +25,9 @@ pub(crate) struct FixedProblem<'a> {
     /// The knots are exactly the k-level split (3.1) of the data knots (each data span divided
     /// into `stride` equal sub-spans), so the closed forms of [`crate::uniform`] apply.
     pub uniform_spans: bool,
-    /// Data constraints that start the working set of the condensed method (those active in
-    /// the previous knot iteration's solution); `None`: the default start.
-    pub working_set: Option<&'a [bool]>,
     /// The previous knot iteration's answer (its points and data multipliers): the condensed
-    /// method first polishes from it ([`crate::backend::working_set`]); `None`: no such answer.
+    /// method first polishes from it, else starts its working set with the constraints active
+    /// in it ([`crate::backend::working_set`]); `None`: no such answer.
     pub warm: Option<(&'a Points, &'a [Vec<f64>])>,
     /// The tuning of the solvers.
     pub options: &'a SolveOptions,

@@ -218,7 +218,6 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         fp.stride,
         &opts,
         &fp.options.working_set,
-        fp.working_set,
         fp.warm,
         &mut judge,
         fp.options.polish_above,

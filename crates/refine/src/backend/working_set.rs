@@ -144,7 +144,8 @@ pub(crate) type Certify<'c, C> = &'c mut dyn FnMut(&Points, &[Vec<f64>]) -> (f64
 type Judge<'j> = &'j mut dyn FnMut(&Points, &mut Vec<(usize, f64)>) -> bool;
 
 /// Solves the data-vertex problem (each data point i in `sets[i]`, `None` for no constraint)
-/// at the data vertices 0, stride, 2·stride, … of `knots` by the working-set method. An
+/// at the data vertices 0, stride, 2·stride, … of `knots` by the working-set method, first from
+/// `warm` (the previous knot iteration's answer) when given ([`polish_from_warm`]). An
 /// accepted round whose curve `certify` puts above `target` is polished
 /// ([`conic::polish::polish_solution`]) and judged again; the better of the two is returned.
 ///
@@ -161,7 +162,6 @@ pub(crate) fn solve<C>(
     stride: usize,
     conic: &conic::Options,
     options: &WorkingSetOptions,
-    start: Option<&[bool]>,
     warm: Option<(&Points, &[Vec<f64>])>,
     certify: Certify<'_, C>,
     target: f64,
@@ -175,6 +175,10 @@ pub(crate) fn solve<C>(
             return Ok(sol);
         }
     }
+    // Otherwise the constraints active in the previous answer (a positive multiplier) start W.
+    let active: Option<Vec<bool>> =
+        warm.map(|(_, m)| m.iter().map(|w| w.iter().any(|&w| w > 0.0)).collect());
+    let start = active.as_deref();
     let n = q.len();
     let constrained = sets.iter().filter(|s| s.is_some()).count();
     let dense_start = start.is_some_and(|s| {
@@ -242,33 +246,97 @@ fn polish_from_warm<C>(
         .iter()
         .map(|m| m.first().copied().unwrap_or(0.0))
         .collect();
-    let Some(mut from) = be.warm_solution(x, &w) else {
+    let Some(from) = be.warm_solution(x, &w) else {
         return Ok(None);
     };
-    let mut best = f64::INFINITY;
-    for calls in 1..=POLISH_ROUNDS {
-        let Some(p) = conic::polish::polish_solution(&mut be, &from, conic_opts) else {
+    // W holds every constraint: nothing outside it to judge. The polish stops once accepted.
+    let polished = polish_rounds(
+        &mut be,
+        stencil,
+        &wsets,
+        d,
+        conic_opts,
+        from,
+        None,
+        accept,
+        &mut |_| true,
+        certify,
+    )?;
+    Ok(match polished {
+        Some(Polished {
+            best: Some(best),
+            calls,
+        }) if best.k <= accept => Some(WorkingSetSolution {
+            points: best.points,
+            multipliers: best.multipliers,
+            iterations: calls,
+            certificate: best.certificate,
+        }),
+        _ => None,
+    })
+}
+
+/// A curve with the caller's certificate of it: its residual `k`, what the caller keeps, and
+/// the multipliers it was certified with.
+struct Certified<C> {
+    k: f64,
+    certificate: C,
+    points: Points,
+    multipliers: Vec<Vec<f64>>,
+}
+
+/// The polish calls ([`conic::polish::polish_solution`]) from `sol`, whose curve is `best`
+/// (`None`: not certified yet): each polished curve is judged (`judge`: the constraints outside
+/// W) and certified, and the calls go on from the polished point while the certificate is above
+/// `target` and falls, at most [`POLISH_ROUNDS`]. `None` when a polished curve left a constraint
+/// outside W.
+#[allow(clippy::too_many_arguments)]
+fn polish_rounds<C>(
+    be: &mut Condensed<'_>,
+    stencil: &Stencil,
+    wsets: &[PointSet],
+    d: usize,
+    conic_opts: &conic::Options,
+    mut sol: conic::Solution,
+    mut best: Option<Certified<C>>,
+    target: f64,
+    judge: &mut dyn FnMut(&Points) -> bool,
+    certify: Certify<'_, C>,
+) -> Result<Option<Polished<C>>, Error> {
+    let mut calls = 0;
+    while calls < POLISH_ROUNDS {
+        if best.as_ref().is_some_and(|b| b.k <= target) || conic_opts.polish.is_none() {
+            break;
+        }
+        let Some(p) = conic::polish::polish_solution(be, &sol, conic_opts) else {
             break;
         };
-        let (curve, g) = be.curve(&p.x, stencil)?;
-        let mult = multipliers(&be, &wsets, &p.z, &g, d);
-        let (k, certificate) = certify(&curve, &mult);
-        if k <= accept {
-            return Ok(Some(WorkingSetSolution {
-                points: curve,
-                multipliers: mult,
-                iterations: calls,
-                certificate,
-            }));
+        calls += 1;
+        let (points, g) = be.curve(&p.x, stencil)?;
+        if !judge(&points) {
+            return Ok(None);
         }
+        let multipliers = multipliers(be, wsets, &p.z, &g, d);
+        let (k, certificate) = certify(&points, &multipliers);
         // (NaN is never better.)
-        if k.is_nan() || k >= best {
+        if k.is_nan() || best.as_ref().is_some_and(|b| k >= b.k) {
             break;
         }
-        best = k;
-        from = p;
+        best = Some(Certified {
+            k,
+            certificate,
+            points,
+            multipliers,
+        });
+        sol = p;
     }
-    Ok(None)
+    Ok(Some(Polished { best, calls }))
+}
+
+/// What [`polish_rounds`] ends with: the best certified curve (if any) and the calls made.
+struct Polished<C> {
+    best: Option<Certified<C>>,
+    calls: usize,
 }
 
 /// [`solve`] with W started from every `step`-th constraint (1: all, a single round) and the
@@ -556,8 +624,13 @@ fn run_round<C>(
         });
     }
     let mult = multipliers(&be, &wsets, &sol.z, &g, d);
-    let (mut k, mut cert) = certify(&points, &mult);
-    let (mut sol, mut points) = (sol, points);
+    let (k, certificate) = certify(&points, &mult);
+    let certified = Certified {
+        k,
+        certificate,
+        points,
+        multipliers: mult,
+    };
     // Polish to the aim: each call takes Newton steps on the active set until the method's
     // stationarity is at its tolerance of the reactions (`conic::Residuals::reaction`, not only
     // of its force floor ‖Q‖ times the largest step, `Condensed::new`, far above the forces of
@@ -566,30 +639,22 @@ fn run_round<C>(
     // of the free-knot optimizer and its envelope gradient are only as accurate as this curve;
     // a call that ran out of steps after an active-set change goes on from its best point).
     // Each polished curve is judged again (it moves a little).
-    for _ in 0..POLISH_ROUNDS {
-        if k <= target || conic_opts.polish.is_none() {
-            break;
-        }
-        let Some(p) = conic::polish::polish_solution(&mut be, &sol, conic_opts) else {
-            break;
-        };
-        let (pp, pg) = be.curve(&p.x, stencil)?;
-        if !judge(&pp, near) {
-            return Ok(Round {
-                accepted: None,
-                iterations,
-            });
-        }
-        let pm = multipliers(&be, &wsets, &p.z, &pg, d);
-        let (kp, pcert) = certify(&pp, &pm);
-        // (NaN is never better.)
-        if kp.is_nan() || kp >= k {
-            break;
-        }
-        (k, cert, sol, points) = (kp, pcert, p, pp);
-    }
+    let polished = polish_rounds(
+        &mut be,
+        stencil,
+        &wsets,
+        d,
+        conic_opts,
+        sol,
+        Some(certified),
+        target,
+        &mut |p| judge(p, near),
+        certify,
+    )?;
     Ok(Round {
-        accepted: Some((points, cert)),
+        accepted: polished
+            .and_then(|p| p.best)
+            .map(|b| (b.points, b.certificate)),
         iterations,
     })
 }
@@ -680,6 +745,31 @@ mod tests {
         })
     }
 
+    /// refine's independent certificate of a curve on `kn` with data `q` every `m` vertices
+    /// under `constraint` and the given multipliers: (its residual, the certificate).
+    fn judged(
+        kn: &Knots,
+        q: &Points,
+        m: usize,
+        constraint: &Constraint,
+        p: &Points,
+        mult: &[Vec<f64>],
+    ) -> (f64, Certificate) {
+        let dv: Vec<usize> = (0..q.len()).map(|i| i * m).collect();
+        let (c, _) = certify(
+            kn,
+            p,
+            q,
+            &dv,
+            &[constraint.kind()],
+            Some(mult.to_vec()),
+            &[],
+            divdiff::DerivativeRule::Bessel,
+            1e-7,
+        );
+        (c.kkt_residual, c)
+    }
+
     /// The working-set method on `sets` (W started from every `step`-th point), certified
     /// independently.
     fn run(
@@ -692,22 +782,7 @@ mod tests {
         start: Option<&[bool]>,
     ) -> (Points, Certificate) {
         let stencil = Stencil::new(kn);
-        let dv: Vec<usize> = (0..q.len()).map(|i| i * m).collect();
-        let kinds = [constraint.kind()];
-        let mut judge = |p: &Points, mult: &[Vec<f64>]| {
-            let (c, _) = certify(
-                kn,
-                p,
-                q,
-                &dv,
-                &kinds,
-                Some(mult.to_vec()),
-                &[],
-                divdiff::DerivativeRule::Bessel,
-                1e-7,
-            );
-            (c.kkt_residual, c)
-        };
+        let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, q, m, constraint, p, mult);
         let sol = solve_from(
             kn,
             &stencil,
@@ -996,22 +1071,7 @@ mod tests {
         };
         let solve_on = |kn: &Knots, warm: Option<(&Points, &[Vec<f64>])>| {
             let stencil = Stencil::new(kn);
-            let dv: Vec<usize> = (0..n).map(|i| i * m).collect();
-            let kinds = [constraint.kind()];
-            let mut judge = |p: &Points, mult: &[Vec<f64>]| {
-                let (c, _) = certify(
-                    kn,
-                    p,
-                    &q,
-                    &dv,
-                    &kinds,
-                    Some(mult.to_vec()),
-                    &[],
-                    divdiff::DerivativeRule::Bessel,
-                    1e-7,
-                );
-                (c.kkt_residual, c)
-            };
+            let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, &q, m, &constraint, p, mult);
             solve(
                 kn,
                 &stencil,
@@ -1020,7 +1080,6 @@ mod tests {
                 m,
                 &conic::Options::default(),
                 &WorkingSetOptions::default(),
-                None,
                 warm,
                 &mut judge,
                 1e-11,
