@@ -25,7 +25,7 @@ from __future__ import annotations
 import json as _json
 from typing import Any, Dict
 
-from . import _curvefit
+from . import _curvefit, _results
 from ._api import natural, refine, refine_many, scheme, strip, surface
 from ._errors import InputError, InternalError
 from ._results import (
@@ -63,17 +63,8 @@ __all__ = [
     "schema",
     "InputError",
     "InternalError",
-    "RefineResult",
-    "RefineIterations",
-    "StripResult",
-    "ExtraKnot",
-    "SchemeResult",
-    "SchemeRule",
-    "SurfaceRule",
-    "PolygonResult",
-    "SurfaceResult",
-    "NaturalResult",
-    "NaturalLevel",
     "SUBCOMMANDS",
     "__version__",
 ]
+# The result classes, listed once in their module (the form type checkers follow).
+__all__ += _results.__all__
