@@ -71,6 +71,20 @@ pub fn check_refusal(e: &InputError) {
     );
 }
 
+/// A result whose JSON has no null (a non-finite number), or a refusal that says what is wrong.
+pub fn check_finite_or_refused<T: serde::Serialize>(out: &Result<T, InputError>) {
+    match out {
+        Ok(r) => {
+            let v = serde_json::to_value(r).expect("a result serializes");
+            assert!(
+                !v.to_string().contains("null"),
+                "a non-finite number in {v}"
+            );
+        }
+        Err(e) => check_refusal(e),
+    }
+}
+
 /// Checks a refinement of `problem`.
 pub fn check_refine(problem: &spec::RefineProblem, r: &RefineResult) {
     show(problem);
