@@ -213,7 +213,12 @@ pub fn check_strip(problem: &spec::StripProblem, s: &StripResult) {
                 .flatten()
                 .fold(0.0f64, |m, v| m.max(v.abs() * span));
             let bounds = (0..t.len())
-                .flat_map(|j| [bound_at(&problem.lower, t, j), bound_at(&problem.upper, t, j)])
+                .flat_map(|j| {
+                    [
+                        bound_at(&problem.lower, t, j),
+                        bound_at(&problem.upper, t, j),
+                    ]
+                })
                 .flatten()
                 .fold(0.0f64, |m, v| m.max(v.abs()));
             2e-7 * (scale.max(bounds).max(slopes) * 2.0)
