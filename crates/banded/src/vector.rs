@@ -56,8 +56,22 @@ pub fn norm(x: &[f64]) -> f64 {
 /// The Euclidean distance |a − b| over the common length, without overflow or underflow of
 /// the squares (see the module docs; the differences a_i − b_i themselves are rounded as
 /// usual and overflow only if they exceed `f64::MAX`).
+#[inline]
 pub fn dist(a: &[f64], b: &[f64]) -> f64 {
-    scaled_norm(a.iter().zip(b).map(|(x, y)| x - y))
+    // The common case first, without the three-range branches: when every difference is 0 or
+    // in the middle range, Blue's sum is the naive one bit for bit (module docs). NaN fails the
+    // range test and goes the long way, which propagates it.
+    let (mut sum, mut middle) = (0.0, true);
+    for (x, y) in a.iter().zip(b) {
+        let v = (x - y).abs();
+        middle &= v == 0.0 || (SMALL..=BIG).contains(&v);
+        sum += v * v;
+    }
+    if middle {
+        sum.sqrt()
+    } else {
+        scaled_norm(a.iter().zip(b).map(|(x, y)| x - y))
+    }
 }
 
 /// Blue's three-accumulator sum of squares (LAPACK `dnrm2`, Anderson 2017).
@@ -160,5 +174,28 @@ mod tests {
         let b = [-1e200, 2e200, 3.0];
         let r = dist(&a, &b);
         assert!((r / (2e200 * 5f64.sqrt()) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn dists_short_path_is_blues_sum_bit_for_bit() {
+        // Middle-range and zero differences take the naive sum; a tiny, huge or NaN difference
+        // takes Blue's three ranges. Both must equal the three-range sum of the differences.
+        let cases: [[f64; 3]; 6] = [
+            [0.3, -7.25, 0.0],
+            [1e-150, 2.0, 0.0],
+            [1e-160, 1e-155, 0.0],
+            [1e-300, 3.0, 4.0],
+            [1e200, 3e200, 1.0],
+            [0.0, f64::NAN, 1.0],
+        ];
+        for x in cases {
+            let (r, blue) = (dist(&x, &[0.0; 3]), scaled_norm(x.iter().copied()));
+            assert!(
+                r.to_bits() == blue.to_bits() || (r.is_nan() && blue.is_nan()),
+                "{x:?}"
+            );
+        }
+        // The tiny entry below the middle range counts: not lost as the naive square would be.
+        assert!(dist(&[1e-160, 0.0], &[0.0, 0.0]) == 1e-160);
     }
 }
