@@ -84,9 +84,8 @@ fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     }
 }
 
-/// Runs Algorithm 4.1 on a validated problem.
+/// Runs Algorithm 4.1 on a validated problem ([`Problem::solve`] validates it).
 pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
-    problem.validate()?;
     let q = &problem.points;
     let u = problem.data_knots_unvalidated()?;
     let e = problem.parametrization;
@@ -205,13 +204,26 @@ pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
     let m = k + 1;
     let v = exact_split_grid(u.values(), m);
     let spans = u.span_count();
-    let mut t = Vec::with_capacity(m * spans + 1);
-    for i in 0..spans {
-        let (a, b) = (v[i], v[i + 1]);
-        let step = (b - a) / m as f64;
-        t.extend((0..m).map(|j| a + j as f64 * step));
-    }
-    t.push(v[spans]);
+    let mut t = vec![0.0; m * spans + 1];
+    // Span by span in parallel chunks (`crate::par`); the last unit is the last knot alone.
+    // (Non-finite values are refused by `Knots::new` below.)
+    crate::par::fill_units(
+        &mut t,
+        m,
+        m,
+        || (),
+        |(), i, out| {
+            if i == spans {
+                out[0] = v[spans];
+                return;
+            }
+            let (a, b) = (v[i], v[i + 1]);
+            let step = (b - a) / m as f64;
+            for (j, x) in out.iter_mut().enumerate() {
+                *x = a + j as f64 * step;
+            }
+        },
+    );
     Ok(Knots::new(u.topology(), t)?)
 }
 

@@ -113,27 +113,93 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     let (n, d) = (p.len(), p.dim());
     let mut hp = vec![0.0; if data.is_some() { 0 } else { n * d }];
     let mut hp_data = vec![0.0; data.map_or(0, |v| v.len() * d)];
+    // Chunks of vertices in parallel (`crate::par`), each with the slices of Hp it writes: all
+    // of its vertices', or its data vertices'.
+    let mut chunks = Vec::new();
+    let (mut hp_rest, mut data_rest) = (&mut hp[..], &mut hp_data[..]);
+    for range in crate::par::ranges(n, crate::par::CHUNK_VERTICES) {
+        let (here, rest) = std::mem::take(&mut hp_rest).split_at_mut(if data.is_some() {
+            0
+        } else {
+            range.len() * d
+        });
+        hp_rest = rest;
+        let first_data = data.map_or(0, |v| v.partition_point(|&x| x < range.start));
+        let data_here = data.map_or(0, |v| v.partition_point(|&x| x < range.end)) - first_data;
+        let (dhere, drest) = std::mem::take(&mut data_rest).split_at_mut(data_here * d);
+        data_rest = drest;
+        chunks.push((range, here, first_data, dhere));
+    }
+    let parts = crate::par::map(chunks, |(range, hp, first_data, hp_data)| {
+        let mut out = Pass::default();
+        // Blocks of up to three coordinates per sweep (the first one also forms ‖H‖_∞).
+        let mut first = 0;
+        while first < d {
+            let width = (d - first).min(3);
+            let at = Chunk {
+                range: range.clone(),
+                first_data,
+            };
+            let (hp, hp_data) = (&mut hp[..], &mut hp_data[..]);
+            let block = match width {
+                3 => sweep::<3>(
+                    knots,
+                    p,
+                    first,
+                    center,
+                    &at,
+                    (hp, data, hp_data),
+                    first == 0,
+                ),
+                2 => sweep::<2>(
+                    knots,
+                    p,
+                    first,
+                    center,
+                    &at,
+                    (hp, data, hp_data),
+                    first == 0,
+                ),
+                _ => sweep::<1>(
+                    knots,
+                    p,
+                    first,
+                    center,
+                    &at,
+                    (hp, data, hp_data),
+                    first == 0,
+                ),
+            };
+            out.merge(&block);
+            first += width;
+        }
+        out
+    });
     let mut out = Pass::default();
-    // Blocks of up to three coordinates per sweep (the first one also forms ‖H‖_∞).
-    let mut first = 0;
-    while first < d {
-        let width = (d - first).min(3);
-        let (hp, hp_data) = (&mut hp[..], &mut hp_data[..]);
-        let block = match width {
-            3 => sweep::<3>(knots, p, first, center, (hp, data, hp_data), first == 0),
-            2 => sweep::<2>(knots, p, first, center, (hp, data, hp_data), first == 0),
-            _ => sweep::<1>(knots, p, first, center, (hp, data, hp_data), first == 0),
-        };
-        out.free_stat = out.free_stat.max(block.free_stat);
-        out.energy += block.energy;
-        out.h_norm = out.h_norm.max(block.h_norm);
-        out.extent = out.extent.max(block.extent);
-        out.magnitude = out.magnitude.max(block.magnitude);
-        first += width;
+    for part in &parts {
+        out.merge(part);
     }
     out.hp = hp;
     out.hp_data = hp_data;
     out
+}
+
+impl Pass {
+    /// Folds another block's or chunk's sums and maxima into this one.
+    fn merge(&mut self, other: &Pass) {
+        self.free_stat = self.free_stat.max(other.free_stat);
+        self.energy += other.energy;
+        self.h_norm = self.h_norm.max(other.h_norm);
+        self.extent = self.extent.max(other.extent);
+        self.magnitude = self.magnitude.max(other.magnitude);
+    }
+}
+
+/// The vertices one sweep covers, and the index (among the data vertices) of its first data
+/// vertex; its Hp slices start there.
+struct Chunk {
+    range: std::ops::Range<usize>,
+    first_data: usize,
 }
 
 /// The reciprocals at vertex i (module docs of [`pass`]): 1/h_{i−1}, 1/h_i, h_{i−1} + h_i and
@@ -172,6 +238,7 @@ fn sweep<const D: usize>(
     p: &Points,
     first: usize,
     center: &[f64],
+    chunk: &Chunk,
     (hp, data, hp_data): HpOut<'_>,
     norm: bool,
 ) -> Pass {
@@ -183,6 +250,12 @@ fn sweep<const D: usize>(
     let t = knots.values();
     let spans = knots.span_count();
     let next = |i: usize| if i + 1 == n { 0 } else { i + 1 };
+    // The span before vertex i (none at the start of an open curve).
+    let before = |i: usize| match (i, closed) {
+        (0, true) => Some(n - 1),
+        (0, false) => None,
+        _ => Some(i - 1),
+    };
     let recip = |j: usize| {
         if j < spans {
             1.0 / (t[j + 1] - t[j])
@@ -211,6 +284,7 @@ fn sweep<const D: usize>(
             iw,
         }
     };
+    let geo_at = |i: usize| geo(i, before(i).map_or(0.0, recip));
     let at = |j: usize| -> [f64; D] { std::array::from_fn(|c| x[j * d + first + c]) };
     // s_j for span j (0 where it does not exist).
     let slope = |j: usize, ih: f64| -> [f64; D] {
@@ -220,27 +294,26 @@ fn sweep<const D: usize>(
     let second = |g: &Geo, left: &[f64; D], right: &[f64; D]| -> [f64; D] {
         std::array::from_fn(|c| (right[c] - left[c]) * g.iw)
     };
-    let g_last = geo(n - 1, if n >= 2 { recip(n - 2) } else { 0.0 });
-    let g0 = geo(0, if closed { recip(n - 1) } else { 0.0 });
-    let s_last = slope(n - 1, g_last.ihr);
-    let c0 = second(&g0, &s_last, &slope(0, g0.ihr));
-    let mut cp = if closed {
-        second(&g_last, &slope(n - 2, g_last.ihl), &s_last)
-    } else {
-        [0.0; D]
+    // c_i at vertex i from scratch: the same operations the loop below carries from vertex to
+    // vertex, so a chunk starts exactly where the loop before it would have been.
+    let second_at = |i: usize| -> [f64; D] {
+        let g = geo_at(i);
+        let left = before(i).map_or([0.0; D], |j| slope(j, recip(j)));
+        second(&g, &left, &slope(i, g.ihr))
     };
-    let (mut g, mut cc, mut s) = (g0, c0, slope(0, g0.ihr));
-    let mut row_prev = if closed {
-        g_last.norm_terms()
-    } else {
-        [0.0; 3]
-    };
-    let mut row = g0.norm_terms();
+    let start = chunk.range.start;
+    let (g0, c0) = (geo_at(0), second_at(0));
+    let mut g = geo_at(start);
+    let mut cc = second_at(start);
+    let mut s = slope(start, g.ihr);
+    let mut cp = before(start).map_or([0.0; D], second_at);
+    let mut row_prev = before(start).map_or([0.0; 3], |j| geo_at(j).norm_terms());
+    let mut row = g.norm_terms();
     let c_mid: [f64; D] = std::array::from_fn(|c| center[first + c]);
     let mut out = Pass::default();
-    // The next data vertex (when Hp is kept only there).
-    let mut next_data = 0;
-    for i in 0..n {
+    // The next data vertex (when Hp is kept only there), and where this chunk's Hp starts.
+    let mut next_data = chunk.first_data;
+    for i in chunk.range.clone() {
         let i1 = next(i);
         let (g1, cn) = if i1 == 0 {
             (g0, c0)
@@ -255,9 +328,13 @@ fn sweep<const D: usize>(
         let v: [f64; D] =
             std::array::from_fn(|c| 2.0 * ((cn[c] - cc[c]) * g.ihr - (cc[c] - cp[c]) * g.ihl));
         match data {
-            None => hp[i * d + first..i * d + first + D].copy_from_slice(&v),
+            None => {
+                let o = (i - start) * d + first;
+                hp[o..o + D].copy_from_slice(&v);
+            }
             Some(dv) if dv.get(next_data) == Some(&i) => {
-                hp_data[next_data * d + first..next_data * d + first + D].copy_from_slice(&v);
+                let o = (next_data - chunk.first_data) * d + first;
+                hp_data[o..o + D].copy_from_slice(&v);
                 next_data += 1;
             }
             Some(_) => {
@@ -442,6 +519,54 @@ pub(crate) fn certify(
 mod tests {
     use divdiff::{Knots, Points, Topology};
     use proptest::prelude::*;
+
+    /// Across chunk boundaries (`crate::par`: each chunk restarts the sweep's carried state), the
+    /// pass is still 2 × divdiff's jumps at every vertex and E (2.1) — open and closed, on
+    /// jittered knots, N a few chunks long and not a multiple of the chunk.
+    #[test]
+    fn the_pass_is_the_jumps_across_chunks() {
+        let n = 3 * crate::par::CHUNK_VERTICES + 123;
+        let mut state: u64 = 7;
+        let mut unif = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for topo in [Topology::Open, Topology::Closed] {
+            let spans = if topo == Topology::Closed { n } else { n - 1 };
+            let mut t = vec![0.0];
+            for j in 0..spans {
+                t.push(t[j] + 0.1 + unif());
+            }
+            let kn = Knots::new(topo, t).unwrap();
+            let x: Vec<f64> = (0..2 * n).map(|_| unif() - 0.5).collect();
+            let p = Points::new(2, x).unwrap();
+            let pass = super::pass(&kn, &p, &[0.0, 0.0], None);
+            let jmp = divdiff::jumps(&kn, &p).unwrap();
+            let scale = pass.hp.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+            for (j, (a, b)) in pass.hp.iter().zip(jmp.coords()).enumerate() {
+                assert!(
+                    (a - 2.0 * b).abs() <= 1e-12 * scale,
+                    "{topo:?} at {j}: {a} vs 2 × {b}"
+                );
+            }
+            let e = energy::energy(&kn, &p).unwrap();
+            assert!(
+                (pass.energy - e).abs() <= 1e-12 * e,
+                "{} vs {e}",
+                pass.energy
+            );
+            // The data-vertex form keeps the same values at the data vertices.
+            let data: Vec<usize> = (0..n).step_by(8).collect();
+            let compact = super::pass(&kn, &p, &[0.0, 0.0], Some(&data));
+            let kept: Vec<f64> = data
+                .iter()
+                .flat_map(|&v| pass.hp[2 * v..2 * v + 2].to_vec())
+                .collect();
+            assert_eq!(compact.hp_data, kept);
+        }
+    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]

@@ -423,13 +423,22 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
     }
     let t = knots.values();
     let k = stride - 1;
-    let mut work = SpanWork::new(k);
-    // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`).
-    let mut span = vec![[0.0; 7]; spans];
-    for (i, sp) in span.iter_mut().enumerate() {
-        let a = i * stride;
-        work.factor(t, a).map_err(|j| singular(a + 1 + j))?;
-        *sp = span_summary(&work.rows, &work.g, &work.h);
+    // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`),
+    // spans in parallel chunks (`crate::par`), each with its own span buffer.
+    let chunks = crate::par::ranges(spans, crate::par::units_per_chunk(stride));
+    let summaries = crate::par::map(chunks, |range| {
+        let mut work = SpanWork::new(k);
+        let mut out = Vec::with_capacity(range.len());
+        for i in range {
+            let a = i * stride;
+            work.factor(t, a).map_err(|j| a + 1 + j)?;
+            out.push(span_summary(&work.rows, &work.g, &work.h));
+        }
+        Ok::<_, usize>(out)
+    });
+    let mut span = Vec::with_capacity(spans);
+    for part in summaries {
+        span.extend(part.map_err(singular)?);
     }
     let data_row = |i: usize| vertex_row(t, i * stride, nv, closed);
     let first = usize::from(!closed);
@@ -458,31 +467,35 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
             0.0
         }
     };
-    // Pass 2: one span (its data vertex, then its free vertices) per chunk of the output.
-    let mut failed = None;
-    let p = Points::from_chunks(d, nv, stride, |i, x| {
-        if i == spans {
-            x.copy_from_slice(q.point(n - 1));
-            return;
-        }
-        let a = i * stride;
-        x[..d].copy_from_slice(q.point(i));
-        if let Err(j) = work.factor(t, a) {
-            failed.get_or_insert(a + 1 + j);
-            return;
-        }
-        let right = if i + 1 == n { 0 } else { i + 1 };
-        let mu_row = data_row(i)[2];
-        let nu_row = data_row(right)[0];
-        let (qa, qb) = (q.point(i), q.point(right));
-        work.factors().solve(&mut x[d..], qa, qb, d, |c| {
-            (mu_row * srow(i, c), nu_row * srow(right, c))
-        });
-    })?;
-    match failed {
-        Some(v) => Err(singular(v)),
-        None => Ok(p),
-    }
+    // Pass 2: one span (its data vertex, then its free vertices) per unit of the output, in
+    // parallel chunks. (Pass 1 factored every span with the same arithmetic, so a pivot cannot
+    // fail here; if it did, the span's NaN would be refused as a non-finite point.)
+    let p = crate::par::points_by_units(
+        d,
+        nv,
+        stride,
+        || SpanWork::new(k),
+        |work, i, x| {
+            if i == spans {
+                x.copy_from_slice(q.point(n - 1));
+                return;
+            }
+            let a = i * stride;
+            x[..d].copy_from_slice(q.point(i));
+            if work.factor(t, a).is_err() {
+                x[d..].fill(f64::NAN);
+                return;
+            }
+            let right = if i + 1 == n { 0 } else { i + 1 };
+            let mu_row = data_row(i)[2];
+            let nu_row = data_row(right)[0];
+            let (qa, qb) = (q.point(i), q.point(right));
+            work.factors().solve(&mut x[d..], qa, qb, d, |c| {
+                (mu_row * srow(i, c), nu_row * srow(right, c))
+            });
+        },
+    );
+    Ok(p?)
 }
 
 /// One span's α-rows and factors, in buffers of the span's k free vertices reused span after

@@ -122,6 +122,7 @@ mod linear;
 mod operator;
 mod options;
 mod paper;
+mod par;
 mod problem;
 mod progress;
 mod slots;

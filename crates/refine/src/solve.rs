@@ -20,6 +20,11 @@ impl Problem {
         // convergence relative to absolute coordinates, so data far from the origin (relative
         // to their extent) stopped early with a wrong active set (tests/invariance.rs).
         self.validate()?;
+        // Interpolation with natural ends is a direct solve (closed form or span condensation,
+        // `linear`), with no convergence test to protect: solved where the data are.
+        if self.constraint == Constraint::Interpolate && !self.has_derivative_constraints() {
+            return self.accept(algorithm::run(self)?);
+        }
         let (n, d) = (self.points.len(), self.points.dim());
         let mut centroid = vec![0.0; d];
         for x in self.points.iter() {
@@ -41,6 +46,8 @@ impl Problem {
         for kind in self.kinds() {
             kind.translate(&offset, &mut centred);
         }
+        // (Centring rounds: points distinct before may coincide after; refused, not solved.)
+        centred.validate()?;
         let mut r = algorithm::run(&centred)?;
         for x in r.points.coords_mut().chunks_exact_mut(d) {
             for (x, c) in x.iter_mut().zip(&centroid) {

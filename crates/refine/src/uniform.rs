@@ -130,12 +130,9 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
         })
         .collect();
     let total = m * spans + usize::from(!closed);
-    let mut mu = vec![0.0; d];
-    let mut nu = vec![0.0; d];
-    let mut dy = vec![0.0; d];
-    // One span (its data vertex and free vertices) per chunk; an open curve's last data point
-    // is the last chunk.
-    Ok(Points::from_chunks(d, total, m, |i, buf| {
+    // One span (its data vertex and free vertices) per unit; an open curve's last data point
+    // is the last unit. Spans in parallel chunks (`crate::par`).
+    let span = |(mu, nu, dy): &mut (Vec<f64>, Vec<f64>, Vec<f64>), i: usize, buf: &mut [f64]| {
         if i == spans {
             buf.copy_from_slice(q.point(n - 1));
             return;
@@ -149,8 +146,8 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
             dy[c] = yb[c] - ya[c];
         }
         match d {
-            2 => fill::<2>(buf, ya, &dy, &mu, &nu, &w),
-            3 => fill::<3>(buf, ya, &dy, &mu, &nu, &w),
+            2 => fill::<2>(buf, ya, dy, mu, nu, &w),
+            3 => fill::<3>(buf, ya, dy, mu, nu, &w),
             _ => {
                 buf[..d].copy_from_slice(ya);
                 for (o, wl) in buf[d..].chunks_exact_mut(d).zip(&w) {
@@ -160,7 +157,9 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                 }
             }
         }
-    })?)
+    };
+    let scratch = || (vec![0.0; d], vec![0.0; d], vec![0.0; d]);
+    Ok(crate::par::points_by_units(d, total, m, scratch, span)?)
 }
 
 /// One span's vertices (the data vertex, then the free ones) for fixed dimension D (see the

@@ -1,0 +1,107 @@
+//! Data parallelism of the O(N) passes over the refined vertices: the closed-form and streaming
+//! interpolations ([`crate::uniform`], [`crate::fast`]), the k-level split of the knots and the
+//! certificate's pass ([`crate::certify`]).
+//!
+//! Work is cut into chunks of a fixed number of units (spans or vertices, about
+//! [`CHUNK_VERTICES`] vertices each) that do not depend on the number of threads, each chunk is
+//! computed exactly as the sequential loop would compute it, and per-chunk results (sums,
+//! maxima, the first non-finite value) are combined in chunk order. So every result is the same
+//! bit for bit on one thread or many (tested: `tests/threads.rs` runs a solve in a one-thread pool
+//! and in the default pool).
+//!
+//! The chunks run on rayon's pool: the global one (as many threads as cores, or
+//! `RAYON_NUM_THREADS`), or the pool a caller installs (the Python package's `refine_many`
+//! solves many problems on its pool; a solve inside it then splits its chunks over the same
+//! workers instead of oversubscribing). On wasm32 (no threads) the chunks run in order on the
+//! calling thread.
+//!
+//! Why: at N = 8·10⁵ vertices (n = 10⁵, k = 7) the certified interpolation is a few passes over
+//! ~20 MB of fresh memory — writing the points and the knots, reading them for the certificate —
+//! and bound by memory traffic and page faults, which a second core shares.
+
+use std::ops::Range;
+
+use divdiff::Points;
+
+/// About how many vertices one chunk covers: 16 Ki vertices of d = 2 are 256 KiB of output,
+/// a core's L2 share, and at N = 8·10⁵ that is ~50 chunks, enough to balance two to eight
+/// threads; below it a problem runs as one chunk (no pool round trip for small solves).
+pub(crate) const CHUNK_VERTICES: usize = 1 << 14;
+
+/// `f` applied to each item, in parallel, results in the items' order.
+pub(crate) fn map<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + Send) -> Vec<T> {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        use rayon::prelude::*;
+        if items.len() > 1 {
+            return items.into_par_iter().map(f).collect();
+        }
+    }
+    items.into_iter().map(f).collect()
+}
+
+/// The ranges of `len` units in chunks of `per_chunk` units (at least one unit each).
+pub(crate) fn ranges(len: usize, per_chunk: usize) -> Vec<Range<usize>> {
+    let per_chunk = per_chunk.max(1);
+    (0..len.div_ceil(per_chunk))
+        .map(|c| c * per_chunk..((c + 1) * per_chunk).min(len))
+        .collect()
+}
+
+/// Units per chunk for units of `vertices_per_unit` vertices each.
+pub(crate) fn units_per_chunk(vertices_per_unit: usize) -> usize {
+    (CHUNK_VERTICES / vertices_per_unit.max(1)).max(1)
+}
+
+/// Fills `out` in units of `unit_len` values (the last unit may be shorter):
+/// `fill(state, unit, values)` writes unit `unit`, with one `state` per chunk from `init`
+/// (scratch buffers reused unit after unit), chunks of about [`CHUNK_VERTICES`] units' worth of
+/// `vertices_per_unit` in parallel. Returns the position of the first non-finite value written,
+/// found while each chunk is in cache.
+pub(crate) fn fill_units<S>(
+    out: &mut [f64],
+    unit_len: usize,
+    vertices_per_unit: usize,
+    init: impl Fn() -> S + Sync + Send,
+    fill: impl Fn(&mut S, usize, &mut [f64]) + Sync + Send,
+) -> Option<usize> {
+    let unit_len = unit_len.max(1);
+    let per_chunk = units_per_chunk(vertices_per_unit);
+    let chunk_len = per_chunk * unit_len;
+    let chunks: Vec<(usize, &mut [f64])> = out.chunks_mut(chunk_len).enumerate().collect();
+    let bad = map(chunks, |(c, out)| {
+        let mut state = init();
+        for (j, unit) in out.chunks_mut(unit_len).enumerate() {
+            fill(&mut state, c * per_chunk + j, unit);
+        }
+        // (A branch-free scan first: the position is wanted only on failure.)
+        let bad = out.iter().fold(false, |b, x| b | !x.is_finite());
+        bad.then(|| out.iter().position(|x| !x.is_finite()))
+            .flatten()
+            .map(|k| c * chunk_len + k)
+    });
+    bad.into_iter().flatten().next()
+}
+
+/// Points of `dim` coordinates written in units of `per_unit` points by [`fill_units`], in
+/// place into the result (zeroed pages from the allocator, written once).
+///
+/// # Errors
+/// [`divdiff::Error::NonFinite`] naming the first point with a non-finite coordinate.
+pub(crate) fn points_by_units<S>(
+    dim: usize,
+    len: usize,
+    per_unit: usize,
+    init: impl Fn() -> S + Sync + Send,
+    fill: impl Fn(&mut S, usize, &mut [f64]) + Sync + Send,
+) -> Result<Points, divdiff::Error> {
+    let dim = dim.max(1);
+    let mut points = Points::zeros(len, dim);
+    match fill_units(points.coords_mut(), per_unit * dim, per_unit, init, fill) {
+        Some(k) => Err(divdiff::Error::NonFinite {
+            field: "points",
+            index: k / dim,
+        }),
+        None => Ok(points),
+    }
+}
