@@ -40,6 +40,22 @@ pub(crate) fn map<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + S
     items.into_iter().map(f).collect()
 }
 
+/// Runs `f` on a thread of the pool and waits for it: a solve whose passes run in parallel
+/// then forks each pass from a worker, which takes part in it, instead of waking the pool from
+/// outside and sleeping once per pass (measured at N = 8·10⁵: 20–22 → 17 ms, median of 40). A
+/// call already on the pool (the Python package's `refine_many`) runs `f` in place; on wasm32
+/// `f` runs on the calling thread.
+pub(crate) fn on_pool<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        rayon::scope(|_| f())
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        f()
+    }
+}
+
 /// The ranges of `len` units in chunks of `per_chunk` units (at least one unit each).
 pub(crate) fn ranges(len: usize, per_chunk: usize) -> Vec<Range<usize>> {
     let per_chunk = per_chunk.max(1);

@@ -20,6 +20,17 @@ impl Problem {
         // convergence relative to absolute coordinates, so data far from the origin (relative
         // to their extent) stopped early with a wrong active set (tests/invariance.rs).
         self.validate()?;
+        // The O(N) passes are parallel (`par`): a solve spanning several chunks runs from the
+        // pool.
+        if self.points.len().saturating_mul(self.k + 1) > crate::par::CHUNK_VERTICES {
+            crate::par::on_pool(|| self.solve_validated())
+        } else {
+            self.solve_validated()
+        }
+    }
+
+    /// [`Problem::solve`] of a validated problem.
+    fn solve_validated(&self) -> Result<Refinement, crate::Error> {
         // Interpolation with natural ends is a direct solve (closed form or span condensation,
         // `linear`), with no convergence test to protect: solved where the data are.
         if self.constraint == Constraint::Interpolate && !self.has_derivative_constraints() {
