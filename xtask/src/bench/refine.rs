@@ -415,11 +415,12 @@ pub fn hard(opts: Opts) -> anyhow::Result<()> {
     std::fs::create_dir_all(&dir)?;
     println!("hard: interpolation, closed noisy star, d = 2, k = {k}, centripetal; Problem::solve (certified); medians of {reps}");
     println!(
-        "  {:>8} {:>9} {:>10} {:>10} {:>10} {:>12} {:>14} {:>12}",
+        "  {:>8} {:>9} {:>10} {:>10} {:>12} {:>10} {:>12} {:>14} {:>12}",
         "n",
         "N",
         "solve ms",
         "ns/vertex",
+        "1 thread ms",
         "scipy ms",
         "scipy/solve",
         "3 updates ms",
@@ -447,6 +448,10 @@ pub fn hard(opts: Opts) -> anyhow::Result<()> {
             .with_k(k)
             .with_knot_iterations(0);
         let one = time_median(reps, || problem.solve().expect("interpolation solves"));
+        // The same solve on one thread: what the parallel passes (refine's `par`) give.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+        let single =
+            pool.install(|| time_median(reps, || problem.solve().expect("interpolation solves")));
         let updates = problem.clone().with_knot_iterations(3);
         let three = time_median(reps.min(3), || {
             updates
@@ -456,11 +461,12 @@ pub fn hard(opts: Opts) -> anyhow::Result<()> {
         let scipy = super::cli::peer(&file, reps);
         let nv = (k + 1) * n;
         println!(
-            "  {:>8} {:>9} {:>10.2} {:>10.1} {:>10} {:>12} {:>14.2} {:>12.2}",
+            "  {:>8} {:>9} {:>10.2} {:>10.1} {:>12.2} {:>10} {:>12} {:>14.2} {:>12.2}",
             n,
             nv,
             ms(one),
             one.as_secs_f64() * 1e9 / nv as f64,
+            ms(single),
             scipy.map_or("-".into(), |s| format!("{:.2}", s * 1e3)),
             scipy.map_or("-".into(), |s| format!("{:.2}x", s / one.as_secs_f64())),
             ms(three),
