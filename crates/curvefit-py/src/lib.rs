@@ -89,6 +89,14 @@ fn parse<'py, P: serde::de::DeserializeOwned>(
             InputError::new("problem", "must be a mapping of the problem's fields")
         }));
     }
+    // Untracked first: the field path is wanted only for an error, and tracking it was a
+    // quarter of a 10^5-point interpolation called from Python. A failure is read again with the
+    // path tracked (the same reader over the same objects — sequences and mappings, which
+    // reading does not consume — so the same error).
+    ctx.trailing.set(None);
+    if let Ok(p) = P::deserialize(de::PyDe::new(obj, ctx)) {
+        return Ok(p);
+    }
     ctx.trailing.set(None);
     match serde_path_to_error::deserialize(de::PyDe::new(obj, ctx)) {
         Ok(p) => Ok(p),

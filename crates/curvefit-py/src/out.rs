@@ -48,7 +48,12 @@ fn table<'py>(py: Python<'py>, rows: Vec<Vec<f64>>) -> PyResult<Bound<'py, PyAny
     let width = rows.first().map_or(0, Vec::len);
     if rows.iter().all(|r| r.len() == width) {
         let n = rows.len();
-        let flat: Vec<f64> = rows.into_iter().flatten().collect();
+        // (Row by row into one allocation: `flatten().collect()` was 15 % of a 10^5-point
+        // interpolation called from Python.)
+        let mut flat = Vec::with_capacity(n * width);
+        for r in &rows {
+            flat.extend_from_slice(r);
+        }
         return matrix(py, flat, n, width);
     }
     let list = PyList::empty(py);
