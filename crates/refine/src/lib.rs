@@ -87,6 +87,15 @@
 //! energy excess over the optimum). Balls that share a common point make the constant curve optimal (E = 0); it is
 //! returned directly.
 //!
+//! # Threads
+//!
+//! The O(N) passes over the refined vertices — the closed form and span condensation of
+//! interpolation, the k-level split, the certificate — run in chunks on rayon's pool (one thread
+//! per core, `RAYON_NUM_THREADS` to change it, or the pool a caller installs); a solve that spans
+//! several chunks runs on the pool. The chunks are fixed by the problem's size, not by the
+//! number of threads, so every result is the same to the last bit on any number of threads
+//! (`tests/threads.rs`). On wasm32 everything runs on the calling thread.
+//!
 //! # Example
 //!
 //! ```
