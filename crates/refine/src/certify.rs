@@ -117,58 +117,35 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     // of its vertices', or its data vertices'.
     let mut chunks = Vec::new();
     let (mut hp_rest, mut data_rest) = (&mut hp[..], &mut hp_data[..]);
+    let mut first_data = 0;
     for range in crate::par::ranges(n, crate::par::CHUNK_VERTICES) {
-        let (here, rest) = std::mem::take(&mut hp_rest).split_at_mut(if data.is_some() {
-            0
-        } else {
-            range.len() * d
-        });
+        let own = if data.is_some() { 0 } else { range.len() * d };
+        let (here, rest) = std::mem::take(&mut hp_rest).split_at_mut(own);
         hp_rest = rest;
-        let first_data = data.map_or(0, |v| v.partition_point(|&x| x < range.start));
-        let data_here = data.map_or(0, |v| v.partition_point(|&x| x < range.end)) - first_data;
-        let (dhere, drest) = std::mem::take(&mut data_rest).split_at_mut(data_here * d);
+        let end_data = data.map_or(0, |v| v.partition_point(|&x| x < range.end));
+        let (dhere, drest) =
+            std::mem::take(&mut data_rest).split_at_mut((end_data - first_data) * d);
         data_rest = drest;
-        chunks.push((range, here, first_data, dhere));
+        chunks.push((Chunk { range, first_data }, here, dhere));
+        first_data = end_data;
     }
-    let parts = crate::par::map(chunks, |(range, hp, first_data, hp_data)| {
+    let input = Input {
+        knots,
+        p,
+        center,
+        data,
+    };
+    let parts = crate::par::map(chunks, |(chunk, hp, hp_data)| {
         let mut out = Pass::default();
         // Blocks of up to three coordinates per sweep (the first one also forms ‖H‖_∞).
         let mut first = 0;
         while first < d {
             let width = (d - first).min(3);
-            let at = Chunk {
-                range: range.clone(),
-                first_data,
-            };
             let (hp, hp_data) = (&mut hp[..], &mut hp_data[..]);
             let block = match width {
-                3 => sweep::<3>(
-                    knots,
-                    p,
-                    first,
-                    center,
-                    &at,
-                    (hp, data, hp_data),
-                    first == 0,
-                ),
-                2 => sweep::<2>(
-                    knots,
-                    p,
-                    first,
-                    center,
-                    &at,
-                    (hp, data, hp_data),
-                    first == 0,
-                ),
-                _ => sweep::<1>(
-                    knots,
-                    p,
-                    first,
-                    center,
-                    &at,
-                    (hp, data, hp_data),
-                    first == 0,
-                ),
+                3 => sweep::<3>(&input, &chunk, first, (hp, hp_data)),
+                2 => sweep::<2>(&input, &chunk, first, (hp, hp_data)),
+                _ => sweep::<1>(&input, &chunk, first, (hp, hp_data)),
             };
             out.merge(&block);
             first += width;
@@ -193,6 +170,15 @@ impl Pass {
         self.extent = self.extent.max(other.extent);
         self.magnitude = self.magnitude.max(other.magnitude);
     }
+}
+
+/// What every sweep of a pass reads: the knots, the points, the centre of the extent, and the
+/// data vertices when Hp is kept only there.
+struct Input<'a> {
+    knots: &'a Knots,
+    p: &'a Points,
+    center: &'a [f64],
+    data: Option<&'a [usize]>,
 }
 
 /// The vertices one sweep covers, and the index (among the data vertices) of its first data
@@ -239,17 +225,20 @@ fn raise(m: &mut f64, v: f64) {
 }
 
 /// Where a sweep writes Hp: every vertex's, or (given the data vertices) the data vertices'.
-type HpOut<'a> = (&'a mut [f64], Option<&'a [usize]>, &'a mut [f64]);
+type HpOut<'a> = (&'a mut [f64], &'a mut [f64]);
 
-/// [`pass`] over the coordinates `first .. first + D`; ‖H‖_∞ only when `norm`.
+/// [`pass`] over `chunk`'s vertices and the coordinates `first .. first + D`; ‖H‖_∞ with the first
+/// block only.
 fn sweep<const D: usize>(
-    knots: &Knots,
-    p: &Points,
-    first: usize,
-    center: &[f64],
+    &Input {
+        knots,
+        p,
+        center,
+        data,
+    }: &Input<'_>,
     chunk: &Chunk,
-    (hp, data, hp_data): HpOut<'_>,
-    norm: bool,
+    first: usize,
+    (hp, hp_data): HpOut<'_>,
 ) -> Pass {
     let (n, d) = (p.len(), p.dim());
     let x = p.coords();
@@ -357,7 +346,7 @@ fn sweep<const D: usize>(
             raise(&mut out.extent, (xi[c] - c_mid[c]).abs());
             raise(&mut out.magnitude, xi[c].abs());
         }
-        if norm {
+        if first == 0 {
             let row_next = if i1 == 0 && !closed {
                 [0.0; 3]
             } else {
