@@ -210,13 +210,16 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         );
         (cert.kkt_residual, (cert, mult))
     };
+    let setting = working_set::Setting {
+        knots: fp.knots,
+        stencil: &stencil,
+        q: fp.q,
+        sets: &sets,
+        stride: fp.stride,
+        conic: &opts,
+    };
     let sol = working_set::solve(
-        fp.knots,
-        &stencil,
-        fp.q,
-        &sets,
-        fp.stride,
-        &opts,
+        &setting,
         &fp.options.working_set,
         fp.warm,
         &mut judge,

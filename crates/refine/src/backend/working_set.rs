@@ -143,6 +143,19 @@ pub(crate) type Certify<'c, C> = &'c mut dyn FnMut(&Points, &[Vec<f64>]) -> (f64
 /// (filling in the near and violated ones).
 type Judge<'j> = &'j mut dyn FnMut(&Points, &mut Vec<(usize, f64)>) -> bool;
 
+/// The fixed-knot data-vertex problem the working set solves: the knots and their stencil, the
+/// data and each data point's set (`None` for no constraint), attached at the vertices 0,
+/// stride, 2·stride, …, and the cone solver's options.
+#[derive(Clone, Copy)]
+pub(crate) struct Setting<'a> {
+    pub knots: &'a Knots,
+    pub stencil: &'a Stencil,
+    pub q: &'a Points,
+    pub sets: &'a [Option<PointSet>],
+    pub stride: usize,
+    pub conic: &'a conic::Options,
+}
+
 /// Solves the data-vertex problem (each data point i in `sets[i]`, `None` for no constraint)
 /// at the data vertices 0, stride, 2·stride, … of `knots` by the working-set method, first from
 /// `warm` (the previous knot iteration's answer) when given ([`polish_from_warm`]). An
@@ -153,14 +166,8 @@ type Judge<'j> = &'j mut dyn FnMut(&Points, &mut Vec<(usize, f64)>) -> bool;
 /// [`Error::Energy`] if a factorization fails; [`Error::NotConverged`] with the best certificate
 /// when the last round (all constraints) does not reach `conic.tolerance`'s neighbourhood
 /// (its certificate above 1e-6: the caller certifies anything better independently).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve<C>(
-    knots: &Knots,
-    stencil: &Stencil,
-    q: &Points,
-    sets: &[Option<PointSet>],
-    stride: usize,
-    conic: &conic::Options,
+    setting: &Setting<'_>,
     options: &WorkingSetOptions,
     warm: Option<(&Points, &[Vec<f64>])>,
     certify: Certify<'_, C>,
@@ -169,12 +176,11 @@ pub(crate) fn solve<C>(
     progress: Option<&crate::Observer>,
 ) -> Result<WorkingSetSolution<C>, Error> {
     if let Some(warm) = warm {
-        if let Some(sol) = polish_from_warm(
-            knots, stencil, q, sets, stride, conic, warm, certify, accept,
-        )? {
+        if let Some(sol) = polish_from_warm(setting, warm, certify, accept)? {
             return Ok(sol);
         }
     }
+    let (q, sets, stride) = (setting.q, setting.sets, setting.stride);
     // Otherwise the constraints active in the previous answer (a positive multiplier) start W.
     let active: Option<Vec<bool>> =
         warm.map(|(_, m)| m.iter().map(|w| w.iter().any(|&w| w > 0.0)).collect());
@@ -189,9 +195,7 @@ pub(crate) fn solve<C>(
     } else {
         (n / options.start_points).clamp(1, options.start_step)
     };
-    solve_from(
-        knots, stencil, q, sets, stride, conic, options, step, start, certify, target, progress,
-    )
+    solve_from(setting, options, step, start, certify, target, progress)
 }
 
 /// The knot iterations of Algorithm 4.1 move the knots a little and the active set rarely: the
@@ -201,14 +205,15 @@ pub(crate) fn solve<C>(
 /// `certify` accepts it (≤ `accept`) — a few banded factorizations instead of an interior-point
 /// solve from the centre. Anything else (a polytope, a point without a set, a polish that does
 /// not get there) returns `None` and the method runs as usual.
-#[allow(clippy::too_many_arguments)]
 fn polish_from_warm<C>(
-    knots: &Knots,
-    stencil: &Stencil,
-    q: &Points,
-    sets: &[Option<PointSet>],
-    stride: usize,
-    conic_opts: &conic::Options,
+    &Setting {
+        knots,
+        stencil,
+        q,
+        sets,
+        stride,
+        conic: conic_opts,
+    }: &Setting<'_>,
     (points, wmult): (&Points, &[Vec<f64>]),
     certify: Certify<'_, C>,
     accept: f64,
@@ -341,14 +346,15 @@ struct Polished<C> {
 
 /// [`solve`] with W started from every `step`-th constraint (1: all, a single round) and the
 /// ones marked in `start`.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_from<C>(
-    knots: &Knots,
-    stencil: &Stencil,
-    q: &Points,
-    sets: &[Option<PointSet>],
-    stride: usize,
-    conic_opts: &conic::Options,
+    &Setting {
+        knots,
+        stencil,
+        q,
+        sets,
+        stride,
+        conic: conic_opts,
+    }: &Setting<'_>,
     options: &WorkingSetOptions,
     step: usize,
     start: Option<&[bool]>,
@@ -705,7 +711,7 @@ mod tests {
     use proptest::prelude::*;
 
     use super::super::condensed::{Face, PointSet};
-    use super::{solve, solve_from, WorkingSetOptions, POLISH_ROUNDS};
+    use super::{solve, solve_from, Setting, WorkingSetOptions, POLISH_ROUNDS};
     use crate::certify::{certify, Certificate};
     use crate::conic_problem::{ConicProblem, ConvexSet};
     use crate::fast::{interpolate_condensed as interpolate, Condensation};
@@ -783,13 +789,16 @@ mod tests {
     ) -> (Points, Certificate) {
         let stencil = Stencil::new(kn);
         let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, q, m, constraint, p, mult);
-        let sol = solve_from(
-            kn,
-            &stencil,
+        let setting = Setting {
+            knots: kn,
+            stencil: &stencil,
             q,
             sets,
-            m,
-            &conic::Options::default(),
+            stride: m,
+            conic: &conic::Options::default(),
+        };
+        let sol = solve_from(
+            &setting,
             &WorkingSetOptions::default(),
             step,
             start,
@@ -1072,13 +1081,16 @@ mod tests {
         let solve_on = |kn: &Knots, warm: Option<(&Points, &[Vec<f64>])>| {
             let stencil = Stencil::new(kn);
             let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, &q, m, &constraint, p, mult);
+            let setting = Setting {
+                knots: kn,
+                stencil: &stencil,
+                q: &q,
+                sets: &sets,
+                stride: m,
+                conic: &conic::Options::default(),
+            };
             solve(
-                kn,
-                &stencil,
-                &q,
-                &sets,
-                m,
-                &conic::Options::default(),
+                &setting,
                 &WorkingSetOptions::default(),
                 warm,
                 &mut judge,
