@@ -103,17 +103,7 @@ pub fn read_json<P: serde::de::DeserializeOwned>(
     crate::spec::not_an_object(prefix.iter().copied().find(|b| !b.is_ascii_whitespace()))?;
     let end = |e: serde_json::Error| InputError::new("problem", format!("malformed JSON: {e}"));
     let result = if prefix.len() <= READ_WHOLE_BYTES {
-        // Untracked first: the field path is wanted only for an error, and tracking it costs
-        // about a third of parsing 10^5 points. A failed parse is repeated with the path
-        // tracked (the same deserializer, so the same error) to name the field.
-        if let Ok(p) = serde_json::from_slice::<P>(&prefix) {
-            return Ok(p);
-        }
-        let mut de = serde_json::Deserializer::from_slice(&prefix);
-        crate::spec::from_deserializer(&mut de).and_then(|p| {
-            de.end().map_err(end)?;
-            Ok(p)
-        })
+        crate::spec::from_json_bytes(&prefix)
     } else {
         let rest = std::io::Cursor::new(&prefix[..]).chain(limited);
         let mut de =
