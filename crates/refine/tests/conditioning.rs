@@ -5,7 +5,10 @@
 //! violation, recomputed here — or fails with a typed error. The limits asserted here are the
 //! ones measured and tabulated in ROBUSTNESS.md (run with `--nocapture` to print the table).
 
+mod noisy;
+
 use divdiff::{Parametrization, Points, Topology};
+use noisy::noisy_star;
 use refine::{
     ConicOptions, ConicProblem, Constraint, ConvexSet, Error, HalfSpace, Problem, Refinement,
 };
@@ -428,25 +431,6 @@ fn iteration_limit_gives_not_converged_with_the_best_residual() {
             other => panic!("limit {limit}: expected NotConverged, got {other:?}"),
         }
     }
-}
-
-/// A noisy star: n points at jittered angles θ_i = 2π(i + u_i)/n, u_i ∈ [−0.4, 0.4], radii
-/// alternating 1 and 1.35 with ±0.05 noise (the `hard` bench's data; a fixed-seed LCG here).
-fn noisy_star(n: usize) -> Points {
-    let mut state = 20261125u64;
-    let mut uniform = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut rows = Vec::with_capacity(2 * n);
-    for i in 0..n {
-        let theta = 2.0 * std::f64::consts::PI * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
-        let r = 1.0 + 0.35 * (i % 2) as f64 + 0.1 * uniform() - 0.05;
-        rows.extend([r * theta.cos(), r * theta.sin()]);
-    }
-    Points::new(2, rows).unwrap()
 }
 
 /// Interpolation of 10⁵ noisy points at k = 7 (N = 8·10⁵ vertices) is certified: the split's

@@ -10,27 +10,23 @@
 //! by the certificate, which is computed from divided differences (every solve here must be
 //! certified), and the large noisy case in `conditioning.rs`.
 
+mod noisy;
+
 use divdiff::{Parametrization, Points, Topology};
+use noisy::noisy_star;
 use refine::{Problem, Refinement};
 
-fn noisy_star(n: usize, d: usize, seed: u64) -> Points {
-    let mut s = seed;
-    let mut unif = move || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut c = Vec::with_capacity(n * d);
-    for i in 0..n {
-        let th = 2.0 * std::f64::consts::PI * (i as f64 + 0.8 * unif() - 0.4) / n as f64;
-        let r = 1.0 + 0.5 * (i % 2) as f64 + 0.06 * unif() - 0.03;
-        c.extend([r * th.cos(), r * th.sin()]);
-        if d == 3 {
-            c.push(0.3 * (3.0 * th).sin() + 0.01 * unif());
-        }
+/// The shared noisy star in d = 2, or lifted to d = 3 by z = 0.3 sin 3θ (θ its angle).
+fn noisy_points(n: usize, d: usize) -> Points {
+    let star = noisy_star(n);
+    if d == 2 {
+        return star;
     }
-    Points::new(d, c).expect("finite points")
+    let c = star
+        .iter()
+        .flat_map(|x| [x[0], x[1], 0.3 * (3.0 * x[1].atan2(x[0])).sin()])
+        .collect();
+    Points::new(3, c).expect("finite points")
 }
 
 fn solve_on(threads: usize, problem: &Problem) -> Refinement {
@@ -50,7 +46,7 @@ fn one_thread_and_many_give_the_same_bits() {
         (5_000, 2, Topology::Closed, 2),
         (5_000, 3, Topology::Open, 1),
     ] {
-        let problem = Problem::new(noisy_star(n, d, 20_261_125))
+        let problem = Problem::new(noisy_points(n, d))
             .with_topology(topology)
             .with_parametrization(Parametrization::Centripetal)
             .with_k(7)
