@@ -43,61 +43,6 @@ impl Points {
         Ok(Points { dim, coords })
     }
 
-    /// `len` points of dimension `dim` written chunk by chunk: `fill(c, buf)` writes the points
-    /// `c·chunk ..` (`chunk` of them, fewer in the last chunk) into `buf`, which is checked for
-    /// finiteness while it is still in cache and then appended — one pass over the output
-    /// instead of a write and a validating read.
-    ///
-    /// # Errors
-    /// [`Error::OutOfRange`] for `dim` or `chunk` 0, [`Error::NonFinite`] naming the first point
-    /// with a non-finite coordinate.
-    ///
-    /// ```
-    /// let p = divdiff::Points::from_chunks(2, 5, 2, |c, buf| {
-    ///     for (j, x) in buf.chunks_exact_mut(2).enumerate() {
-    ///         x.copy_from_slice(&[(2 * c + j) as f64, 0.0]);
-    ///     }
-    /// })
-    /// .unwrap();
-    /// assert_eq!(p.point(4), &[4.0, 0.0]);
-    /// ```
-    pub fn from_chunks(
-        dim: usize,
-        len: usize,
-        chunk: usize,
-        mut fill: impl FnMut(usize, &mut [f64]),
-    ) -> Result<Self, Error> {
-        for (field, v) in [("dim", dim), ("chunk", chunk)] {
-            if v == 0 {
-                return Err(Error::OutOfRange {
-                    field,
-                    value: 0.0,
-                    reason: "must be at least 1",
-                });
-            }
-        }
-        let mut coords = Vec::with_capacity(len * dim);
-        let mut buf = vec![0.0; chunk * dim];
-        for c in 0..len.div_ceil(chunk) {
-            let first = c * chunk;
-            let out = &mut buf[..(len - first).min(chunk) * dim];
-            fill(c, out);
-            if !all_finite(out) {
-                let k = out
-                    .iter()
-                    .position(|x| !x.is_finite())
-                    .expect("a non-finite value");
-                return Err(Error::NonFinite {
-                    field: "points",
-                    index: first + k / dim,
-                });
-            }
-            // (A copying iterator over a slice extends with one capacity check, inlined.)
-            coords.extend(out.iter().copied());
-        }
-        Ok(Points { dim, coords })
-    }
-
     /// Points from rows `[[x, y, …], …]`, all of the same dimension d ≥ 1.
     ///
     /// # Errors
