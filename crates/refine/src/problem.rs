@@ -311,11 +311,12 @@ impl Problem {
     }
 
     /// The number of refined vertices after one `k`-level split of `n` data points (3.1):
-    /// (k + 1)n closed, (k + 1)(n − 1) + 1 open.
+    /// (k + 1)n closed, (k + 1)(n − 1) + 1 open; `usize::MAX` where that overflows.
     pub fn refined_len(topology: Topology, n: usize, k: usize) -> usize {
+        let m = k.saturating_add(1);
         match topology {
-            Topology::Closed => (k + 1) * n,
-            Topology::Open => (k + 1) * (n.max(1) - 1) + 1,
+            Topology::Closed => m.saturating_mul(n),
+            Topology::Open => m.saturating_mul(n.max(1) - 1).saturating_add(1),
         }
     }
 

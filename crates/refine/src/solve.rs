@@ -22,7 +22,8 @@ impl Problem {
         self.validate()?;
         // The O(N) passes are parallel (`par`): a solve spanning several chunks runs from the
         // pool.
-        if self.points.len().saturating_mul(self.k + 1) > crate::par::CHUNK_VERTICES {
+        let vertices = Self::refined_len(self.topology, self.points.len(), self.k);
+        if vertices > crate::par::CHUNK_VERTICES {
             crate::par::on_pool(|| self.solve_validated())
         } else {
             self.solve_validated()
