@@ -43,21 +43,15 @@ fn indices<'py>(py: Python<'py>, v: &[usize]) -> PyResult<Bound<'py, PyAny>> {
     Ok(vector(py, v))
 }
 
-/// Rows of equal length as a 2-D array, ragged rows as a list of 1-D arrays.
-fn table<'py>(py: Python<'py>, rows: Vec<Vec<f64>>) -> PyResult<Bound<'py, PyAny>> {
-    let width = rows.first().map_or(0, Vec::len);
-    if rows.iter().all(|r| r.len() == width) {
+/// Rows of equal length as a 2-D array (their buffer, without a copy), ragged rows as a list
+/// of 1-D arrays.
+fn table<'py>(py: Python<'py>, rows: curvefit::refine::Multipliers) -> PyResult<Bound<'py, PyAny>> {
+    if let Some(width) = rows.width() {
         let n = rows.len();
-        // (Row by row into one allocation: `flatten().collect()` was 15 % of a 10^5-point
-        // interpolation called from Python.)
-        let mut flat = Vec::with_capacity(n * width);
-        for r in &rows {
-            flat.extend_from_slice(r);
-        }
-        return matrix(py, flat, n, width);
+        return matrix(py, rows.into_values(), n, width);
     }
     let list = PyList::empty(py);
-    for r in rows {
+    for r in rows.to_vecs() {
         list.append(vector(py, r))?;
     }
     Ok(list.into_any())

@@ -57,7 +57,7 @@ pub struct Refinement {
     /// - balls of radius ε_i > 0: `[w_i]`, Kersey's weight in (3.5), (Hp)_{i_k} + w_i(p_{i_k} − q_i) = 0;
     /// - smoothing: `[w_i]`, the given weight;
     /// - half-spaces: `[w_i1, …, w_im]`, (Hp)_{i_k} + Σ_j w_ij n_ij = 0 (3.8).
-    pub multipliers: Vec<Vec<f64>>,
+    pub multipliers: crate::Multipliers,
     /// Whether each data point's constraint is active in stage 0 (always for interpolation,
     /// never for smoothing).
     pub active: Vec<bool>,
@@ -348,7 +348,7 @@ fn stage_loop(
     stride: usize,
     param: Parametrization,
     iterations: &mut Iterations,
-) -> Result<(Points, Vec<Vec<f64>>, Certificate), Error> {
+) -> Result<(Points, crate::Multipliers, Certificate), Error> {
     let mut sol: Option<FixedSolution> = None;
     for knot_iteration in 0..=problem.knot_iterations {
         crate::progress::report(

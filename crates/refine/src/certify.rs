@@ -468,7 +468,7 @@ pub(crate) fn certify(
     derivative: &[(Vec<f64>, Vec<f64>)],
     rule: DerivativeRule,
     active_tol: f64,
-) -> (Certificate, Vec<Vec<f64>>) {
+) -> (Certificate, crate::Multipliers) {
     let d = p.dim();
     let n = q.len();
     let nv = p.len();
@@ -502,11 +502,10 @@ pub(crate) fn certify(
             .collect();
     }
     let hp_data = &pass.hp_data;
-    let multipliers = multipliers.unwrap_or_else(|| {
-        (0..n)
-            .map(|i| hp_data[i * d..(i + 1) * d].iter().map(|x| -x).collect())
-            .collect()
-    });
+    let multipliers = match multipliers {
+        Some(m) => crate::Multipliers::from(m),
+        None => crate::Multipliers::uniform(d, n, hp_data.iter().map(|x| -x).collect()),
+    };
     let mut terms = Terms::new(n, d, nv, derivative_kinds);
     let at = At {
         p,

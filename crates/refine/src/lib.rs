@@ -128,6 +128,7 @@ mod fast;
 mod freeknots;
 mod limit;
 mod linear;
+mod multipliers;
 mod operator;
 mod options;
 mod paper;
@@ -150,6 +151,7 @@ pub use freeknots::{
     optimize_knots, reduced_objective, FreeKnotOptions, FreeKnotResult, FreeKnots, KnotDiagnostics,
 };
 pub use limit::{limit_curve, limit_curve_of, CubicSpline};
+pub use multipliers::Multipliers;
 pub use options::{
     CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
 };

@@ -62,7 +62,7 @@ pub(crate) struct FixedSolution {
     pub derivative: Vec<(Vec<f64>, Vec<f64>)>,
     /// The certificate of exactly these points and multipliers, when the solver already
     /// computed it to accept them (and the multipliers it reports).
-    pub certificate: Option<(Certificate, Vec<Vec<f64>>)>,
+    pub certificate: Option<(Certificate, crate::Multipliers)>,
 }
 
 impl FixedSolution {

@@ -92,7 +92,7 @@ fn full_applies(fp: &FixedProblem<'_>) -> bool {
 pub(crate) fn certificate(
     fp: &FixedProblem<'_>,
     sol: &FixedSolution,
-) -> (Certificate, Vec<Vec<f64>>) {
+) -> (Certificate, crate::Multipliers) {
     if let Some(c) = &sol.certificate {
         return c.clone();
     }

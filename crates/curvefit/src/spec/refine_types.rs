@@ -207,13 +207,27 @@ pub struct RefineResult {
     pub energy: f64,
     /// Multipliers of the final solve, one list per data point (see the README for their
     /// meaning per constraint type).
-    pub multipliers: Vec<Vec<f64>>,
+    #[serde(serialize_with = "multiplier_rows")]
+    pub multipliers: refine::Multipliers,
     /// Which data-point constraints are active at the optimum.
     pub active: Vec<bool>,
     /// Relative KKT residual of the final solve.
     pub kkt_residual: f64,
     /// Iteration counts.
     pub iterations: RefineIterations,
+}
+
+/// The multipliers as JSON: one array per data point.
+pub struct MultiplierRows<'a>(pub &'a refine::Multipliers);
+
+impl Serialize for MultiplierRows<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.iter())
+    }
+}
+
+fn multiplier_rows<S: serde::Serializer>(m: &refine::Multipliers, s: S) -> Result<S::Ok, S::Error> {
+    MultiplierRows(m).serialize(s)
 }
 
 /// Iteration counts of a refinement (fields in the order the result has always printed them).

@@ -197,7 +197,7 @@ pub(crate) struct At<'a> {
     pub knots: &'a Knots,
     pub data_vertex: &'a [usize],
     /// The data kind's multipliers, one entry per data point, in its convention.
-    pub multipliers: &'a [Vec<f64>],
+    pub multipliers: &'a crate::Multipliers,
     /// The derivative kinds' (cone dual ζ_c, force z_c = −F_cᵀζ_c), one per derivative
     /// constraint in the order of [`Rows`] (a constraint the solver turned into a fixed vertex has
     /// no dual, only its reaction force).

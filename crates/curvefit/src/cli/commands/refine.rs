@@ -27,7 +27,7 @@ impl super::super::Command for RefineCmd {
         struct Rest<'a> {
             data_vertex: &'a [usize],
             energy: f64,
-            multipliers: &'a [Vec<f64>],
+            multipliers: MultiplierRows<'a>,
             active: &'a [bool],
             kkt_residual: f64,
             iterations: &'a RefineIterations,
@@ -45,7 +45,7 @@ impl super::super::Command for RefineCmd {
         let rest = serde_json::to_vec(&Rest {
             data_vertex,
             energy: *energy,
-            multipliers,
+            multipliers: MultiplierRows(multipliers),
             active,
             kkt_residual: *kkt_residual,
             iterations,
