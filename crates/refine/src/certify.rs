@@ -89,6 +89,8 @@ pub(crate) struct Pass {
     pub hp: Vec<f64>,
     /// Hp at the data vertices (n × d) when the pass was given them; else empty.
     pub hp_data: Vec<f64>,
+    /// The points at the data vertices (n × d) when the pass was given them; else empty.
+    pub p_data: Vec<f64>,
     /// max |Hp| over the vertices that are not data vertices, when the pass was given them.
     pub free_stat: f64,
     /// E of (2.1).
@@ -115,10 +117,12 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     let (n, d) = (p.len(), p.dim());
     let mut hp = vec![0.0; if data.is_some() { 0 } else { n * d }];
     let mut hp_data = vec![0.0; data.map_or(0, |v| v.len() * d)];
+    let mut p_data = vec![0.0; hp_data.len()];
     // Chunks of vertices in parallel (`crate::par`), each with the slices of Hp it writes: all
-    // of its vertices', or its data vertices'.
+    // of its vertices', or its data vertices' (and their points).
     let mut chunks = Vec::new();
     let (mut hp_rest, mut data_rest) = (&mut hp[..], &mut hp_data[..]);
+    let mut points_rest = &mut p_data[..];
     let mut first_data = 0;
     for range in crate::par::ranges(n, crate::par::CHUNK_VERTICES) {
         let own = if data.is_some() { 0 } else { range.len() * d };
@@ -128,7 +132,10 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
         let (dhere, drest) =
             std::mem::take(&mut data_rest).split_at_mut((end_data - first_data) * d);
         data_rest = drest;
-        chunks.push((Chunk { range, first_data }, here, dhere));
+        let (phere, prest) =
+            std::mem::take(&mut points_rest).split_at_mut((end_data - first_data) * d);
+        points_rest = prest;
+        chunks.push((Chunk { range, first_data }, here, (dhere, phere)));
         first_data = end_data;
     }
     let input = Input {
@@ -137,15 +144,14 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
         center,
         data,
     };
-    let parts = crate::par::map(chunks, |(chunk, hp, hp_data)| {
-        sweep(&input, &chunk, (hp, hp_data))
-    });
+    let parts = crate::par::map(chunks, |(chunk, hp, data)| sweep(&input, &chunk, (hp, data)));
     let mut out = Pass::default();
     for part in &parts {
         out.merge(part);
     }
     out.hp = hp;
     out.hp_data = hp_data;
+    out.p_data = p_data;
     out
 }
 
@@ -207,8 +213,9 @@ fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
     }
 }
 
-/// Where a sweep writes Hp: every vertex's, or (given the data vertices) the data vertices'.
-type HpOut<'a> = (&'a mut [f64], &'a mut [f64]);
+/// Where a sweep writes Hp: every vertex's, or (given the data vertices) the data vertices' and
+/// their points.
+type HpOut<'a> = (&'a mut [f64], (&'a mut [f64], &'a mut [f64]));
 
 /// A block's arrays, in local indices: local vertex `l` is global vertex `a − 2 + l` for the
 /// block's vertices `a .. b` (two vertices of halo each side), local span `l` the span from
@@ -275,7 +282,7 @@ fn sweep(
         data,
     }: &Input<'_>,
     chunk: &Chunk,
-    (hp, hp_data): HpOut<'_>,
+    (hp, (hp_data, p_data)): HpOut<'_>,
 ) -> Pass {
     let (n, d) = (p.len(), p.dim());
     let x = p.coords();
@@ -439,7 +446,9 @@ fn sweep(
                 }
                 Some(dv) => {
                     for (k, &i) in dv[next_data..data_end].iter().enumerate() {
-                        hp_data[(next_data + k - chunk.first_data) * d + coord] = v[i - a];
+                        let o = (next_data + k - chunk.first_data) * d + coord;
+                        hp_data[o] = v[i - a];
+                        p_data[o] = own[i - a];
                         v[i - a] = 0.0;
                     }
                     raise_abs(&mut out.free_stat, v, 0.0);
@@ -475,8 +484,11 @@ pub(crate) fn certify(
     let mut centroid = vec![0.0; d];
     for x in q.iter() {
         for (c, v) in centroid.iter_mut().zip(x) {
-            *c += v / n as f64;
+            *c += v;
         }
+    }
+    for c in &mut centroid {
+        *c /= n as f64;
     }
     let derivative_kinds = kinds.iter().any(|k| k.on_derivatives());
     // Without derivative forces, stationarity away from the data vertices is |Hp| alone, so the
@@ -500,6 +512,10 @@ pub(crate) fn certify(
             .iter()
             .flat_map(|&v| pass.hp[v * d..(v + 1) * d].iter().copied())
             .collect();
+        pass.p_data = data_vertex
+            .iter()
+            .flat_map(|&v| p.point(v).iter().copied())
+            .collect();
     }
     let hp_data = &pass.hp_data;
     let multipliers = match multipliers {
@@ -509,6 +525,7 @@ pub(crate) fn certify(
     let mut terms = Terms::new(n, d, nv, derivative_kinds);
     let at = At {
         p,
+        data_points: &pass.p_data,
         q,
         knots,
         data_vertex,
@@ -536,12 +553,14 @@ pub(crate) fn certify(
     // Stationarity at every vertex: Hp + derivative forces + data forces at the data vertices.
     let stat = if compact {
         hp_data
-            .iter()
-            .zip(&terms.force_data)
-            .enumerate()
-            .fold(pass.free_stat, |a, (k, (h, f))| {
+            .chunks_exact(d)
+            .zip(terms.force_data.chunks_exact(d))
+            .zip(&terms.rounding_data)
+            .fold(pass.free_stat, |a, ((h, f), r)| {
                 // what one rounding of a stiffly weighted vertex exerts is not a residual
-                a.max(((h + f).abs() - terms.rounding_data[k / d]).max(0.0))
+                h.iter()
+                    .zip(f)
+                    .fold(a, |a, (h, f)| a.max(((h + f).abs() - r).max(0.0)))
             })
     } else {
         // Summed into Hp's own buffer (Hp is not needed after this).

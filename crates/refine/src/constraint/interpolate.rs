@@ -75,7 +75,7 @@ pub(crate) fn reaction(
 /// the reaction, the violation |p_{i_k} − q_i|; always active.
 pub(crate) fn fixed_points(at: &At<'_>, terms: &mut Terms, fixed: impl Fn(usize) -> bool) {
     let d = at.q.dim();
-    for (i, &v) in at.data_vertex.iter().enumerate() {
+    for i in 0..at.data_vertex.len() {
         if !fixed(i) {
             continue;
         }
@@ -83,7 +83,7 @@ pub(crate) fn fixed_points(at: &At<'_>, terms: &mut Terms, fixed: impl Fn(usize)
         for (f, mc) in terms.force_data[i * d..(i + 1) * d].iter_mut().zip(m) {
             *f += mc;
         }
-        terms.primal = terms.primal.max(super::dist(at.p.point(v), at.q.point(i)));
+        terms.primal = terms.primal.max(super::dist(at.data_point(i), at.q.point(i)));
         terms.active[i] = true;
     }
 }

@@ -193,6 +193,8 @@ impl Rows {
 /// What a kind's certificate terms are computed from (see [`crate::certify`]).
 pub(crate) struct At<'a> {
     pub p: &'a Points,
+    /// The points at the data vertices, n × d (p_{i_k} of data point i: [`At::data_point`]).
+    pub data_points: &'a [f64],
     pub q: &'a Points,
     pub knots: &'a Knots,
     pub data_vertex: &'a [usize],
@@ -207,6 +209,14 @@ pub(crate) struct At<'a> {
     pub length: f64,
     /// A constraint within this relative slack of its boundary counts as active.
     pub active_tol: f64,
+}
+
+impl At<'_> {
+    /// p_{i_k}, the point at data point i's vertex.
+    pub(crate) fn data_point(&self, i: usize) -> &[f64] {
+        let d = self.q.dim();
+        &self.data_points[i * d..(i + 1) * d]
+    }
 }
 
 /// A kind's certificate terms, accumulated (module docs of [`crate::certify`] for the units).
