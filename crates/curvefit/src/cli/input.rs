@@ -81,6 +81,28 @@ pub fn read_json<P: serde::de::DeserializeOwned>(
     reader: impl Read,
     what: &str,
 ) -> Result<P, InputError> {
+    read_json_with(reader, what, |_| None)
+}
+
+/// [`read_json`] of a problem whose large arrays (`points`, …) the fast path reads
+/// ([`super::fastjson`]: the same numbers, and every error still serde_json's) when the input is
+/// read whole.
+///
+/// # Errors
+/// As [`read_json`].
+pub fn read_problem<P: super::fastjson::LargeArrays>(
+    reader: impl Read,
+    what: &str,
+) -> Result<P, InputError> {
+    read_json_with(reader, what, super::fastjson::read::<P>)
+}
+
+/// [`read_json`], trying `fast` first on an input read whole.
+fn read_json_with<P: serde::de::DeserializeOwned>(
+    reader: impl Read,
+    what: &str,
+    fast: impl FnOnce(&[u8]) -> Option<P>,
+) -> Result<P, InputError> {
     let exceeded = std::cell::Cell::new(false);
     let mut limited = Limited {
         inner: reader,
@@ -103,7 +125,10 @@ pub fn read_json<P: serde::de::DeserializeOwned>(
     crate::spec::not_an_object(prefix.iter().copied().find(|b| !b.is_ascii_whitespace()))?;
     let end = |e: serde_json::Error| InputError::new("problem", format!("malformed JSON: {e}"));
     let result = if prefix.len() <= READ_WHOLE_BYTES {
-        crate::spec::from_json_bytes(&prefix)
+        match fast(&prefix) {
+            Some(p) => Ok(p),
+            None => crate::spec::from_json_bytes(&prefix),
+        }
     } else {
         let rest = std::io::Cursor::new(&prefix[..]).chain(limited);
         let mut de =
