@@ -382,6 +382,67 @@ mod tests {
         assert_eq!(fast, b"[]");
     }
 
+    /// CSV of many pieces, non-finite values included, equals the rows formatted one by one
+    /// (the previous, sequential writer).
+    #[test]
+    fn parallel_csv_is_the_rows_one_by_one() {
+        let data: Vec<f64> = (0..3 * 3 * ROWS_PER_CHUNK + 6)
+            .map(|i| match i % 101 {
+                0 => f64::NAN,
+                1 => f64::NEG_INFINITY,
+                2 => -0.0,
+                _ => (i as f64).sqrt() * 1e-3 - 7.0,
+            })
+            .collect();
+        let table = Table {
+            columns: Table::point_columns(3),
+            data: data.as_slice().into(),
+        };
+        let mut fast = Vec::new();
+        write_csv(&table, &mut fast).unwrap();
+        let mut want = String::from("x,y,z\n");
+        let mut num = zmij::Buffer::new();
+        for row in data.chunks_exact(3) {
+            let cells: Vec<String> = row.iter().map(|&x| num.format(x).to_string()).collect();
+            want.push_str(&cells.join(","));
+            want.push('\n');
+        }
+        assert_eq!(String::from_utf8(fast).unwrap(), want);
+    }
+
+    /// A failing output or piece ends the write with its error (the formatting threads stop;
+    /// nothing hangs).
+    #[test]
+    fn errors_stop_the_formatting_threads() {
+        struct Full(usize);
+        impl Write for Full {
+            fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+                if b.len() > self.0 {
+                    return Err(std::io::Error::other("full"));
+                }
+                self.0 -= b.len();
+                Ok(b.len())
+            }
+            fn flush(&mut self) -> std::io::Result<()> {
+                Ok(())
+            }
+        }
+        let data = vec![0.5; 40 * ROWS_PER_CHUNK];
+        let e = write_json_array(&data, 2, &mut Full(1 << 20)).unwrap_err();
+        assert_eq!(e.to_string(), "full");
+        let pieces: Vec<Piece<'_>> = vec![
+            bytes_piece(b"a"),
+            Box::new(|_: &mut Vec<u8>| Err(std::io::Error::other("bad"))),
+            bytes_piece(b"c"),
+        ];
+        let mut out = Vec::new();
+        assert_eq!(
+            write_pieces(pieces, &mut out).unwrap_err().to_string(),
+            "bad"
+        );
+        assert_eq!(out, b"a");
+    }
+
     #[test]
     fn the_extension_chooses_the_format() {
         assert_eq!(Format::choose(None, Some(Path::new("a.CSV"))), Format::Csv);
