@@ -95,18 +95,14 @@ fn run_scheme_cmd(
 ) -> Result<(), Failure> {
     let t0 = Instant::now();
     let polygon = match &a.apply {
-        Some(p) => Some(
-            input::read_problem(input::open(p, "--apply")?, &p.display().to_string()).map_err(
-                |e| {
-                    let field = if e.field.is_empty() || e.field == "problem" {
-                        "polygon".to_string()
-                    } else {
-                        format!("polygon.{}", e.field)
-                    };
-                    InputError::new(field, e.message)
-                },
-            )?,
-        ),
+        Some(p) => Some(input::read_problem_file(p, "--apply").map_err(|e| {
+            let field = if e.field.is_empty() || e.field == "problem" {
+                "polygon".to_string()
+            } else {
+                format!("polygon.{}", e.field)
+            };
+            InputError::new(field, e.message)
+        })?),
         None => None,
     };
     let t1 = Instant::now();
@@ -618,7 +614,7 @@ fn name_static(name: &str) -> &'static str {
 fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C::Problem, Failure> {
     let mut problem: C::Problem = match &args.problem {
         Some(p) if p.as_os_str() == "-" => input::read_problem(stdin, "standard input")?,
-        Some(p) => input::read_problem(input::open(p, "problem")?, &p.display().to_string())?,
+        Some(p) => input::read_problem_file(p, "problem")?,
         None if args.points_csv.is_some() => crate::spec::from_json("{}")?,
         None if args.stdin_is_terminal => {
             return Err(InputError::new(
