@@ -7,6 +7,7 @@
 mod commands;
 pub mod demo;
 pub mod export;
+pub mod fastjson;
 pub mod format;
 pub mod input;
 pub mod output;
@@ -30,7 +31,7 @@ use clap::{Args, Parser, Subcommand};
 /// One subcommand: a JSON problem in, a JSON solution (and optionally a picture) out.
 pub trait Command {
     /// The JSON problem (`#[serde(deny_unknown_fields)]`, documented defaults).
-    type Problem: serde::de::DeserializeOwned;
+    type Problem: fastjson::LargeArrays;
     /// The JSON result.
     type Solution: serde::Serialize;
     /// Validates and solves; errors name the field path and index.
@@ -94,18 +95,14 @@ fn run_scheme_cmd(
 ) -> Result<(), Failure> {
     let t0 = Instant::now();
     let polygon = match &a.apply {
-        Some(p) => Some(
-            input::read_json(input::open(p, "--apply")?, &p.display().to_string()).map_err(
-                |e| {
-                    let field = if e.field.is_empty() || e.field == "problem" {
-                        "polygon".to_string()
-                    } else {
-                        format!("polygon.{}", e.field)
-                    };
-                    InputError::new(field, e.message)
-                },
-            )?,
-        ),
+        Some(p) => Some(input::read_problem_file(p, "--apply").map_err(|e| {
+            let field = if e.field.is_empty() || e.field == "problem" {
+                "polygon".to_string()
+            } else {
+                format!("polygon.{}", e.field)
+            };
+            InputError::new(field, e.message)
+        })?),
         None => None,
     };
     let t1 = Instant::now();
@@ -616,8 +613,8 @@ fn name_static(name: &str) -> &'static str {
 /// supplies `points` (or `t` and `y`), which the problem must not have already.
 fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C::Problem, Failure> {
     let mut problem: C::Problem = match &args.problem {
-        Some(p) if p.as_os_str() == "-" => input::read_json(stdin, "standard input")?,
-        Some(p) => input::read_json(input::open(p, "problem")?, &p.display().to_string())?,
+        Some(p) if p.as_os_str() == "-" => input::read_problem(stdin, "standard input")?,
+        Some(p) => input::read_problem_file(p, "problem")?,
         None if args.points_csv.is_some() => crate::spec::from_json("{}")?,
         None if args.stdin_is_terminal => {
             return Err(InputError::new(
@@ -626,7 +623,7 @@ fn parse_problem<C: Command>(args: &JsonArgs, stdin: &mut dyn Read) -> Result<C:
             )
             .into())
         }
-        None => input::read_json(stdin, "standard input")?,
+        None => input::read_problem(stdin, "standard input")?,
     };
     if let Some(csv) = &args.points_csv {
         let what = csv.display().to_string();

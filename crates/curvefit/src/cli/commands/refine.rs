@@ -1,9 +1,7 @@
 //! `curvefit refine`: the subcommand (the JSON contract is [`crate::spec::refine`]) and its
 //! picture.
 
-use std::io::Write;
-
-use super::super::format::{write_json_array, Table};
+use super::super::format::{bytes_piece, json_array_pieces, write_pieces, Table};
 use crate::spec::refine::*;
 use crate::spec::InputError;
 
@@ -20,8 +18,8 @@ impl super::super::Command for RefineCmd {
     }
 
     /// The result as serde_json writes it, with `points` and `knots` (8·10⁵ vertices and more)
-    /// formatted on every core ([`write_json_array`]); the destructuring is exhaustive, so a new
-    /// result field does not compile until it is written here too.
+    /// and the other fields formatted on every core ([`write_pieces`]); the destructuring is
+    /// exhaustive, so a new result field does not compile until it is written here too.
     fn write_json(r: &RefineResult, w: &mut dyn std::io::Write) -> std::io::Result<()> {
         #[derive(serde::Serialize)]
         struct Rest<'a> {
@@ -42,25 +40,27 @@ impl super::super::Command for RefineCmd {
             kkt_residual,
             iterations,
         } = r;
-        let rest = serde_json::to_vec(&Rest {
+        let rest = Rest {
             data_vertex,
             energy: *energy,
             multipliers: MultiplierRows(multipliers),
             active,
             kkt_residual: *kkt_residual,
             iterations,
-        })
-        .map_err(std::io::Error::other)?;
-        let mut out = std::io::BufWriter::with_capacity(1 << 18, w);
-        out.write_all(b"{\"points\":")?;
-        write_json_array(points.coords(), points.dim().max(1), &mut out)?;
-        out.write_all(b",\"knots\":")?;
-        write_json_array(knots, 0, &mut out)?;
-        out.write_all(b",")?;
-        // `rest` is an object: its fields follow without its opening brace.
-        out.write_all(&rest[1..])?;
-        out.write_all(b"\n")?;
-        out.flush()
+        };
+        let mut pieces = vec![bytes_piece(b"{\"points\":")];
+        pieces.extend(json_array_pieces(points.coords(), points.dim().max(1)));
+        pieces.push(bytes_piece(b",\"knots\":"));
+        pieces.extend(json_array_pieces(knots, 0));
+        pieces.push(Box::new(move |out: &mut Vec<u8>| {
+            let start = out.len();
+            serde_json::to_writer(&mut *out, &rest).map_err(std::io::Error::other)?;
+            // `rest` is an object: its fields follow the others', without its opening brace.
+            out[start] = b',';
+            out.push(b'\n');
+            Ok(())
+        }));
+        write_pieces(pieces, w)
     }
 
     /// The refined points, one row per vertex.
