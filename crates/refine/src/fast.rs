@@ -456,7 +456,8 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
                 s[j * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
             }
         }
-        solve_tridiagonal(&diag, &off, &mut s, d, closed && size >= 3)
+        let off = off.iter().map(|&v| [v]).collect();
+        solve_band(diag, off, &mut s, d, closed && size >= 3)
             .map_err(|j| singular((first + j) * stride))?;
     }
     // The data-row value of data point i (zero for the end rows of an open curve).
@@ -675,14 +676,27 @@ pub(crate) fn interpolate_condensed(
     cond.reconstruct(knots, stencil, q.coords(), &s, d)
 }
 
+/// [`solve_band`] of borrowed bands (the tests' reference path).
+#[cfg(test)]
+fn solve_tridiagonal(
+    diag: &[f64],
+    off: &[f64],
+    rhs: &mut [f64],
+    d: usize,
+    cyclic: bool,
+) -> Result<(), usize> {
+    solve_band(diag.to_vec(), off.iter().map(|&v| [v]).collect(), rhs, d, cyclic)
+}
+
 /// Solves the symmetric tridiagonal (or, with `cyclic`, cyclic tridiagonal: `off[len−1]`
 /// couples the last unknown with the first) positive definite system in place, for `d`
 /// right-hand-side columns stored row-major in `rhs`, by [`banded::SymBand`]`<1>` (root-free
-/// LDLᵀ, pivots from the determinant recurrence; a cyclic system bordered). Returns the index of
-/// a non-positive pivot.
-pub(super) fn solve_tridiagonal(
-    diag: &[f64],
-    off: &[f64],
+/// LDLᵀ, pivots from the determinant recurrence; a cyclic system bordered); the bands are taken
+/// by value (`off[j]` couples rows j and j + 1), so the callers assemble them in place and
+/// nothing is copied. Returns the index of a non-positive pivot.
+pub(super) fn solve_band(
+    diag: Vec<f64>,
+    off: Vec<[f64; 1]>,
     rhs: &mut [f64],
     d: usize,
     cyclic: bool,
@@ -697,8 +711,7 @@ pub(super) fn solve_tridiagonal(
         banded::Error::Singular { index } => index,
         _ => 0,
     };
-    let a = SymBand::<1>::from_bands(topology, diag.to_vec(), off.iter().map(|&v| [v]).collect())
-        .map_err(row)?;
+    let a = SymBand::<1>::from_bands(topology, diag, off).map_err(row)?;
     a.factor_with(&FactorOptions::default().pivot_rtol(0.0))
         .map_err(row)?
         .solve_in_place(rhs, d)

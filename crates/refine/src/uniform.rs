@@ -70,34 +70,38 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
     let gg_unit = k * (2.0 * k + 1.0) / (6.0 * mf);
     let gh_unit = k * (k + 2.0) / (6.0 * mf);
     // The data rows (α_{v_i,1}, α_{v_i,2}, α_{v_i,3}); zero rows at the ends of an open curve.
-    let rows: Vec<[f64; 3]> = (0..n)
-        .map(|i| {
-            if closed {
-                alpha_row(h[if i == 0 { spans - 1 } else { i - 1 }], h[i % spans])
-            } else if i == 0 || i + 1 == n {
-                [0.0; 3]
-            } else {
-                alpha_row(h[i - 1], h[i])
-            }
-        })
-        .collect();
+    // Formed where they are used (here and in the spans' pass), not kept: an n-row table was
+    // 2.4 MB of fresh memory at n = 10⁵.
+    let row = |i: usize| -> [f64; 3] {
+        if closed {
+            alpha_row(h[if i == 0 { spans - 1 } else { i - 1 }], h[i % spans])
+        } else if i == 0 || i + 1 == n {
+            [0.0; 3]
+        } else {
+            alpha_row(h[i - 1], h[i])
+        }
+    };
 
     let first = usize::from(!closed);
     let last = if closed { n } else { n - 1 }; // exclusive
     let size = last.saturating_sub(first);
+    // The data-row values s (zero at the end rows of an open curve), solved in place from the
+    // right-hand side, with T assembled straight into its band.
     let mut s = vec![0.0; n * d];
     if size > 0 {
         let mut diag = vec![0.0; size];
-        let mut off = vec![0.0; size];
-        let mut rhs = vec![0.0; size * d];
+        let mut off = vec![[0.0]; size];
+        let rhs = &mut s[first * d..last * d];
+        let mut ar = row(first);
         for (j, i) in (first..last).enumerate() {
-            let [a1, _, a3] = rows[i];
+            let [a1, _, a3] = ar;
+            let an = row(yn(i + 1));
             let prev = if i == 0 { spans - 1 } else { i - 1 };
             let cur = i % spans;
             let (h3p, h3c) = (h[prev].powi(3), h[cur].powi(3));
             diag[j] = 1.0 + (a1 * a1 * h3p + a3 * a3 * h3c) * gg_unit;
             if i + 1 < last || closed {
-                off[j] = a3 * rows[yn(i + 1)][0] * gh_unit * h3c;
+                off[j] = [a3 * an[0] * gh_unit * h3c];
             }
             let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, yn(i + 1));
             for c in 0..d {
@@ -107,15 +111,13 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                 // form, exact under translation of the data.
                 rhs[j * d + c] = (a1 * (yp - yi) + a3 * (ynx - yi)) / mf;
             }
+            ar = an;
         }
-        crate::fast::solve_tridiagonal(&diag, &off, &mut rhs, d, closed && size >= 3).map_err(
-            |j| {
-                Error::from(energy::Error::Singular {
-                    vertex: (first + j) * m,
-                })
-            },
-        )?;
-        s[first * d..last * d].copy_from_slice(&rhs);
+        crate::fast::solve_band(diag, off, rhs, d, closed && size >= 3).map_err(|j| {
+            Error::from(energy::Error::Singular {
+                vertex: (first + j) * m,
+            })
+        })?;
     }
 
     // The cubic weights, shared by every span.
@@ -140,9 +142,10 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
         let r = yn(i + 1);
         let h3 = h[i].powi(3);
         let (ya, yb) = (&y[i * d..(i + 1) * d], &y[r * d..(r + 1) * d]);
+        let (a3, b1) = (row(i)[2], row(r)[0]);
         for c in 0..d {
-            mu[c] = rows[i][2] * s[i * d + c] * h3;
-            nu[c] = rows[r][0] * s[r * d + c] * h3;
+            mu[c] = a3 * s[i * d + c] * h3;
+            nu[c] = b1 * s[r * d + c] * h3;
             dy[c] = yb[c] - ya[c];
         }
         match d {
