@@ -24,7 +24,10 @@ use std::time::Instant;
 
 use super::Opts;
 
-/// The scipy peer: reads the problem's points, times fit + evaluation in memory.
+/// The scipy peer: reads the problem's points, times fit + evaluation in memory: a closed curve
+/// by the periodic `CubicSpline` through the points and the first again, an open one by the
+/// natural `CubicSpline` (curvefit's default ends), on the centripetal parameters, evaluated at
+/// the (k + 1)·spans parameters of the split (and the last one of an open curve).
 const PEER: &str = r#"
 import json, sys, time
 try:
@@ -33,12 +36,16 @@ try:
 except ImportError as e:
     print(json.dumps({"skipped": str(e)})); sys.exit(3)
 p = json.load(open(sys.argv[1])); reps = int(sys.argv[2]); k = p["k"]
-q = np.array(p["points"]); qc = np.vstack([q, q[:1]])
+closed = p.get("closed", False)
+q = np.array(p["points"]); qc = np.vstack([q, q[:1]]) if closed else q
 u = np.concatenate([[0.0], np.cumsum(np.sqrt(np.linalg.norm(np.diff(qc, axis=0), axis=1)))])
 s = np.arange(k + 1) / (k + 1)
 t = (u[:-1, None] * (1.0 - s) + u[1:, None] * s).ravel()
+if not closed:
+    t = np.append(t, u[-1])
+bc = "periodic" if closed else "natural"
 def run():
-    return CubicSpline(u, qc, bc_type="periodic")(t)
+    return CubicSpline(u, qc, bc_type=bc)(t)
 run()
 ts = []
 for _ in range(reps):
@@ -49,6 +56,12 @@ print(json.dumps({"median_s": ts[len(ts) // 2], "evaluations": int(out.shape[0])
 
 /// The noisy star of the module docs, as a `refine` problem (also the `hard` group's data).
 pub(super) fn star_problem(n: usize, k: usize) -> serde_json::Value {
+    star_case(n, k, true, 2)
+}
+
+/// The noisy star, closed or open (an arc of nine tenths of the turn), in the plane or lifted
+/// to d = 3 by z = 0.3 sin 3θ.
+pub(super) fn star_case(n: usize, k: usize, closed: bool, d: usize) -> serde_json::Value {
     let mut s: u64 = 0x2545_F491_4F6C_DD1D;
     let mut unif = move || {
         s = s
@@ -56,15 +69,20 @@ pub(super) fn star_problem(n: usize, k: usize) -> serde_json::Value {
             .wrapping_add(1_442_695_040_888_963_407);
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
-    let points: Vec<[f64; 2]> = (0..n)
+    let turn = if closed { 1.0 } else { 0.9 };
+    let points: Vec<Vec<f64>> = (0..n)
         .map(|i| {
-            let th = 2.0 * std::f64::consts::PI * (i as f64 + 0.8 * unif() - 0.4) / n as f64;
+            let th = turn * 2.0 * std::f64::consts::PI * (i as f64 + 0.8 * unif() - 0.4) / n as f64;
             let r = 1.0 + 0.5 * (i % 2) as f64 + 0.06 * unif() - 0.03;
-            [r * th.cos(), r * th.sin()]
+            let mut p = vec![r * th.cos(), r * th.sin()];
+            if d == 3 {
+                p.push(0.3 * (3.0 * th).sin());
+            }
+            p
         })
         .collect();
     serde_json::json!({
-        "points": points, "closed": true, "k": k,
+        "points": points, "closed": closed, "k": k,
         "parametrization": "centripetal", "knot_iterations": 0
     })
 }
