@@ -144,7 +144,9 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
         center,
         data,
     };
-    let parts = crate::par::map(chunks, |(chunk, hp, data)| sweep(&input, &chunk, (hp, data)));
+    let parts = crate::par::map(chunks, |(chunk, hp, data)| {
+        sweep(&input, &chunk, (hp, data))
+    });
     let mut out = Pass::default();
     for part in &parts {
         out.merge(part);

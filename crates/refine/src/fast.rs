@@ -685,7 +685,13 @@ fn solve_tridiagonal(
     d: usize,
     cyclic: bool,
 ) -> Result<(), usize> {
-    solve_band(diag.to_vec(), off.iter().map(|&v| [v]).collect(), rhs, d, cyclic)
+    solve_band(
+        diag.to_vec(),
+        off.iter().map(|&v| [v]).collect(),
+        rhs,
+        d,
+        cyclic,
+    )
 }
 
 /// Solves the symmetric tridiagonal (or, with `cyclic`, cyclic tridiagonal: `off[len−1]`

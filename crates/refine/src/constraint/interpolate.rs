@@ -83,7 +83,9 @@ pub(crate) fn fixed_points(at: &At<'_>, terms: &mut Terms, fixed: impl Fn(usize)
         for (f, mc) in terms.force_data[i * d..(i + 1) * d].iter_mut().zip(m) {
             *f += mc;
         }
-        terms.primal = terms.primal.max(super::dist(at.data_point(i), at.q.point(i)));
+        terms.primal = terms
+            .primal
+            .max(super::dist(at.data_point(i), at.q.point(i)));
         terms.active[i] = true;
     }
 }
