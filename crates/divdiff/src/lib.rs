@@ -58,5 +58,5 @@ pub use differences::{
 };
 pub use error::Error;
 pub use knots::{Knots, Topology};
-pub use parametrize::{parametrize, Parametrization};
+pub use parametrize::{accumulate, parametrize, span_count, span_powers, Parametrization};
 pub use points::Points;

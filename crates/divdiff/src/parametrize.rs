@@ -53,14 +53,19 @@ pub fn parametrize(
     topology: Topology,
     parametrization: Parametrization,
 ) -> Result<Knots, Error> {
-    let e = parametrization.exponent();
-    if !e.is_finite() || e < 0.0 {
-        return Err(Error::OutOfRange {
-            field: "exponent",
-            value: e,
-            reason: "the exponent must be finite and non-negative",
-        });
-    }
+    checked_exponent(parametrization)?;
+    let spans = span_count(points, topology)?;
+    let mut t = vec![0.0; spans + 1];
+    span_powers(points, parametrization, 0, &mut t[1..])?;
+    accumulate(&mut t);
+    Knots::new(topology, t)
+}
+
+/// The number of spans of [`parametrize`]'s polygon: n − 1 open, n closed.
+///
+/// # Errors
+/// [`Error::TooFew`] for fewer than 2 points (open) or 3 points (closed).
+pub fn span_count(points: &Points, topology: Topology) -> Result<usize, Error> {
     let n = points.len();
     let needed = match topology {
         Topology::Open => 2,
@@ -73,19 +78,38 @@ pub fn parametrize(
             got: n,
         });
     }
-    let spans = match topology {
+    Ok(match topology {
         Topology::Open => n - 1,
         Topology::Closed => n,
-    };
+    })
+}
+
+/// The increments |q_{j+1} − q_j|^e of [`parametrize`] for the spans `first .. first +
+/// out.len()` into `out` (span j runs from point j to point j + 1, the last span of a closed
+/// curve from point n − 1 back to point 0): the knots are their running sums from 0. For callers
+/// that compute them in pieces (refine's knot updates, over 10⁶ vertices, in parallel chunks);
+/// the same values as `parametrize` computes.
+///
+/// # Errors
+/// - [`Error::OutOfRange`] (`field: "exponent"`) if e is NaN, infinite or negative;
+/// - [`Error::ZeroLengthSpan`] `{ index, next }` for the first span in the range whose points
+///   coincide.
+pub fn span_powers(
+    points: &Points,
+    parametrization: Parametrization,
+    first: usize,
+    out: &mut [f64],
+) -> Result<(), Error> {
+    let e = checked_exponent(parametrization)?;
+    let n = points.len();
     // The common exponents without a general power (both correctly rounded, so the same values).
     let power = |x: f64| match parametrization {
         Parametrization::Centripetal => x.sqrt(),
         Parametrization::Chordal => x,
         _ => x.powf(e),
     };
-    let mut t = Vec::with_capacity(spans + 1);
-    t.push(0.0);
-    for i in 0..spans {
+    for (k, o) in out.iter_mut().enumerate() {
+        let i = first + k;
         let next = if i + 1 == n { 0 } else { i + 1 };
         // Scaled (Blue's algorithm, `banded::vector`): squares of coordinates at 1e±300 would
         // overflow to ∞ or underflow to 0 where the distance itself is representable.
@@ -93,8 +117,28 @@ pub fn parametrize(
         if dist <= 0.0 {
             return Err(Error::ZeroLengthSpan { index: i, next });
         }
-        let last = t[t.len() - 1];
-        t.push(last + power(dist));
+        *o = power(dist);
     }
-    Knots::new(topology, t)
+    Ok(())
+}
+
+/// The exponent e, finite and non-negative.
+fn checked_exponent(parametrization: Parametrization) -> Result<f64, Error> {
+    let e = parametrization.exponent();
+    if !e.is_finite() || e < 0.0 {
+        return Err(Error::OutOfRange {
+            field: "exponent",
+            value: e,
+            reason: "the exponent must be finite and non-negative",
+        });
+    }
+    Ok(e)
+}
+
+/// Running sums in place: t_j ← t_{j−1} + t_j from t_0 (the knots of [`parametrize`] from 0 and
+/// the [`span_powers`] after it).
+pub fn accumulate(t: &mut [f64]) {
+    for j in 1..t.len() {
+        t[j] += t[j - 1];
+    }
 }

@@ -361,7 +361,7 @@ fn stage_loop(
         );
         if let Some(FixedSolution { points, .. }) = &sol {
             let updated =
-                divdiff::parametrize(points, knots.topology(), param).map_err(|err| match err {
+                crate::par::parametrize(points, knots.topology(), param).map_err(|err| match err {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::DegenerateRefinedSpan { stage, index, next }
                     }
