@@ -8,6 +8,13 @@
 //! * `cargo xtask playground [--out DIR]` — the interactive page (WebAssembly + static files).
 //! * `cargo xtask tidy`    — checks the architectural invariants of ARCHITECTURE.md.
 
+/// The benches time the libraries with the allocator the `curvefit` binary and the Python module
+/// use (mimalloc; see `crates/curvefit/src/main.rs`), not the system's: with glibc's malloc the
+/// tens of megabytes of a large solve are mapped fresh and faulted in on every call, and which
+/// calls do so depends on glibc's thresholds more than on the solver.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod bench;
 mod figures;
 mod fuzz;

@@ -40,6 +40,7 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
         .map(String::as_str)
         .unwrap_or("");
     let opts = Opts { quick };
+    println!("(allocator: mimalloc, as in the curvefit binary and the Python module; threads: rayon's pool, {} here)", rayon::current_num_threads());
     if "energy".contains(filter) || filter.is_empty() {
         energy::run(opts)?;
     }
