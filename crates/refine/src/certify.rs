@@ -652,13 +652,7 @@ mod tests {
     }
 
     fn pass_is_the_jumps(n: usize) {
-        let mut state: u64 = 7;
-        let mut unif = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unif = crate::par::uniform_stream(7);
         for topo in [Topology::Open, Topology::Closed] {
             let spans = if topo == Topology::Closed { n } else { n - 1 };
             let mut t = vec![0.0];

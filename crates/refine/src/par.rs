@@ -152,6 +152,19 @@ pub(crate) fn parametrize(
     divdiff::Knots::new(topology, t)
 }
 
+/// Deterministic numbers in [0, 1) for the unit tests of the chunked passes (an LCG; the
+/// integration tests have their own in `tests/`).
+#[cfg(test)]
+pub(crate) fn uniform_stream(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use divdiff::{Parametrization, Points, Topology};
@@ -162,13 +175,7 @@ mod tests {
     #[test]
     fn parametrize_in_chunks_is_divdiffs() {
         let n = 2 * super::CHUNK_VERTICES + 77;
-        let mut state: u64 = 11;
-        let mut unif = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unif = super::uniform_stream(11);
         let mut x: Vec<f64> = (0..3 * n).map(|_| unif() - 0.5).collect();
         for topology in [Topology::Open, Topology::Closed] {
             for param in [
