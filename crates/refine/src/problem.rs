@@ -333,7 +333,7 @@ impl Problem {
     pub(crate) fn data_knots_unvalidated(&self) -> Result<Knots, Error> {
         match &self.knots {
             Some(u) => Ok(Knots::new(self.topology, u.clone())?),
-            None => divdiff::parametrize(&self.points, self.topology, self.parametrization)
+            None => crate::par::parametrize(&self.points, self.topology, self.parametrization)
                 .map_err(|e| match e {
                     divdiff::Error::ZeroLengthSpan { index, next } => {
                         Error::CoincidentPoints { index, next }
