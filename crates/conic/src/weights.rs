@@ -63,6 +63,45 @@ impl Weights {
         }
     }
 
+    /// Θ_b = V_b⁻² on every non-zero block of `cones` with its scaling data laid out once
+    /// (block b from the returned offset b: m + 1 entries for Q^m, m for an orthant, none for a
+    /// zero block, which is Θ_b = 0 until [`Weights::set_scalar`]), for the method to write the
+    /// scalings of each iteration in place ([`Weights::nt_data_mut`]).
+    pub(crate) fn nt_layout(cones: &Cones) -> (Self, Vec<usize>) {
+        let mut off = vec![0];
+        let mut tags = Vec::with_capacity(cones.len());
+        for b in cones.blocks() {
+            let len = match b {
+                crate::Cone::Zero(_) => 0,
+                crate::Cone::Nonnegative(m) => *m,
+                crate::Cone::SecondOrder(m) => m + 1,
+            };
+            tags.push(match b.kind() {
+                Kind::Zero => Tag::Scalar(0.0),
+                kind => Tag::Nt(kind),
+            });
+            off.push(off.last().copied().unwrap_or(0) + len);
+        }
+        let total = off.last().copied().unwrap_or(0);
+        let w = Weights {
+            tags,
+            start: off[..cones.len()].to_vec(),
+            data: vec![0.0; total],
+            dims: cones.blocks().iter().map(|b| b.dim()).collect(),
+        };
+        (w, off)
+    }
+
+    /// The scaling data of a [`Weights::nt_layout`], to write in place.
+    pub(crate) fn nt_data_mut(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+
+    /// The scaling data of a [`Weights::nt_layout`].
+    pub(crate) fn nt_data(&self) -> &[f64] {
+        &self.data
+    }
+
     /// The number of blocks.
     pub fn len(&self) -> usize {
         self.tags.len()
