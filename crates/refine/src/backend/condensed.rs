@@ -115,9 +115,17 @@ pub(crate) struct Condensed<'a> {
     sm_factor: BlockFactor<2>,
     touching: Vec<[(usize, f64); 3]>,
     ntouch: Vec<usize>,
-    /// (D + ρI)⁻¹ and D per variable (d × d).
+    /// (D + ρI)⁻¹ per condensed point (d × d; 0 at an interpolated point, which does not move)
+    /// and D per variable (d × d).
     dinv: Vec<f64>,
     dmat: Vec<f64>,
+    /// Every variable is a ball (the fixed-size kernels of `factor_balls` apply).
+    balls: bool,
+    /// Every condensed point is a variable, in order (x is the condensed y itself).
+    identity: bool,
+    /// What the interpolated points of `y` hold: their data (`Some(true)`), zero
+    /// (`Some(false)`), or not yet written.
+    y_fixed: Option<bool>,
     route: Route,
     /// Every factorization takes the full-vertex route (after [`KktSystem::escalate`]).
     exact: bool,
@@ -382,6 +390,17 @@ impl<'a> Condensed<'a> {
             }
         }
         let nv = var_point.len();
+        let balls = var_point
+            .iter()
+            .all(|&j| matches!(sets[j], PointSet::Ball(_)));
+        // S = T ⊗ I_d + K D⁻¹ Kᵀ: the scalar part T once, the blocks at each factorization.
+        let mut sm = BlockBand::zeros(size, d, topology).map_err(|_| singular(0))?;
+        for j in 0..size {
+            let _ = sm.add_scalar(j, j, cond.diag[j]);
+            if closed || j + 1 < size {
+                let _ = sm.add_scalar(j, (j + 1) % size, cond.off[j]);
+            }
+        }
         Ok(Condensed {
             cond,
             knots,
@@ -397,12 +416,15 @@ impl<'a> Condensed<'a> {
             s: vec![0.0; size * d],
             y: vec![0.0; n * d],
             g: vec![0.0; n * d],
-            sm: BlockBand::zeros(size, d, topology).map_err(|_| singular(0))?,
+            sm,
             sm_factor: BlockFactor::default(),
             touching,
             ntouch,
-            dinv: vec![0.0; nv * d * d],
+            dinv: vec![0.0; n * d * d],
             dmat: vec![0.0; nv * d * d],
+            balls,
+            identity: nv == n,
+            y_fixed: None,
             route: Route::Condensed,
             exact: false,
             full: None,
@@ -485,8 +507,9 @@ impl<'a> Condensed<'a> {
             .iter()
             .flat_map(|&j| self.q[j * d..(j + 1) * d].to_vec())
             .collect();
-        let mut g = vec![0.0; x.len()];
-        self.gradient(&x, &mut g);
+        // The forces at every condensed point (the interpolated ones too).
+        self.scatter(&x, true);
+        self.apply_q();
         let f0 = self.g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let f = if f0 > 0.0 { f0 } else { self.scales.force };
         let m = self.cones.rows();
@@ -502,17 +525,26 @@ impl<'a> Condensed<'a> {
         })
     }
 
-    /// Scatters the variables into the condensed y (fixed points at their data).
+    /// Scatters the variables into the condensed y (interpolated points at their data, or at 0
+    /// for a direction).
     fn scatter(&mut self, x: &[f64], with_fixed: bool) {
         let d = self.d;
-        if with_fixed {
+        if self.identity {
+            self.y.copy_from_slice(x);
+            return;
+        }
+        if self.y_fixed != Some(with_fixed) {
             for (j, set) in self.sets.iter().enumerate() {
                 if *set == PointSet::Fixed {
-                    self.y[j * d..(j + 1) * d].copy_from_slice(&self.q[j * d..(j + 1) * d]);
+                    let yj = &mut self.y[j * d..(j + 1) * d];
+                    if with_fixed {
+                        yj.copy_from_slice(&self.q[j * d..(j + 1) * d]);
+                    } else {
+                        yj.fill(0.0);
+                    }
                 }
             }
-        } else {
-            self.y.fill(0.0);
+            self.y_fixed = Some(with_fixed);
         }
         for (v, &j) in self.var_point.iter().enumerate() {
             self.y[j * d..(j + 1) * d].copy_from_slice(&x[v * d..(v + 1) * d]);
@@ -528,6 +560,26 @@ impl<'a> Condensed<'a> {
         let _ = self.t.solve_in_place(&mut self.s, d);
         self.cond.apply_kt(&self.s, d, &mut self.g);
         0.5 * dot(&self.u, &self.s)
+    }
+
+    /// Q y at the variables into `out`, E(y) returned, for the variables `x` (interpolated
+    /// points at their data with `with_fixed`, else at 0).
+    fn q_at_variables(&mut self, x: &[f64], with_fixed: bool, out: &mut [f64]) -> f64 {
+        let d = self.d;
+        if self.identity {
+            // x is y: no scatter, Kᵀs straight into `out`.
+            self.cond.apply_k(x, d, &mut self.u);
+            self.s.copy_from_slice(&self.u);
+            let _ = self.t.solve_in_place(&mut self.s, d);
+            self.cond.apply_kt(&self.s, d, out);
+            return 0.5 * dot(&self.u, &self.s);
+        }
+        self.scatter(x, with_fixed);
+        let e = self.apply_q();
+        for (v, &j) in self.var_point.iter().enumerate() {
+            out[v * d..(v + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
+        }
+        e
     }
 
     /// The refined curve for the variables x (data vertices of W at y, free vertices by the
@@ -582,70 +634,18 @@ impl<'a> Condensed<'a> {
 
     /// The condensed route: (D + ρI)⁻¹ per variable from the NT weights, S = T + K D⁻¹ Kᵀ.
     fn factor_condensed(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
-        let d = self.d;
         let size = self.cond.len();
-        let closed = self.cond.closed;
+        // Without aliasing blocks (a cyclic S of more than 2W + 1 rows), balls in d ≤ 3 take
+        // the fixed-size kernels.
+        let fixed = self.balls && (!self.cond.closed || size > 5);
         loop {
-            // (indices within the band by construction: the adds cannot fail)
-            self.sm.clear();
-            for j in 0..size {
-                let _ = self.sm.add_scalar(j, j, self.cond.diag[j]);
-                if closed || j + 1 < size {
-                    let _ = self.sm.add_scalar(j, (j + 1) % size, self.cond.off[j]);
-                }
-            }
-            for v in 0..self.var_point.len() {
-                let j = self.var_point[v];
-                let shift = self.rho + sigma * self.qdiag[j];
-                let di = &mut self.dinv[v * d * d..(v + 1) * d * d];
-                let dm = &mut self.dmat[v * d * d..(v + 1) * d * d];
-                match (weights.block(v), &self.sets[j]) {
-                    (BlockWeight::Nt { scaling, .. }, PointSet::Ball(_)) => {
-                        // V⁻² lower-right block: η⁻²(I + 2 w̄₁w̄₁ᵀ).
-                        let eta2 = scaling[0] * scaling[0];
-                        let w1 = &scaling[2..];
-                        ball_inverse(1.0 / eta2, 2.0 / eta2, w1, shift, di);
-                        for a in 0..d {
-                            for b in 0..d {
-                                let id = if a == b { 1.0 } else { 0.0 };
-                                dm[a * d + b] = (id + 2.0 * w1[a] * w1[b]) / eta2;
-                            }
-                        }
-                    }
-                    (BlockWeight::Nt { scaling, .. }, PointSet::Faces(faces)) => {
-                        let theta: Vec<f64> = scaling.iter().map(|v| 1.0 / (v * v)).collect();
-                        let normals: Vec<&[f64]> =
-                            faces.iter().map(|f| f.normal.as_slice()).collect();
-                        faces_inverse(&normals, &theta, shift, d, di);
-                        for a in 0..d {
-                            for b in 0..d {
-                                dm[a * d + b] = faces
-                                    .iter()
-                                    .zip(&theta)
-                                    .map(|(f, t)| t * f.normal[a] * f.normal[b])
-                                    .sum::<f64>();
-                            }
-                        }
-                    }
-                    _ => {
-                        return Err(conic::Error::Singular {
-                            index: self.cond.vertices[j],
-                        })
-                    }
-                }
-                let di = &self.dinv[v * d * d..(v + 1) * d * d];
-                let nt = self.ntouch[j];
-                for x in 0..nt {
-                    let (jx, kx) = self.touching[j][x];
-                    let _ = self.sm.add_scaled(jx, jx, kx * kx, di);
-                    for &(jy, ky) in &self.touching[j][x + 1..nt] {
-                        // A row touching the point twice (a closed curve of two condensed
-                        // points) meets itself: both (jx, jy) and (jy, jx) are its diagonal.
-                        let f = if jx == jy { 2.0 * kx * ky } else { kx * ky };
-                        let _ = self.sm.add_scaled(jx, jy, f, di);
-                    }
-                }
-            }
+            let assembled = match (fixed, self.d) {
+                (true, 1) => self.assemble_balls::<1>(weights, sigma),
+                (true, 2) => self.assemble_balls::<2>(weights, sigma),
+                (true, 3) => self.assemble_balls::<3>(weights, sigma),
+                _ => self.assemble_general(weights, sigma),
+            };
+            assembled?;
             match self.sm.factor_into(&cholesky(), &mut self.sm_factor) {
                 Ok(()) => return Ok(()),
                 Err(e) => {
@@ -659,6 +659,142 @@ impl<'a> Condensed<'a> {
                 }
             }
         }
+    }
+
+    /// (D + ρI)⁻¹ and D of every variable and the blocks K (D + ρI)⁻¹ Kᵀ of S, any sets.
+    fn assemble_general(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
+        let d = self.d;
+        self.sm.clear_blocks();
+        for v in 0..self.var_point.len() {
+            let j = self.var_point[v];
+            let shift = self.rho + sigma * self.qdiag[j];
+            let di = &mut self.dinv[j * d * d..(j + 1) * d * d];
+            let dm = &mut self.dmat[v * d * d..(v + 1) * d * d];
+            match (weights.block(v), &self.sets[j]) {
+                (BlockWeight::Nt { scaling, .. }, PointSet::Ball(_)) => {
+                    // V⁻² lower-right block: η⁻²(I + 2 w̄₁w̄₁ᵀ).
+                    let eta2 = scaling[0] * scaling[0];
+                    let w1 = &scaling[2..];
+                    ball_inverse(1.0 / eta2, 2.0 / eta2, w1, shift, di);
+                    for a in 0..d {
+                        for b in 0..d {
+                            let id = if a == b { 1.0 } else { 0.0 };
+                            dm[a * d + b] = (id + 2.0 * w1[a] * w1[b]) / eta2;
+                        }
+                    }
+                }
+                (BlockWeight::Nt { scaling, .. }, PointSet::Faces(faces)) => {
+                    let theta: Vec<f64> = scaling.iter().map(|v| 1.0 / (v * v)).collect();
+                    let normals: Vec<&[f64]> = faces.iter().map(|f| f.normal.as_slice()).collect();
+                    faces_inverse(&normals, &theta, shift, d, di);
+                    for a in 0..d {
+                        for b in 0..d {
+                            dm[a * d + b] = faces
+                                .iter()
+                                .zip(&theta)
+                                .map(|(f, t)| t * f.normal[a] * f.normal[b])
+                                .sum::<f64>();
+                        }
+                    }
+                }
+                _ => {
+                    return Err(conic::Error::Singular {
+                        index: self.cond.vertices[j],
+                    })
+                }
+            }
+            let di = &self.dinv[j * d * d..(j + 1) * d * d];
+            let nt = self.ntouch[j];
+            for x in 0..nt {
+                let (jx, kx) = self.touching[j][x];
+                let _ = self.sm.add_scaled(jx, jx, kx * kx, di);
+                for &(jy, ky) in &self.touching[j][x + 1..nt] {
+                    // A row touching the point twice (a closed curve of two condensed
+                    // points) meets itself: both (jx, jy) and (jy, jx) are its diagonal.
+                    let f = if jx == jy { 2.0 * kx * ky } else { kx * ky };
+                    let _ = self.sm.add_scaled(jx, jy, f, di);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Condensed::assemble_general`] for balls alone in a compile-time d = `D` and no
+    /// aliasing blocks: (D + ρI)⁻¹ per ball as in [`ball_inverse`], then each row j of S
+    /// written whole from the three points its row of K touches —
+    /// S_jj = T_jj I + Σ_t K_jt² D⁻¹_(j,t), S_j,j+1 = T_j,j+1 I + K_j1 K_j+1,0 D⁻¹_(j,1) +
+    /// K_j2 K_j+1,1 D⁻¹_(j,2), S_j,j+2 = K_j2 K_j+2,0 D⁻¹_(j,2) — instead of six scattered adds
+    /// per point (the same sums).
+    fn assemble_balls<const D: usize>(
+        &mut self,
+        weights: &Weights,
+        sigma: f64,
+    ) -> Result<(), conic::Error> {
+        let dd = D * D;
+        for v in 0..self.var_point.len() {
+            let j = self.var_point[v];
+            let BlockWeight::Nt { scaling, .. } = weights.block(v) else {
+                return Err(conic::Error::Singular {
+                    index: self.cond.vertices[j],
+                });
+            };
+            let shift = self.rho + sigma * self.qdiag[j];
+            let eta2 = scaling[0] * scaling[0];
+            let w: [f64; D] = std::array::from_fn(|k| scaling[2 + k]);
+            let (a, b) = (1.0 / eta2, 2.0 / eta2);
+            // ball_inverse, unrolled.
+            let mut w2 = 0.0;
+            for k in 0..D {
+                w2 += w[k] * w[k];
+            }
+            let ar = a + shift;
+            let (across, along) = (1.0 / ar, 1.0 / (ar + b * w2));
+            let wn = w2.sqrt();
+            let di = &mut self.dinv[j * dd..(j + 1) * dd];
+            let dm = &mut self.dmat[v * dd..(v + 1) * dd];
+            for r in 0..D {
+                for c in 0..D {
+                    let id = if r == c { 1.0 } else { 0.0 };
+                    let uu = if wn > 0.0 {
+                        (w[r] / wn) * (w[c] / wn)
+                    } else {
+                        0.0
+                    };
+                    di[r * D + c] = across * (id - uu) + along * uu;
+                    dm[r * D + c] = (id + 2.0 * w[r] * w[c]) / eta2;
+                }
+            }
+        }
+        let size = self.cond.len();
+        let closed = self.cond.closed;
+        let cond = self.cond;
+        let dinv = &self.dinv;
+        let di = |p: usize| -> &[f64] { &dinv[p * dd..(p + 1) * dd] };
+        let blocks = self.sm.blocks_mut();
+        for j in 0..size {
+            let kr = cond.krows[j];
+            let (c0, c1, c2) = (cond.col(j, 0), cond.col(j, 1), cond.col(j, 2));
+            let row = &mut blocks[j * 3 * dd..(j + 1) * 3 * dd];
+            let (d0, d1, d2) = (di(c0), di(c1), di(c2));
+            let (f0, f1, f2) = (kr[0] * kr[0], kr[1] * kr[1], kr[2] * kr[2]);
+            for e in 0..dd {
+                row[e] = f0 * d0[e] + f1 * d1[e] + f2 * d2[e];
+            }
+            if closed || j + 1 < size {
+                let next = cond.krows[(j + 1) % size];
+                let (g1, g2) = (kr[1] * next[0], kr[2] * next[1]);
+                for e in 0..dd {
+                    row[dd + e] = g1 * d1[e] + g2 * d2[e];
+                }
+            }
+            if closed || j + 2 < size {
+                let h = kr[2] * cond.krows[(j + 2) % size][0];
+                for e in 0..dd {
+                    row[2 * dd + e] = h * d2[e];
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The full-vertex route: H ⊗ I + D at W's data vertices.
@@ -706,6 +842,69 @@ impl<'a> Condensed<'a> {
     }
 }
 
+impl Condensed<'_> {
+    /// The condensed route's solve (see [`KktSystem::solve`]) with d a compile-time constant
+    /// for d ≤ 3 (`D` = 0: `self.d`).
+    fn solve_condensed<const D: usize>(&mut self, r: &mut [f64]) {
+        let d = if D == 0 { self.d } else { D };
+        let dd = d * d;
+        // (wy stays 0 at interpolated points.)
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let di = &self.dinv[j * dd..(j + 1) * dd];
+            let rv = &r[v * d..(v + 1) * d];
+            let out = &mut self.wy[j * d..(j + 1) * d];
+            for a in 0..d {
+                let mut acc = 0.0;
+                for b in 0..d {
+                    acc += di[a * d + b] * rv[b];
+                }
+                out[a] = acc;
+            }
+        }
+        self.cond.apply_k(&self.wy, d, &mut self.wk);
+        let _ = self.sm_factor.solve_in_place(&mut self.wk, 1);
+        self.cond.apply_kt(&self.wk, d, &mut self.wkt);
+        let mut buf = [0.0; 16];
+        let mut heap = Vec::new();
+        let t: &mut [f64] = if d <= 16 {
+            &mut buf[..d]
+        } else {
+            heap.resize(d, 0.0);
+            &mut heap
+        };
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let di = &self.dinv[j * dd..(j + 1) * dd];
+            let rv = &mut r[v * d..(v + 1) * d];
+            let wv = &self.wkt[j * d..(j + 1) * d];
+            for b in 0..d {
+                t[b] = rv[b] - wv[b];
+            }
+            for a in 0..d {
+                let mut acc = 0.0;
+                for b in 0..d {
+                    acc += di[a * d + b] * t[b];
+                }
+                rv[a] = acc;
+            }
+        }
+    }
+
+    /// y = A x for balls alone (rows (0; I) per ball), d a compile-time constant.
+    fn apply_a_balls<const D: usize>(&self, x: &[f64], out: &mut [f64]) {
+        for (xv, o) in x.chunks_exact(D).zip(out.chunks_exact_mut(D + 1)) {
+            o[0] = 0.0;
+            o[1..].copy_from_slice(xv);
+        }
+    }
+
+    /// out = Aᵀ z for balls alone, d a compile-time constant.
+    fn apply_at_balls<const D: usize>(&self, z: &[f64], out: &mut [f64]) {
+        for (o, zv) in out.chunks_exact_mut(D).zip(z.chunks_exact(D + 1)) {
+            o.copy_from_slice(&zv[1..]);
+        }
+    }
+}
+
 impl KktSystem for Condensed<'_> {
     fn num_vars(&self) -> usize {
         self.var_point.len() * self.d
@@ -720,26 +919,23 @@ impl KktSystem for Condensed<'_> {
     }
 
     fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> f64 {
-        let d = self.d;
-        self.scatter(x, true);
-        let e = self.apply_q();
-        for (v, &j) in self.var_point.iter().enumerate() {
-            g[v * d..(v + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
-        }
-        e
+        self.q_at_variables(x, true, g)
     }
 
     fn apply_p(&mut self, v: &[f64], y: &mut [f64]) {
-        let d = self.d;
-        self.scatter(v, false);
-        self.apply_q();
-        for (k, &j) in self.var_point.iter().enumerate() {
-            y[k * d..(k + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
-        }
+        self.q_at_variables(v, false, y);
     }
 
     fn apply_a(&self, x: &[f64], out: &mut [f64]) {
         let d = self.d;
+        if self.balls {
+            match d {
+                1 => return self.apply_a_balls::<1>(x, out),
+                2 => return self.apply_a_balls::<2>(x, out),
+                3 => return self.apply_a_balls::<3>(x, out),
+                _ => {}
+            }
+        }
         for (v, &j) in self.var_point.iter().enumerate() {
             let r = self.row_start[v];
             let xv = &x[v * d..(v + 1) * d];
@@ -761,6 +957,14 @@ impl KktSystem for Condensed<'_> {
 
     fn apply_at(&self, z: &[f64], out: &mut [f64]) {
         let d = self.d;
+        if self.balls {
+            match d {
+                1 => return self.apply_at_balls::<1>(z, out),
+                2 => return self.apply_at_balls::<2>(z, out),
+                3 => return self.apply_at_balls::<3>(z, out),
+                _ => {}
+            }
+        }
         for (v, &j) in self.var_point.iter().enumerate() {
             let r = self.row_start[v];
             let o = &mut out[v * d..(v + 1) * d];
@@ -835,32 +1039,11 @@ impl KktSystem for Condensed<'_> {
             Route::Condensed => {
                 // dy ← D⁻¹ r (temporarily, in condensed y-space), w = K D⁻¹ r, w ← S⁻¹ w,
                 // dy = D⁻¹(r − Kᵀ w).
-                self.wy.fill(0.0);
-                for (v, &j) in self.var_point.iter().enumerate() {
-                    let di = &self.dinv[v * d * d..(v + 1) * d * d];
-                    for a in 0..d {
-                        self.wy[j * d + a] = (0..d).map(|b| di[a * d + b] * r[v * d + b]).sum();
-                    }
-                }
-                self.cond.apply_k(&self.wy, d, &mut self.wk);
-                let _ = self.sm_factor.solve_in_place(&mut self.wk, 1);
-                self.cond.apply_kt(&self.wk, d, &mut self.wkt);
-                for (v, &j) in self.var_point.iter().enumerate() {
-                    let di = &self.dinv[v * d * d..(v + 1) * d * d];
-                    let mut out = [0.0; 16];
-                    let mut heap = Vec::new();
-                    let o: &mut [f64] = if d <= 16 {
-                        &mut out[..d]
-                    } else {
-                        heap.resize(d, 0.0);
-                        &mut heap
-                    };
-                    for a in 0..d {
-                        o[a] = (0..d)
-                            .map(|b| di[a * d + b] * (r[v * d + b] - self.wkt[j * d + b]))
-                            .sum();
-                    }
-                    r[v * d..(v + 1) * d].copy_from_slice(o);
+                match d {
+                    1 => self.solve_condensed::<1>(r),
+                    2 => self.solve_condensed::<2>(r),
+                    3 => self.solve_condensed::<3>(r),
+                    _ => self.solve_condensed::<0>(r),
                 }
             }
             Route::Full => {
