@@ -30,10 +30,13 @@
 //! decreasing θ (each large θ_k then enters one new diagonal entry and no Schur complement
 //! subtracts it from a small one).
 //!
-//! The active-set polish's weights (curvature and penalties, [`conic::polish`]) may leave D
-//! singular, so its systems take the full-vertex elimination instead: H ⊗ I_d + D at W's data
-//! vertices, whose Schur complement on them is Q + D, factored by [`energy::System`] in O(N)
-//! with no D⁻¹.
+//! The active-set polish's weights ([`conic::polish`]: an active ball's c I + p ūūᵀ, c its
+//! curvature and p the stiff penalty on its normal; a polytope's penalties on its active faces; 0
+//! on an inactive point) take the condensed route too, c floored at [`POLISH_FLOOR`] × Q_jj in
+//! the inverse (refined away). When they are indefinite (a multiplier turned negative), or once a
+//! solve was too inexact ([`conic::KktSystem::escalate`]), the systems take the full-vertex
+//! elimination instead: H ⊗ I_d + D at W's data vertices, whose Schur complement on them is
+//! Q + D, factored by [`energy::System`] in O(N) with no D⁻¹.
 
 // The per-point kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
@@ -55,6 +58,12 @@ pub(crate) const REGULARIZATION: f64 = 1e-13;
 pub(crate) const REGULARIZATION_GROWTH: f64 = 100.0;
 /// Largest ρ tried, relative to the largest diagonal entry of Q.
 pub(crate) const MAX_REGULARIZATION: f64 = 1e-7;
+/// The polish's weight on a ball (its curvature across the normal, 0 on an inactive ball) is
+/// inverted as at least this times the point's Q_jj: D⁻¹ of 1/ρ at a point the polish leaves
+/// free made T + K D⁻¹ Kᵀ lose its T entirely (solves off by 1e-3 to 1e4 relative, measured);
+/// the refinement against the exact Q + D removes the floor, at a rate of about this where the
+/// free points are isolated among active ones.
+pub(crate) const POLISH_FLOOR: f64 = 1e-8;
 
 /// One face n̂·y ≤ ĉ of a polytope, with unit normal and the original normal's length (the
 /// multipliers of (3.8) are for the original normals).
@@ -442,6 +451,11 @@ impl<'a> Condensed<'a> {
         })
     }
 
+    /// The condensed point of each variable (the interpolated points are not variables).
+    pub(crate) fn variables(&self) -> &[usize] {
+        &self.var_point
+    }
+
     /// The rows of variable `v`'s block.
     pub(crate) fn rows(&self, v: usize) -> std::ops::Range<usize> {
         self.row_start[v]..self.row_start[v] + self.cones.blocks()[v].dim()
@@ -664,6 +678,7 @@ impl<'a> Condensed<'a> {
     /// (D + ρI)⁻¹ and D of every variable and the blocks K (D + ρI)⁻¹ Kᵀ of S, any sets.
     fn assemble_general(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
         let d = self.d;
+        let normal_zero = vec![0.0; d];
         self.sm.clear_blocks();
         for v in 0..self.var_point.len() {
             let j = self.var_point[v];
@@ -683,8 +698,42 @@ impl<'a> Condensed<'a> {
                         }
                     }
                 }
-                (BlockWeight::Nt { scaling, .. }, PointSet::Faces(faces)) => {
-                    let theta: Vec<f64> = scaling.iter().map(|v| 1.0 / (v * v)).collect();
+                (weight, PointSet::Ball(_)) => {
+                    // The polish: c I + p ūūᵀ (an active ball), or c I.
+                    let (a, b, w1): (f64, f64, &[f64]) = match weight {
+                        BlockWeight::Active {
+                            curvature,
+                            normal,
+                            penalty,
+                        } => (curvature, penalty, &normal[1..]),
+                        BlockWeight::Scalar(c) => (c, 0.0, &normal_zero[..d]),
+                        _ => {
+                            return Err(conic::Error::Singular {
+                                index: self.cond.vertices[j],
+                            })
+                        }
+                    };
+                    ball_inverse(a.max(POLISH_FLOOR * self.qdiag[j]), b, w1, shift, di);
+                    for r in 0..d {
+                        for c in 0..d {
+                            let id = if r == c { a } else { 0.0 };
+                            dm[r * d + c] = id + b * w1[r] * w1[c];
+                        }
+                    }
+                }
+                (weight, PointSet::Faces(faces)) => {
+                    let theta: Vec<f64> = match weight {
+                        BlockWeight::Nt { scaling, .. } => {
+                            scaling.iter().map(|v| 1.0 / (v * v)).collect()
+                        }
+                        BlockWeight::Diagonal(t) => t.to_vec(),
+                        BlockWeight::Scalar(c) => vec![c; faces.len()],
+                        BlockWeight::Active { .. } => {
+                            return Err(conic::Error::Singular {
+                                index: self.cond.vertices[j],
+                            })
+                        }
+                    };
                     let normals: Vec<&[f64]> = faces.iter().map(|f| f.normal.as_slice()).collect();
                     faces_inverse(&normals, &theta, shift, d, di);
                     for a in 0..d {
@@ -733,21 +782,47 @@ impl<'a> Condensed<'a> {
         let dd = D * D;
         for v in 0..self.var_point.len() {
             let j = self.var_point[v];
-            let BlockWeight::Nt { scaling, .. } = weights.block(v) else {
-                return Err(conic::Error::Singular {
-                    index: self.cond.vertices[j],
-                });
-            };
             let shift = self.rho + sigma * self.qdiag[j];
-            let eta2 = scaling[0] * scaling[0];
-            let w: [f64; D] = std::array::from_fn(|k| scaling[2 + k]);
-            let (a, b) = (1.0 / eta2, 2.0 / eta2);
-            // ball_inverse, unrolled.
+            // D = a I + b w wᵀ: the NT weight η⁻²(I + 2 w̄₁w̄₁ᵀ), or the polish's c I + p ūūᵀ
+            // (an active ball) or c I.
+            let (a, b, w, nt): (f64, f64, [f64; D], Option<f64>) = match weights.block(v) {
+                BlockWeight::Nt { scaling, .. } => {
+                    let eta2 = scaling[0] * scaling[0];
+                    (
+                        1.0 / eta2,
+                        2.0 / eta2,
+                        std::array::from_fn(|k| scaling[2 + k]),
+                        Some(eta2),
+                    )
+                }
+                BlockWeight::Active {
+                    curvature,
+                    normal,
+                    penalty,
+                } => (
+                    curvature,
+                    penalty,
+                    std::array::from_fn(|k| normal[1 + k]),
+                    None,
+                ),
+                BlockWeight::Scalar(c) => (c, 0.0, [0.0; D], None),
+                BlockWeight::Diagonal(_) => {
+                    return Err(conic::Error::Singular {
+                        index: self.cond.vertices[j],
+                    })
+                }
+            };
+            // ball_inverse, unrolled (the polish's weight floored, see POLISH_FLOOR).
             let mut w2 = 0.0;
             for k in 0..D {
                 w2 += w[k] * w[k];
             }
-            let ar = a + shift;
+            let floor = if nt.is_none() {
+                POLISH_FLOOR * self.qdiag[j]
+            } else {
+                0.0
+            };
+            let ar = a.max(floor) + shift;
             let (across, along) = (1.0 / ar, 1.0 / (ar + b * w2));
             let wn = w2.sqrt();
             let di = &mut self.dinv[j * dd..(j + 1) * dd];
@@ -761,7 +836,10 @@ impl<'a> Condensed<'a> {
                         0.0
                     };
                     di[r * D + c] = across * (id - uu) + along * uu;
-                    dm[r * D + c] = (id + 2.0 * w[r] * w[c]) / eta2;
+                    dm[r * D + c] = match nt {
+                        Some(eta2) => (id + 2.0 * w[r] * w[c]) / eta2,
+                        None => id * a + b * w[r] * w[c],
+                    };
                 }
             }
         }
@@ -992,16 +1070,32 @@ impl KktSystem for Condensed<'_> {
     }
 
     fn factor(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
-        let nt = !self.exact
-            && (0..self.var_point.len())
-                .all(|v| matches!(weights.block(v), BlockWeight::Nt { .. }));
-        if nt {
+        // The interior-point weights (NT) and the polish's (an active ball's c I + p ūūᵀ, a
+        // polytope's penalties on its active faces, 0 on inactive points) have D ⪰ 0 of known
+        // structure: the condensed route. The polish's D may be indefinite (a multiplier turned
+        // negative): then the exact full-vertex route.
+        let nt =
+            (0..self.var_point.len()).all(|v| matches!(weights.block(v), BlockWeight::Nt { .. }));
+        let structured = (0..self.var_point.len()).all(|v| {
+            match (weights.block(v), &self.sets[self.var_point[v]]) {
+                (BlockWeight::Nt { .. } | BlockWeight::Scalar(_), _) => true,
+                (BlockWeight::Active { curvature, .. }, PointSet::Ball(_)) => curvature >= 0.0,
+                (BlockWeight::Diagonal(_), PointSet::Faces(_)) => true,
+                _ => false,
+            }
+        });
+        if !self.exact && structured {
             self.route = Route::Condensed;
-            self.factor_condensed(weights, sigma)
-        } else {
-            self.route = Route::Full;
-            self.factor_full(weights, sigma)
+            let rho = self.rho;
+            match self.factor_condensed(weights, sigma) {
+                Ok(()) => return Ok(()),
+                Err(e) if nt => return Err(e),
+                // (The polish's system on the full route, with the regularization it found.)
+                Err(_) => self.rho = rho,
+            }
         }
+        self.route = Route::Full;
+        self.factor_full(weights, sigma)
     }
 
     fn factor_is_exact(&self) -> bool {
@@ -1224,6 +1318,73 @@ mod route_tests {
         let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         for (x, y) in a.iter().zip(&b) {
             assert!((x - y).abs() <= 1e-6 * scale, "{a:?}\n{b:?}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod polish_route_tests {
+    use super::{Condensed, PointSet};
+    use crate::fast::Condensation;
+    use crate::operator::Stencil;
+    use conic::{KktSystem, Weights};
+    use divdiff::{Knots, Topology};
+
+    /// The condensed route and the full-vertex one solve the same system for the polish's
+    /// weights (an active ball's c(−J) + p uuᵀ with a stiff p, an inactive ball's 0).
+    #[test]
+    fn both_routes_solve_the_polish_system() {
+        for closed in [true, false] {
+            let (n, m, d) = (12usize, 4usize, 2usize);
+            let topo = if closed {
+                Topology::Closed
+            } else {
+                Topology::Open
+            };
+            let spans = if closed { n * m } else { (n - 1) * m };
+            let t: Vec<f64> = (0..=spans)
+                .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
+                .collect();
+            let kn = Knots::new(topo, t).unwrap();
+            let stencil = Stencil::new(&kn);
+            let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
+            let q: Vec<f64> = (0..n * d)
+                .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
+                .collect();
+            let sets = vec![PointSet::Ball(0.1); n];
+            let mut be = Condensed::new(&cond, &kn, q, sets, d).unwrap();
+            let cones = be.cones().clone();
+            let mut w = Weights::zero(&cones);
+            for b in 0..cones.len() {
+                if b == 3 {
+                    // An inactive ball: Θ = 0.
+                    continue;
+                }
+                let a = 0.3 + b as f64;
+                let u = [
+                    0.5f64.sqrt(),
+                    -0.5f64.sqrt() * a.cos(),
+                    -0.5f64.sqrt() * a.sin(),
+                ];
+                let scale = be.diagonal_scale(b);
+                w.set_active(b, scale * (0.01 + 0.1 * (b % 3) as f64), scale * 1e9, &u);
+            }
+            let r: Vec<f64> = (0..n * d).map(|k| ((k * 5) % 11) as f64 - 5.0).collect();
+            be.factor(&w, 0.0).unwrap();
+            assert_eq!(be.route, super::Route::Condensed);
+            let mut a = r.clone();
+            be.solve(&mut a);
+            be.route = super::Route::Full;
+            be.factor_full(&w, 0.0).unwrap();
+            let mut b = r.clone();
+            be.solve(&mut b);
+            let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (x, y) in a.iter().zip(&b) {
+                assert!(
+                    (x - y).abs() <= 1e-6 * scale,
+                    "closed {closed}\n{a:?}\n{b:?}"
+                );
+            }
         }
     }
 }
