@@ -282,19 +282,23 @@ fn polish_from_warm<C>(
     let Some(from) = be.warm_solution(x, &w) else {
         return Ok(None);
     };
-    // W holds every constraint: nothing outside it to judge. The polish stops once accepted.
-    let polished = polish_rounds(
-        &mut be,
+    // W holds every constraint: nothing outside it to judge. The polish stops once accepted; it
+    // runs on the points active in the previous answer when a tenth or more are not
+    // (`ActivePolish`: a condensation onto them, joined by any point its curve leaves).
+    let qw = q.coords().to_vec();
+    let polished = ActivePolish {
+        be: &mut be,
+        cond: &cond,
+        knots,
         stencil,
-        &wsets,
+        qw: &qw,
+        wsets: &wsets,
         d,
         conic_opts,
-        from,
-        None,
-        accept,
-        &mut |_| true,
-        certify,
-    )?;
+        margin: WorkingSetOptions::default().margin,
+        target: accept,
+    }
+    .run(&from, &mut |_| true, certify)?;
     Ok(match polished {
         Some(Polished {
             best: Some(best),
@@ -336,6 +340,7 @@ fn polish_rounds<C>(
     target: f64,
     judge: &mut dyn FnMut(&Points) -> bool,
     certify: Certify<'_, C>,
+    left: Option<&mut Option<(conic::Solution, Points)>>,
 ) -> Result<Option<Polished<C>>, Error> {
     let mut calls = 0;
     let mut settled = false;
@@ -354,6 +359,9 @@ fn polish_rounds<C>(
         calls += 1;
         let (points, g) = be.curve(&p.x, stencil)?;
         if !judge(&points) {
+            if let Some(left) = left {
+                *left = Some((p, points));
+            }
             return Ok(None);
         }
         let multipliers = multipliers(be, wsets, &p.z, &g, d);
@@ -371,6 +379,13 @@ fn polish_rounds<C>(
             points,
             multipliers,
         });
+        if p.residuals.total <= ROUNDING_LEVEL * conic_opts.tolerance {
+            // The method certifies the point at its rounding: another call would take its
+            // Newton steps again from a converged point; the caller's certificate is at its
+            // floor.
+            settled = true;
+            break;
+        }
         sol = p;
     }
     Ok(Some(Polished {
@@ -666,7 +681,7 @@ fn run_round<C>(
         // it does not get there (or its curve leaves a constraint outside W), the method
         // resumes from the iterate.
         if early && conic_opts.polish.is_some() {
-            let early = Early {
+            let on_active = ActivePolish {
                 be: &mut be,
                 cond,
                 knots,
@@ -676,13 +691,20 @@ fn run_round<C>(
                 d,
                 conic_opts,
                 margin: options.margin,
-                aim,
+                target: aim.target,
             };
-            if let Some(done) = early.polish(&sol, &mut |p| judge(p, near), certify)? {
-                return Ok(Round {
-                    accepted: Some(done),
-                    iterations,
-                });
+            if let Some(Polished {
+                best: Some(b),
+                settled,
+                ..
+            }) = on_active.run(&sol, &mut |p| judge(p, near), certify)?
+            {
+                if b.k <= aim.target || (settled && b.k <= aim.accept) {
+                    return Ok(Round {
+                        accepted: Some((b.points, b.certificate)),
+                        iterations,
+                    });
+                }
             }
         }
         start = Some(Start {
@@ -720,7 +742,35 @@ fn run_round<C>(
     // from the polished point while the caller's certificate is above `target` and falls (F(t)
     // of the free-knot optimizer and its envelope gradient are only as accurate as this curve;
     // a call that ran out of steps after an active-set change goes on from its best point).
-    // Each polished curve is judged again (it moves a little).
+    // Each polished curve is judged again (it moves a little). On the active points of W when
+    // a tenth of W or more is inactive (`ActivePolish`); on W when that polish leaves a point of
+    // W it dropped.
+    if certified.k > aim.target && conic_opts.polish.is_some() {
+        let mut on_active = ActivePolish {
+            be: &mut be,
+            cond,
+            knots,
+            stencil,
+            qw: &qw,
+            wsets: &wsets,
+            d,
+            conic_opts,
+            margin: options.margin,
+            target: aim.target,
+        };
+        if on_active.prefers_subset(&sol) {
+            if let Some(p) = on_active.run(&sol, &mut |p| judge(p, near), certify)? {
+                let best = match p.best {
+                    Some(b) if b.k < certified.k => b,
+                    _ => certified,
+                };
+                return Ok(Round {
+                    accepted: Some((best.points, best.certificate)),
+                    iterations,
+                });
+            }
+        }
+    }
     let polished = polish_rounds(
         &mut be,
         stencil,
@@ -732,6 +782,7 @@ fn run_round<C>(
         aim.target,
         &mut |p| judge(p, near),
         certify,
+        None,
     )?;
     Ok(Round {
         accepted: polished
@@ -749,7 +800,7 @@ fn run_round<C>(
 /// the curve); condensed onto the active points, the inactive ones are free vertices of the
 /// energy, as outside W, and every condensed point carries its constraint's curvature and
 /// penalty. The polished curve is judged against every constraint it left out.
-struct Early<'e, 'c> {
+struct ActivePolish<'e, 'c> {
     be: &'e mut Condensed<'c>,
     cond: &'e Condensation,
     knots: &'e Knots,
@@ -759,22 +810,35 @@ struct Early<'e, 'c> {
     d: usize,
     conic_opts: &'e conic::Options,
     margin: f64,
-    aim: Aim,
+    target: f64,
 }
 
-/// At most this fraction of W's variables inactive: the early polish runs on W's own backend.
-const EARLY_ON_W: f64 = 0.1;
+/// At most this fraction of W's variables inactive: the polish runs on W's own backend.
+const POLISH_ON_W: f64 = 0.1;
 
-impl Early<'_, '_> {
-    /// The polished curve and its certificate when the polish gets to the aim (or settles
-    /// within `accept`), else `None`.
-    fn polish<C>(
+impl ActivePolish<'_, '_> {
+    /// Whether the polish from `sol` would run on a condensation onto W's active points (W of
+    /// balls alone, a tenth or more of it inactive).
+    fn prefers_subset(&mut self, sol: &conic::Solution) -> bool {
+        if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
+            return false;
+        }
+        let Some(active) = conic::polish::active_blocks(self.be, sol, self.conic_opts) else {
+            return false;
+        };
+        let inactive = active.iter().filter(|a| !**a).count();
+        inactive as f64 > POLISH_ON_W * active.len() as f64
+    }
+
+    /// The polish calls from `sol` ([`polish_rounds`], none certified yet), on W or on its
+    /// active points; `None` when a polished curve left a constraint it does not hold.
+    fn run<C>(
         self,
         sol: &conic::Solution,
         judge: &mut dyn FnMut(&Points) -> bool,
         certify: Certify<'_, C>,
-    ) -> Result<Option<(Points, C)>, Error> {
-        let Early {
+    ) -> Result<Option<Polished<C>>, Error> {
+        let ActivePolish {
             be,
             cond,
             knots,
@@ -784,18 +848,8 @@ impl Early<'_, '_> {
             d,
             conic_opts,
             margin,
-            aim,
+            target,
         } = self;
-        let done = |p: Option<Polished<C>>| match p {
-            Some(Polished {
-                best: Some(b),
-                settled,
-                ..
-            }) if b.k <= aim.target || (settled && b.k <= aim.accept) => {
-                Some((b.points, b.certificate))
-            }
-            _ => None,
-        };
         let vars = be.variables().to_vec();
         let active = conic::polish::active_blocks(be, sol, conic_opts);
         let balls = wsets.iter().all(|s| !matches!(s, PointSet::Faces(_)));
@@ -820,14 +874,13 @@ impl Early<'_, '_> {
                 }
             }
         }
-        let pos: Vec<usize> = (0..n_w).filter(|&j| keep[j]).collect();
         let need = if cond.closed { 2 } else { 3 };
         if active.is_none()
             || !balls
-            || inactive as f64 <= EARLY_ON_W * vars.len() as f64
-            || pos.len() < need
+            || inactive as f64 <= POLISH_ON_W * vars.len() as f64
+            || keep.iter().filter(|&&k| k).count() < need
         {
-            let p = polish_rounds(
+            return polish_rounds(
                 be,
                 stencil,
                 wsets,
@@ -835,89 +888,140 @@ impl Early<'_, '_> {
                 conic_opts,
                 sol.clone(),
                 None,
-                aim.target,
+                target,
                 judge,
                 certify,
-            )?;
-            return Ok(done(p));
+                None,
+            );
         }
-        let sub_cond = Condensation::at_vertices_reusing(
-            knots,
-            stencil,
-            pos.iter().map(|&j| cond.vertices[j]).collect(),
-            None,
-        )?;
-        let qs: Vec<f64> = pos
-            .iter()
-            .flat_map(|&j| qw[j * d..(j + 1) * d].iter().copied())
-            .collect();
-        let ss: Vec<PointSet> = pos.iter().map(|&j| wsets[j].clone()).collect();
-        let mut sub = Condensed::new(&sub_cond, knots, qs, ss.clone(), d)?;
-        // The iterate on the kept variables.
         let mut var_of = vec![usize::MAX; n_w];
         for (v, &j) in vars.iter().enumerate() {
             var_of[j] = v;
         }
-        let (mut x, mut s, mut z) = (Vec::new(), Vec::new(), Vec::new());
-        for &j in &pos {
-            let v = var_of[j];
-            if v == usize::MAX {
-                continue;
-            }
-            x.extend_from_slice(&sol.x[v * d..(v + 1) * d]);
+        // The points of W left out that a polished curve violates join, and the polish is
+        // repeated on the larger set from that curve (the points joining on their boundary
+        // side, where the polish takes them as active), a few times at most.
+        // The start: the iterate on W's variables (x, its slack and dual per variable).
+        let mut from: Vec<Option<VariableStart>> = vec![None; n_w];
+        for (v, &j) in vars.iter().enumerate() {
             let r = be.rows(v);
-            s.extend_from_slice(&sol.s[r.clone()]);
-            z.extend_from_slice(&sol.z[r]);
+            from[j] = Some((
+                sol.x[v * d..(v + 1) * d].to_vec(),
+                sol.s[r.clone()].to_vec(),
+                sol.z[r].to_vec(),
+            ));
         }
-        let sub_sol = conic::Solution {
-            x,
-            s,
-            z,
-            residuals: conic::Residuals::default(),
-            objective: 0.0,
-            iterations: sol.iterations,
-            status: sol.status,
-            polished: false,
-        };
-        // The judge: the points of W left out (with the margin), then those outside W.
-        let dropped: Vec<usize> = (0..n_w).filter(|&j| !keep[j]).collect();
-        let mut judge_sub = |p: &Points| {
-            let inside = dropped.iter().all(|&j| {
-                wsets[j].closeness(p.point(cond.vertices[j]), &qw[j * d..(j + 1) * d], 0.0)
-                    < 1.0 - margin
-            });
-            inside && judge(p)
-        };
-        // The certificate: W's multipliers, 0 on the points left out.
-        let mut certify_sub = |p: &Points, m: &[Vec<f64>]| {
-            let mut wm: Vec<Vec<f64>> = wsets
+        for attempt in 1..=SUBSET_ATTEMPTS {
+            let pos: Vec<usize> = (0..n_w).filter(|&j| keep[j]).collect();
+            let sub_cond = Condensation::at_vertices_reusing(
+                knots,
+                stencil,
+                pos.iter().map(|&j| cond.vertices[j]).collect(),
+                None,
+            )?;
+            let qs: Vec<f64> = pos
                 .iter()
-                .map(|set| match set {
-                    PointSet::Fixed => vec![0.0; d],
-                    PointSet::Ball(_) => vec![0.0],
-                    PointSet::Faces(f) => vec![0.0; f.len()],
-                })
+                .flat_map(|&j| qw[j * d..(j + 1) * d].iter().copied())
                 .collect();
-            for (mm, &j) in m.iter().zip(&pos) {
-                wm[j].clone_from(mm);
+            let ss: Vec<PointSet> = pos.iter().map(|&j| wsets[j].clone()).collect();
+            let mut sub = Condensed::new(&sub_cond, knots, qs, ss.clone(), d)?;
+            let (mut x, mut s, mut z) = (Vec::new(), Vec::new(), Vec::new());
+            for &j in &pos {
+                if let Some((xj, sj, zj)) = &from[j] {
+                    x.extend_from_slice(xj);
+                    s.extend_from_slice(sj);
+                    z.extend_from_slice(zj);
+                }
             }
-            certify(p, &wm)
-        };
-        let p = polish_rounds(
-            &mut sub,
-            stencil,
-            &ss,
-            d,
-            conic_opts,
-            sub_sol,
-            None,
-            aim.target,
-            &mut judge_sub,
-            &mut certify_sub,
-        )?;
-        Ok(done(p))
+            let sub_sol = conic::Solution {
+                x,
+                s,
+                z,
+                residuals: conic::Residuals::default(),
+                objective: 0.0,
+                iterations: sol.iterations,
+                status: sol.status,
+                polished: false,
+            };
+            // The judge: the points of W left out (with the margin), then those outside W.
+            let dropped: Vec<usize> = (0..n_w).filter(|&j| !keep[j]).collect();
+            let mut violated: Vec<usize> = Vec::new();
+            let mut judge_sub = |p: &Points| {
+                violated.clear();
+                violated.extend(dropped.iter().copied().filter(|&j| {
+                    wsets[j].closeness(p.point(cond.vertices[j]), &qw[j * d..(j + 1) * d], 0.0)
+                        >= 1.0 - margin
+                }));
+                violated.is_empty() && judge(p)
+            };
+            // The certificate: W's multipliers, 0 on the points left out.
+            let mut certify_sub = |p: &Points, m: &[Vec<f64>]| {
+                let mut wm: Vec<Vec<f64>> = wsets
+                    .iter()
+                    .map(|set| match set {
+                        PointSet::Fixed => vec![0.0; d],
+                        PointSet::Ball(_) => vec![0.0],
+                        PointSet::Faces(f) => vec![0.0; f.len()],
+                    })
+                    .collect();
+                for (mm, &j) in m.iter().zip(&pos) {
+                    wm[j].clone_from(mm);
+                }
+                certify(p, &wm)
+            };
+            let mut left = None;
+            let polished = polish_rounds(
+                &mut sub,
+                stencil,
+                &ss,
+                d,
+                conic_opts,
+                sub_sol,
+                None,
+                target,
+                &mut judge_sub,
+                &mut certify_sub,
+                Some(&mut left),
+            )?;
+            if polished.is_some() || violated.is_empty() || attempt == SUBSET_ATTEMPTS {
+                return Ok(polished);
+            }
+            // The next start: the polished point, and the violated points where its curve put
+            // them (outside their balls: the polish takes them as active, with multiplier 0).
+            if let Some((p, points)) = left {
+                let sub_vars = sub.variables();
+                for (v, &sj) in sub_vars.iter().enumerate() {
+                    let r = sub.rows(v);
+                    from[pos[sj]] = Some((
+                        p.x[v * d..(v + 1) * d].to_vec(),
+                        p.s[r.clone()].to_vec(),
+                        p.z[r].to_vec(),
+                    ));
+                }
+                for &j in &violated {
+                    let PointSet::Ball(radius) = wsets[j] else {
+                        continue;
+                    };
+                    let xj = points.point(cond.vertices[j]).to_vec();
+                    let mut sj = vec![radius];
+                    sj.extend(qw[j * d..(j + 1) * d].iter().zip(&xj).map(|(q, x)| q - x));
+                    from[j] = Some((xj, sj, vec![0.0; d + 1]));
+                }
+            }
+            for &j in &violated {
+                keep[j] = true;
+            }
+        }
+        Ok(None)
     }
 }
+
+/// A variable's part of a start: its x, s and z.
+type VariableStart = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// Polishes on a condensation onto W's active points, each with the points of W the previous
+/// one's curve left, at most this many.
+const SUBSET_ATTEMPTS: usize = 3;
 
 /// The polish's penalty on the normals of active constraints on the condensed backend, relative
 /// to each point's Q_jj (as [`conic::PolishOptions::penalty`], whose default of 1e-9 a caller's
@@ -928,6 +1032,10 @@ impl Early<'_, '_> {
 /// took five or six solves (noisy star, n = 10⁴); the penalty's own error, δ times the
 /// multipliers' change, is refined away at a rate of about δ per solve.
 const CONDENSED_PENALTY: f64 = 1e-6;
+
+/// A polished point the method certifies at this fraction of its tolerance is converged: no
+/// further polish call is made from it.
+const ROUNDING_LEVEL: f64 = 1e-2;
 
 /// Most polish calls per accepted round (each one or more Newton steps on the active set; the
 /// steps converge quadratically, so a call that does not lower the certificate ends them).
