@@ -131,8 +131,10 @@ pub(crate) struct Condensed<'a> {
     /// and D per variable (d × d).
     dinv: Vec<f64>,
     dmat: Vec<f64>,
-    /// Every variable is a ball (the fixed-size kernels of `factor_balls` apply).
+    /// Every variable is a ball (apply_a / apply_at take their fixed-size kernels).
     balls: bool,
+    /// Work space: the face weights θ of one point.
+    theta: Vec<f64>,
     /// Every condensed point is a variable, in order (x is the condensed y itself).
     identity: bool,
     /// What the interpolated points of `y` hold: their data (`Some(true)`), zero
@@ -297,6 +299,138 @@ pub(crate) fn faces_inverse(
     }
 }
 
+/// [`faces_inverse`] for a compile-time d = `D` (1 to 3) into `out`, the same operations on
+/// arrays (no allocation; more than [`MAX_FIXED_FACES`] faces go to [`faces_inverse`]).
+fn faces_inverse_fixed<const D: usize>(faces: &[Face], theta: &[f64], rho: f64, out: &mut [f64]) {
+    let m = faces.len();
+    if m > MAX_FIXED_FACES {
+        let normals: Vec<&[f64]> = faces.iter().map(|f| f.normal.as_slice()).collect();
+        return faces_inverse(&normals, theta, rho, D, out);
+    }
+    let mut order = [0usize; MAX_FIXED_FACES];
+    for (k, o) in order[..m].iter_mut().enumerate() {
+        *o = k;
+    }
+    order[..m].sort_by(|&a, &b| theta[b].total_cmp(&theta[a]));
+    let mut u = [[0.0f64; D]; D];
+    let mut ulen = 0;
+    let mut coords = [[0.0f64; D]; MAX_FIXED_FACES];
+    for &k in &order[..m] {
+        let n = &faces[k].normal;
+        let mut c = [0.0; D];
+        let mut r: [f64; D] = std::array::from_fn(|e| n[e]);
+        for (i, ui) in u[..ulen].iter().enumerate() {
+            let mut p = 0.0;
+            for e in 0..D {
+                p += ui[e] * r[e];
+            }
+            c[i] = p;
+            for e in 0..D {
+                r[e] -= p * ui[e];
+            }
+        }
+        let mut rr = 0.0;
+        for e in 0..D {
+            rr += r[e] * r[e];
+        }
+        let rn = rr.sqrt();
+        if ulen < D && rn > 1e-8 {
+            c[ulen] = rn;
+            u[ulen] = std::array::from_fn(|e| r[e] / rn);
+            ulen += 1;
+        }
+        coords[k] = c;
+    }
+    for e in 0..D {
+        if ulen == D {
+            break;
+        }
+        let mut r = [0.0; D];
+        r[e] = 1.0;
+        for ui in &u[..ulen] {
+            let p = ui[e];
+            for k in 0..D {
+                r[k] -= p * ui[k];
+            }
+        }
+        let mut rr = 0.0;
+        for k in 0..D {
+            rr += r[k] * r[k];
+        }
+        let rn = rr.sqrt();
+        if rn > 0.5 {
+            u[ulen] = std::array::from_fn(|k| r[k] / rn);
+            ulen += 1;
+        }
+    }
+    let mut cm = [[0.0f64; D]; D];
+    for i in 0..D {
+        cm[i][i] = rho;
+    }
+    for (k, c) in coords[..m].iter().enumerate() {
+        for i in 0..D {
+            if c[i] == 0.0 {
+                continue;
+            }
+            for j in 0..D {
+                cm[i][j] += theta[k] * c[i] * c[j];
+            }
+        }
+    }
+    let mut l = cm;
+    for j in 0..D {
+        let mut v = l[j][j];
+        for t in 0..j {
+            v -= l[j][t] * l[j][t];
+        }
+        let piv = v.max(f64::MIN_POSITIVE).sqrt();
+        l[j][j] = piv;
+        for i in j + 1..D {
+            let mut w = l[i][j];
+            for t in 0..j {
+                w -= l[i][t] * l[j][t];
+            }
+            l[i][j] = w / piv;
+        }
+    }
+    let mut cinv = [[0.0f64; D]; D];
+    for e in 0..D {
+        let mut col = [0.0; D];
+        col[e] = 1.0;
+        for i in 0..D {
+            let mut v = col[i];
+            for t in 0..i {
+                v -= l[i][t] * col[t];
+            }
+            col[i] = v / l[i][i];
+        }
+        for i in (0..D).rev() {
+            let mut v = col[i];
+            for t in i + 1..D {
+                v -= l[t][i] * col[t];
+            }
+            col[i] = v / l[i][i];
+        }
+        for i in 0..D {
+            cinv[i][e] = col[i];
+        }
+    }
+    for a in 0..D {
+        for b in 0..D {
+            let mut acc = 0.0;
+            for i in 0..D {
+                for j in 0..D {
+                    acc += u[i][a] * cinv[i][j] * u[j][b];
+                }
+            }
+            out[a * D + b] = acc;
+        }
+    }
+}
+
+/// Faces per point that [`faces_inverse_fixed`] keeps on the stack.
+const MAX_FIXED_FACES: usize = 16;
+
 impl<'a> Condensed<'a> {
     /// The backend for the condensed points of `cond` (on `knots`), with data `q` (cond.n × d)
     /// and `sets` (one per condensed point; no point may have an empty polytope).
@@ -435,6 +569,7 @@ impl<'a> Condensed<'a> {
             dinv: vec![0.0; n * d * d],
             dmat: vec![0.0; nv * d * d],
             balls,
+            theta: Vec::new(),
             identity: nv == n,
             y_fixed: None,
             route: Route::Condensed,
@@ -654,12 +789,12 @@ impl<'a> Condensed<'a> {
         let size = self.cond.len();
         // Without aliasing blocks (a cyclic S of more than 2W + 1 rows), balls in d ≤ 3 take
         // the fixed-size kernels.
-        let fixed = self.balls && (!self.cond.closed || size > 5);
+        let fixed = !self.cond.closed || size > 5;
         loop {
             let assembled = match (fixed, self.d) {
-                (true, 1) => self.assemble_balls::<1>(weights, sigma),
-                (true, 2) => self.assemble_balls::<2>(weights, sigma),
-                (true, 3) => self.assemble_balls::<3>(weights, sigma),
+                (true, 1) => self.assemble_fixed::<1>(weights, sigma),
+                (true, 2) => self.assemble_fixed::<2>(weights, sigma),
+                (true, 3) => self.assemble_fixed::<3>(weights, sigma),
                 _ => self.assemble_general(weights, sigma),
             };
             assembled?;
@@ -771,13 +906,13 @@ impl<'a> Condensed<'a> {
         Ok(())
     }
 
-    /// [`Condensed::assemble_general`] for balls alone in a compile-time d = `D` and no
-    /// aliasing blocks: (D + ρI)⁻¹ per ball as in [`ball_inverse`], then each row j of S
-    /// written whole from the three points its row of K touches —
+    /// [`Condensed::assemble_general`] in a compile-time d = `D` without aliasing blocks:
+    /// (D + ρI)⁻¹ per point as in [`ball_inverse`] and [`faces_inverse`] (without allocating),
+    /// then each row j of S written whole from the three points its row of K touches —
     /// S_jj = T_jj I + Σ_t K_jt² D⁻¹_(j,t), S_j,j+1 = T_j,j+1 I + K_j1 K_j+1,0 D⁻¹_(j,1) +
     /// K_j2 K_j+1,1 D⁻¹_(j,2), S_j,j+2 = K_j2 K_j+2,0 D⁻¹_(j,2) — instead of six scattered adds
     /// per point (the same sums).
-    fn assemble_balls<const D: usize>(
+    fn assemble_fixed<const D: usize>(
         &mut self,
         weights: &Weights,
         sigma: f64,
@@ -785,6 +920,36 @@ impl<'a> Condensed<'a> {
         let dd = D * D;
         for v in 0..self.var_point.len() {
             let j = self.var_point[v];
+            if let PointSet::Faces(faces) = &self.sets[j] {
+                let shift = self.rho + sigma * self.qdiag[j];
+                let di = &mut self.dinv[j * dd..(j + 1) * dd];
+                let dm = &mut self.dmat[v * dd..(v + 1) * dd];
+                let theta = &mut self.theta;
+                theta.clear();
+                match weights.block(v) {
+                    BlockWeight::Nt { scaling, .. } => {
+                        theta.extend(scaling.iter().map(|v| 1.0 / (v * v)));
+                    }
+                    BlockWeight::Diagonal(t) => theta.extend_from_slice(t),
+                    BlockWeight::Scalar(c) => theta.resize(faces.len(), c),
+                    BlockWeight::Active { .. } => {
+                        return Err(conic::Error::Singular {
+                            index: self.cond.vertices[j],
+                        })
+                    }
+                }
+                faces_inverse_fixed::<D>(faces, theta, shift, di);
+                for a in 0..D {
+                    for b in 0..D {
+                        dm[a * D + b] = faces
+                            .iter()
+                            .zip(theta.iter())
+                            .map(|(f, t)| t * f.normal[a] * f.normal[b])
+                            .sum::<f64>();
+                    }
+                }
+                continue;
+            }
             let shift = self.rho + sigma * self.qdiag[j];
             // D = a I + b w wᵀ: the NT weight η⁻²(I + 2 w̄₁w̄₁ᵀ), or the polish's c I + p ūūᵀ
             // (an active ball) or c I.
@@ -1229,6 +1394,51 @@ mod tests {
                 let want = if i == j { 1.0 } else { 0.0 };
                 assert!((id[i * d + j] - want).abs() < 1e-12, "{id:?}");
             }
+        }
+    }
+
+    /// The fixed-size inverse of faces does what the general one does, to the last bit.
+    #[test]
+    fn the_fixed_size_faces_inverse_is_the_general_one() {
+        let face = |n: &[f64]| {
+            let l = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+            super::Face {
+                normal: n.iter().map(|x| x / l).collect(),
+                offset: 0.0,
+                norm: l,
+            }
+        };
+        let cases: Vec<(Vec<super::Face>, Vec<f64>)> = vec![
+            (
+                vec![face(&[1.0, 0.2]), face(&[-0.3, 1.0]), face(&[0.7, -0.7])],
+                vec![3.0, 1e-6, 2e8],
+            ),
+            (vec![face(&[1.0, 0.0]), face(&[-1.0, 0.0])], vec![1e12, 0.5]),
+            (
+                vec![
+                    face(&[1.0, 0.2, 0.1]),
+                    face(&[0.0, 1.0, 0.3]),
+                    face(&[0.2, -0.1, 1.0]),
+                    face(&[-1.0, 0.0, 0.0]),
+                ],
+                vec![1e-3, 7.0, 1e9, 0.0],
+            ),
+        ];
+        for (faces, theta) in cases {
+            let d = faces[0].normal.len();
+            let normals: Vec<&[f64]> = faces.iter().map(|f| f.normal.as_slice()).collect();
+            let mut a = vec![0.0; d * d];
+            faces_inverse(&normals, &theta, 1e-9, d, &mut a);
+            let mut b = vec![0.0; d * d];
+            match d {
+                2 => super::faces_inverse_fixed::<2>(&faces, &theta, 1e-9, &mut b),
+                _ => super::faces_inverse_fixed::<3>(&faces, &theta, 1e-9, &mut b),
+            }
+            assert_eq!(
+                a.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                b.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                "{a:?} vs {b:?}"
+            );
         }
     }
 
