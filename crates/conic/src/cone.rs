@@ -154,6 +154,16 @@ impl Cones {
         })
     }
 
+    /// m when every block is Q^m of a uniform layout (3 or 4), else `None`.
+    #[inline]
+    pub(crate) fn uniform_soc(&self) -> Option<usize> {
+        match self.layout {
+            Layout::Soc3 => Some(3),
+            Layout::Soc4 => Some(4),
+            _ => None,
+        }
+    }
+
     /// The layout of the blocks (see [`Layout`]).
     #[inline]
     pub(crate) fn layout(&self) -> Layout {

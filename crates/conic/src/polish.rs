@@ -61,6 +61,7 @@ struct Con {
 
 /// The row-space normal u (unit, into `u`: the block's rows), value c and |J s| of a
 /// constraint at slack s.
+#[inline]
 fn normal(con: &Con, s: &[f64], range: std::ops::Range<usize>, u: &mut [f64]) -> (f64, f64) {
     match con.row {
         Some(k) => {
@@ -111,11 +112,13 @@ impl Normals {
     }
 
     /// Constraint ci's normal.
+    #[inline]
     fn of(&self, ci: usize) -> &[f64] {
         &self.u[self.off[ci]..self.off[ci + 1]]
     }
 
     /// z = Σ y_ci u_ci over the rows (z zeroed first).
+    #[inline]
     fn scatter(&self, cons: &[Con], cones: &crate::Cones, w: impl Fn(usize) -> f64, z: &mut [f64]) {
         z.fill(0.0);
         for (ci, con) in cons.iter().enumerate() {
