@@ -21,7 +21,7 @@
 //! reaches [`WorkingSetOptions::round_tolerance`] (the method is stopped there and resumed from
 //! the same iterate if the round is accepted), and judged again at its end. An accepted round on
 //! a dense W ([`WorkingSetOptions::early_polish`]) is polished right at the round tolerance
-//! (Newton's method on the active set, on W's condensation or, when a tenth of W or more is
+//! (Newton's method on the active set, on W's condensation or, when a fifth of W or more is
 //! inactive, on a condensation onto its active points), and the method resumes only when that
 //! polish does not get the caller's certificate to its aim. Each round's
 //! condensation reuses the spans of the previous one that no new point splits. The multipliers
@@ -283,7 +283,7 @@ fn polish_from_warm<C>(
         return Ok(None);
     };
     // W holds every constraint: nothing outside it to judge. The polish stops once accepted; it
-    // runs on the points active in the previous answer when a tenth or more are not
+    // runs on the points active in the previous answer when a fifth or more are not
     // (`ActivePolish`: a condensation onto them, joined by any point its curve leaves).
     let qw = q.coords().to_vec();
     let polished = ActivePolish {
@@ -743,7 +743,7 @@ fn run_round<C>(
     // of the free-knot optimizer and its envelope gradient are only as accurate as this curve;
     // a call that ran out of steps after an active-set change goes on from its best point).
     // Each polished curve is judged again (it moves a little). On the active points of W when
-    // a tenth of W or more is inactive (`ActivePolish`); on W when that polish leaves a point of
+    // a fifth of W or more is inactive (`ActivePolish`); on W when that polish leaves a point of
     // W it dropped.
     if certified.k > aim.target && conic_opts.polish.is_some() {
         let mut on_active = ActivePolish {
@@ -814,11 +814,11 @@ struct ActivePolish<'e, 'c> {
 }
 
 /// At most this fraction of W's variables inactive: the polish runs on W's own backend.
-const POLISH_ON_W: f64 = 0.1;
+const POLISH_ON_W: f64 = 0.2;
 
 impl ActivePolish<'_, '_> {
     /// Whether the polish from `sol` would run on a condensation onto W's active points (W of
-    /// balls alone, a tenth or more of it inactive).
+    /// balls alone, a fifth or more of it inactive).
     fn prefers_subset(&mut self, sol: &conic::Solution) -> bool {
         if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
             return false;
