@@ -80,6 +80,22 @@ pub enum Kind {
     SecondOrder,
 }
 
+/// How the blocks of a product are laid out, for the method's passes over all of them
+/// (`crate::product`): uniform layouts run one kernel over the whole slack, the others go block
+/// by block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub(crate) enum Layout {
+    /// Every block is Q³ (a ball in the plane, a wedge in the plane).
+    Soc3,
+    /// Every block is Q⁴ (a ball in space).
+    Soc4,
+    /// Every block is an orthant: the product is one orthant, row by row (polytopes).
+    Orthant,
+    /// Anything else (zero cones, mixed kinds or sizes, no block at all).
+    #[default]
+    Mixed,
+}
+
 /// The blocks of a product cone, with the row offset of each.
 #[derive(Clone, Debug, PartialEq, Eq, Default)]
 pub struct Cones {
@@ -87,6 +103,8 @@ pub struct Cones {
     offsets: Vec<usize>,
     rows: usize,
     degree: usize,
+    layout: Layout,
+    equalities: bool,
 }
 
 impl Cones {
@@ -114,12 +132,42 @@ impl Cones {
             rows += b.dim();
             degree += b.degree();
         }
+        let blocks_have_zero = blocks.iter().any(|b| matches!(b, Cone::Zero(_)));
+        let layout = if blocks.is_empty() {
+            Layout::Mixed
+        } else if blocks.iter().all(|b| *b == Cone::SecondOrder(3)) {
+            Layout::Soc3
+        } else if blocks.iter().all(|b| *b == Cone::SecondOrder(4)) {
+            Layout::Soc4
+        } else if blocks.iter().all(|b| b.kind() == Kind::Nonnegative) {
+            Layout::Orthant
+        } else {
+            Layout::Mixed
+        };
         Ok(Cones {
             blocks,
             offsets,
             rows,
             degree,
+            layout,
+            equalities: blocks_have_zero,
         })
+    }
+
+    /// m when every block is Q^m of a uniform layout (3 or 4), else `None`.
+    #[inline]
+    pub(crate) fn uniform_soc(&self) -> Option<usize> {
+        match self.layout {
+            Layout::Soc3 => Some(3),
+            Layout::Soc4 => Some(4),
+            _ => None,
+        }
+    }
+
+    /// The layout of the blocks (see [`Layout`]).
+    #[inline]
+    pub(crate) fn layout(&self) -> Layout {
+        self.layout
     }
 
     /// The blocks, in row order.
@@ -155,7 +203,7 @@ impl Cones {
 
     /// Whether any block is a zero cone.
     pub fn has_equalities(&self) -> bool {
-        self.blocks.iter().any(|b| matches!(b, Cone::Zero(_)))
+        self.equalities
     }
 }
 

@@ -1,10 +1,8 @@
 //! The primal–dual interior-point method: Mehrotra's predictor–corrector with Nesterov–Todd
 //! scaling (crate docs for the math and sources).
 
-use crate::cone::{
-    add_identity, apply_nt, jordan_divide, jordan_product, nt_scaling, soc_residual,
-    step_to_boundary, Kind,
-};
+use crate::cone::{soc_residual, Kind};
+use crate::product;
 use crate::residual::{self, Parts, Residuals};
 use crate::vector::{inf_norm, norm};
 use crate::{Error, KktSystem, Options, Weights};
@@ -359,15 +357,15 @@ fn given_start<K: KktSystem + ?Sized>(kkt: &K, start: Start) -> Result<Point, Er
 /// One factorization of the Newton matrix with its scalings, and solves with iterative
 /// refinement.
 pub(crate) struct Newton {
-    /// NT scaling of every block, flat: block b at sc[sc_off[b]..sc_off[b + 1]] (empty for
-    /// zero blocks).
-    sc: Vec<f64>,
+    /// Start of block b's NT scaling in the weights' data ([`Weights::nt_layout`]).
     sc_off: Vec<usize>,
     scratch: Vec<f64>,
     /// λ = V z.
     pub lambda: Vec<f64>,
     /// δ per zero block (0 elsewhere).
     pub delta: Vec<f64>,
+    /// Θ: the NT scalings of the iterate (written in place each iteration) and 1/δ on zero
+    /// blocks.
     pub weights: Weights,
     pub shifted: bool,
     ws: SolveWork,
@@ -375,25 +373,21 @@ pub(crate) struct Newton {
 
 impl Newton {
     fn new(cones: &crate::Cones, n: usize) -> Self {
-        let mut sc_off = vec![0];
-        for b in cones.blocks() {
-            let len = match b {
-                crate::Cone::Zero(_) => 0,
-                crate::Cone::Nonnegative(m) => *m,
-                crate::Cone::SecondOrder(m) => m + 1,
-            };
-            sc_off.push(sc_off.last().copied().unwrap_or(0) + len);
-        }
+        let (weights, sc_off) = Weights::nt_layout(cones);
         Newton {
-            sc: vec![0.0; sc_off.last().copied().unwrap_or(0)],
             sc_off,
             scratch: Vec::new(),
             lambda: vec![0.0; cones.rows()],
             delta: vec![0.0; cones.len()],
-            weights: Weights::zero(cones),
+            weights,
             shifted: false,
             ws: SolveWork::new(n, cones.rows()),
         }
+    }
+
+    /// The NT scaling data of every block (block b from `sc_off[b]`).
+    fn sc(&self) -> &[f64] {
+        self.weights.nt_data()
     }
 
     /// Scalings at (s, z) and the factorization, with the retries of
@@ -405,24 +399,15 @@ impl Newton {
         pt: &Point,
         opts: &Options,
     ) -> Result<(), Error> {
-        self.weights.clear();
-        for (bi, cone) in cones.blocks().iter().enumerate() {
-            let r = cones.range(bi);
-            if cone.kind() == Kind::Zero {
-                continue;
-            }
-            nt_scaling(
-                cone.kind(),
-                &pt.s[r.clone()],
-                &pt.z[r.clone()],
-                &mut self.scratch,
-            );
-            let l = &mut self.lambda[r.clone()];
-            l.copy_from_slice(&pt.z[r]);
-            apply_nt(cone.kind(), &self.scratch, l, false);
-            self.weights.set_nt(bi, cone.kind(), &self.scratch);
-            self.sc[self.sc_off[bi]..self.sc_off[bi + 1]].copy_from_slice(&self.scratch);
-        }
+        product::scalings(
+            cones,
+            &pt.s,
+            &pt.z,
+            self.weights.nt_data_mut(),
+            &self.sc_off,
+            &mut self.lambda,
+            &mut self.scratch,
+        );
         let reg = &opts.regularization;
         let eq_attempts = if cones.has_equalities() {
             reg.equality_attempts.max(1)
@@ -433,11 +418,13 @@ impl Newton {
         for attempt in 0..eq_attempts + reg.static_attempts {
             let eq = attempt.min(eq_attempts - 1);
             let rel = reg.equality * reg.equality_growth.powi(eq as i32);
-            for (bi, cone) in cones.blocks().iter().enumerate() {
-                if cone.kind() == Kind::Zero {
-                    let scale = kkt.diagonal_scale(bi).max(f64::MIN_POSITIVE);
-                    self.delta[bi] = rel / scale;
-                    self.weights.set_scalar(bi, 1.0 / self.delta[bi]);
+            if cones.has_equalities() {
+                for (bi, cone) in cones.blocks().iter().enumerate() {
+                    if cone.kind() == Kind::Zero {
+                        let scale = kkt.diagonal_scale(bi).max(f64::MIN_POSITIVE);
+                        self.delta[bi] = rel / scale;
+                        self.weights.set_scalar(bi, 1.0 / self.delta[bi]);
+                    }
                 }
             }
             let shift_attempt = attempt - eq;
@@ -470,28 +457,22 @@ impl Newton {
         out: &mut Direction,
     ) -> bool {
         let ws = &mut self.ws;
-        let (sc_all, sc_off) = (&self.sc, &self.sc_off);
-        let sc = |b: usize| &sc_all[sc_off[b]..sc_off[b + 1]];
+        let sc = self.weights.nt_data();
+        let sc_off = &self.sc_off[..];
         let has_eq = cones.has_equalities();
         // rhs1 = −r_x − A_iᵀ(V⁻¹ξ + V⁻² r_s) over inequality blocks; e2 = −r_s on zero blocks.
-        for (bi, cone) in cones.blocks().iter().enumerate() {
-            let r = cones.range(bi);
-            if cone.kind() == Kind::Zero {
-                for k in r.clone() {
-                    ws.e2[k] = -rs[k];
-                    ws.t[k] = 0.0;
+        // V⁻¹ξ + V⁻² r_s = V⁻¹(ξ + V⁻¹ r_s).
+        product::scaled_sum(cones, sc, sc_off, rs, xi, &mut ws.t);
+        if has_eq {
+            ws.e2.fill(0.0);
+            for (bi, cone) in cones.blocks().iter().enumerate() {
+                if cone.kind() == Kind::Zero {
+                    for k in cones.range(bi) {
+                        ws.e2[k] = -rs[k];
+                        ws.t[k] = 0.0;
+                    }
                 }
-                continue;
             }
-            // V⁻¹ξ + V⁻² r_s = V⁻¹(ξ + V⁻¹ r_s).
-            let tb = &mut ws.t[r.clone()];
-            tb.copy_from_slice(&rs[r.clone()]);
-            apply_nt(cone.kind(), sc(bi), tb, true);
-            for (a, x) in tb.iter_mut().zip(&xi[r.clone()]) {
-                *a += x;
-            }
-            apply_nt(cone.kind(), sc(bi), tb, true);
-            ws.e2[r].fill(0.0);
         }
         kkt.apply_at(&ws.t, &mut ws.rhs1);
         for (a, r) in ws.rhs1.iter_mut().zip(rx) {
@@ -499,12 +480,15 @@ impl Newton {
         }
         // [K A_eᵀ; A_e 0][dx; dz_e] = [rhs1; e2], K = P + A_iᵀV⁻²A_i: regularized solves
         // dx = K_δ⁻¹(e1 + A_eᵀe2/δ), dz_e = (A_e dx − e2)/δ, refined against the exact system.
+        // (Without zero blocks e2 and res2 stay 0 and dz is set by the recovery below.)
         out.dx.fill(0.0);
-        out.dz.fill(0.0);
+        if has_eq {
+            out.dz.fill(0.0);
+            ws.res2.copy_from_slice(&ws.e2);
+        }
         ws.e1.copy_from_slice(&ws.rhs1);
-        ws.res2.copy_from_slice(&ws.e2);
         let bnorm = inf_norm(&ws.rhs1)
-            .max(inf_norm(&ws.e2))
+            .max(if has_eq { inf_norm(&ws.e2) } else { 0.0 })
             .max(f64::MIN_POSITIVE);
         let mut last = f64::INFINITY;
         for step in 0..=steps {
@@ -529,7 +513,9 @@ impl Newton {
             if step > 0 {
                 // (Kept to undo a diverging correction; before the first, dx = dz = 0.)
                 ws.prev_dx.copy_from_slice(&out.dx);
-                ws.prev_dz.copy_from_slice(&out.dz);
+                if has_eq {
+                    ws.prev_dz.copy_from_slice(&out.dz);
+                }
             }
             for (a, c) in out.dx.iter_mut().zip(&ws.r) {
                 *a += c;
@@ -555,18 +541,15 @@ impl Newton {
             } else {
                 kkt.apply_p(&out.dx, &mut ws.kdx);
                 kkt.apply_a(&out.dx, &mut ws.ax);
-                for (bi, cone) in cones.blocks().iter().enumerate() {
-                    let rr = cones.range(bi);
-                    if cone.kind() == Kind::Zero {
-                        for k in rr {
-                            ws.u[k] = out.dz[k];
-                            ws.res2[k] = ws.e2[k] - ws.ax[k];
+                product::theta(cones, sc, sc_off, &ws.ax, &mut ws.u);
+                if has_eq {
+                    for (bi, cone) in cones.blocks().iter().enumerate() {
+                        if cone.kind() == Kind::Zero {
+                            for k in cones.range(bi) {
+                                ws.u[k] = out.dz[k];
+                                ws.res2[k] = ws.e2[k] - ws.ax[k];
+                            }
                         }
-                    } else {
-                        let ub = &mut ws.u[rr.clone()];
-                        ub.copy_from_slice(&ws.ax[rr]);
-                        apply_nt(cone.kind(), sc(bi), ub, true);
-                        apply_nt(cone.kind(), sc(bi), ub, true);
                     }
                 }
                 kkt.apply_at(&ws.u, &mut ws.atu);
@@ -579,12 +562,14 @@ impl Newton {
                     *e = a - k - c;
                 }
             }
-            let rn = inf_norm(&ws.e1).max(inf_norm(&ws.res2));
+            let rn = inf_norm(&ws.e1).max(if has_eq { inf_norm(&ws.res2) } else { 0.0 });
             if !rn.is_finite() || rn > last {
                 // Diverging (the regularized factor is too far from the exact matrix): undo
                 // the last correction (never the first: `last` starts at ∞).
                 out.dx.copy_from_slice(&ws.prev_dx);
-                out.dz.copy_from_slice(&ws.prev_dz);
+                if has_eq {
+                    out.dz.copy_from_slice(&ws.prev_dz);
+                }
                 break;
             }
             last = rn;
@@ -596,25 +581,21 @@ impl Newton {
         // factorization is too far from the exact matrix for this direction. (A direction a few
         // digits short of a tight target still makes progress; escalating costs more.)
         let accurate = steps == 0 || last <= (1e2 * rtol).max(1e-4) * bnorm;
+        // ds = −r_s − A dx, dz = V⁻¹(ξ + V⁻¹(r_s + A dx)) on inequality blocks (zero blocks:
+        // ds = 0, dz_e from the refinement).
         kkt.apply_a(&out.dx, &mut ws.ax);
-        for (bi, cone) in cones.blocks().iter().enumerate() {
-            let r = cones.range(bi);
-            if cone.kind() == Kind::Zero {
-                out.ds[r].fill(0.0);
-                continue;
-            }
-            let tmp = &mut ws.u[r.clone()];
-            for (j, k) in r.clone().enumerate() {
-                tmp[j] = rs[k] + ws.ax[k];
-            }
-            apply_nt(cone.kind(), sc(bi), tmp, true);
-            for (j, k) in r.clone().enumerate() {
-                tmp[j] += xi[k];
-            }
-            apply_nt(cone.kind(), sc(bi), tmp, true);
-            for (j, k) in r.enumerate() {
-                out.dz[k] = tmp[j];
-                out.ds[k] = -rs[k] - ws.ax[k];
+        for ((u, a), r) in ws.u.iter_mut().zip(&ws.ax).zip(rs) {
+            *u = r + a;
+        }
+        product::scaled_sum(cones, sc, sc_off, &ws.u, xi, &mut out.dz);
+        for (d, u) in out.ds.iter_mut().zip(&ws.u) {
+            *d = -u;
+        }
+        if has_eq {
+            for (bi, cone) in cones.blocks().iter().enumerate() {
+                if cone.kind() == Kind::Zero {
+                    out.ds[cones.range(bi)].fill(0.0);
+                }
             }
         }
         accurate
@@ -687,13 +668,7 @@ impl Direction {
 
 /// The largest step in [0, cap] keeping s + α ds and z + α dz in their cones.
 fn max_step(cones: &crate::Cones, pt: &Point, d: &Direction, cap: f64) -> f64 {
-    let mut a = cap;
-    for (bi, cone) in cones.blocks().iter().enumerate() {
-        let r = cones.range(bi);
-        a = step_to_boundary(cone.kind(), &pt.s[r.clone()], &d.ds[r.clone()], a);
-        a = step_to_boundary(cone.kind(), &pt.z[r.clone()], &d.dz[r], a);
-    }
-    a
+    product::max_step(cones, &pt.s, &d.ds, &pt.z, &d.dz, cap)
 }
 
 /// The interior-point method, then the polish (see [`crate::solve_with`]).
@@ -742,10 +717,13 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
     let mut aff = Direction::new(n, m);
     let mut dir = Direction::new(n, m);
     let mut xi = vec![0.0; m];
-    let (mut ca, mut cc, mut t1, mut t2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    // The best iterate so far (copied into buffers allocated once).
+    let mut corrector_work: [Vec<f64>; 4] = Default::default();
+    // The best iterate so far: the current one (`best_is_current`) or, once the current one
+    // has moved on from it, `best` (the update swaps the two and writes the new point from it,
+    // so the best point is never copied).
     let mut best_total = f64::INFINITY;
     let mut best = pt.clone();
+    let mut best_is_current = false;
     let mut polished_best: Option<Solution> = None;
     let mut polish_tried = false;
     let mut iterations = 0;
@@ -753,9 +731,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
         let (res, _) = evaluate(kkt, &pt, &mut w, floors);
         if iterations == 0 || res.total < best_total {
             best_total = res.total;
-            best.x.copy_from_slice(&pt.x);
-            best.s.copy_from_slice(&pt.s);
-            best.z.copy_from_slice(&pt.z);
+            best_is_current = true;
         }
         if !monitor.iterate(&Iterate {
             iteration: iterations,
@@ -804,20 +780,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             }
             break Status::Stalled;
         }
-        let gap: f64 = cones
-            .blocks()
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.kind() != Kind::Zero)
-            .map(|(bi, _)| {
-                let r = cones.range(bi);
-                pt.s[r.clone()]
-                    .iter()
-                    .zip(&pt.z[r])
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-            })
-            .sum();
+        let gap = product::gap(&cones, &pt.s, &pt.z);
         let mu = if degree > 0.0 { gap / degree } else { 0.0 };
         // Predictor: ξ = −λ.
         for (x, l) in xi.iter_mut().zip(&newton.lambda) {
@@ -839,53 +802,21 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
         let alpha_a = max_step(&cones, &pt, &aff, 1.0);
         let mut sigma = 0.0;
         if gap > 0.0 {
-            let mut gap_a = 0.0;
-            for (bi, cone) in cones.blocks().iter().enumerate() {
-                if cone.kind() == Kind::Zero {
-                    continue;
-                }
-                for k in cones.range(bi) {
-                    gap_a += (pt.s[k] + alpha_a * aff.ds[k]) * (pt.z[k] + alpha_a * aff.dz[k]);
-                }
-            }
+            let gap_a = product::gap_along(&cones, &pt.s, &aff.ds, &pt.z, &aff.dz, alpha_a);
             sigma = (gap_a / gap).clamp(0.0, 1.0).powi(3);
         }
         // Corrector: ξ = λ⁻¹ ∘ (σμe − λ∘λ − (V⁻¹ds_a)∘(V dz_a)).
-        for (bi, cone) in cones.blocks().iter().enumerate() {
-            let kind = cone.kind();
-            let r = cones.range(bi);
-            if kind == Kind::Zero {
-                xi[r].fill(0.0);
-                continue;
-            }
-            let mb = r.len();
-            ca.clear();
-            ca.extend_from_slice(&aff.ds[r.clone()]);
-            apply_nt(
-                kind,
-                &newton.sc[newton.sc_off[bi]..newton.sc_off[bi + 1]],
-                &mut ca,
-                true,
-            );
-            cc.clear();
-            cc.extend_from_slice(&aff.dz[r.clone()]);
-            apply_nt(
-                kind,
-                &newton.sc[newton.sc_off[bi]..newton.sc_off[bi + 1]],
-                &mut cc,
-                false,
-            );
-            t1.resize(mb, 0.0);
-            jordan_product(kind, &ca, &cc, &mut t1);
-            t2.resize(mb, 0.0);
-            let l = &newton.lambda[r.clone()];
-            jordan_product(kind, l, l, &mut t2);
-            for k in 0..mb {
-                t2[k] = -t2[k] - t1[k];
-            }
-            add_identity(kind, &mut t2, sigma * mu);
-            jordan_divide(kind, l, &t2, &mut xi[r]);
-        }
+        product::corrector(
+            &cones,
+            newton.sc(),
+            &newton.sc_off,
+            &newton.lambda,
+            &aff.ds,
+            &aff.dz,
+            sigma * mu,
+            &mut xi,
+            &mut corrector_work,
+        );
         let steps = if cones.has_equalities() || newton.shifted || !kkt.factor_is_exact() {
             opts.refinement.max_steps
         } else if res.total <= opts.refinement.exact_from {
@@ -905,15 +836,28 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
         {
             break Status::Stalled;
         }
-        for (a, b) in pt.x.iter_mut().zip(&dir.dx) {
-            *a += alpha * b;
-        }
-        for (bi, cone) in cones.blocks().iter().enumerate() {
-            for k in cones.range(bi) {
-                if cone.kind() != Kind::Zero {
-                    pt.s[k] += alpha * dir.ds[k];
+        // (ds is 0 on zero blocks: their s stays.)
+        if best_is_current {
+            std::mem::swap(&mut pt, &mut best);
+            best_is_current = false;
+            for (v, (b, d)) in [
+                (&mut pt.x, (&best.x, &dir.dx)),
+                (&mut pt.s, (&best.s, &dir.ds)),
+                (&mut pt.z, (&best.z, &dir.dz)),
+            ] {
+                for (a, (b, d)) in v.iter_mut().zip(b.iter().zip(d)) {
+                    *a = b + alpha * d;
                 }
-                pt.z[k] += alpha * dir.dz[k];
+            }
+        } else {
+            for (v, d) in [
+                (&mut pt.x, &dir.dx),
+                (&mut pt.s, &dir.ds),
+                (&mut pt.z, &dir.dz),
+            ] {
+                for (a, d) in v.iter_mut().zip(d) {
+                    *a += alpha * d;
+                }
             }
         }
     };
@@ -929,7 +873,7 @@ pub(crate) fn run<K: KktSystem + ?Sized>(
             }
         }
     }
-    let from = if status == Status::Converged {
+    let from = if status == Status::Converged || best_is_current {
         pt
     } else {
         best

@@ -85,6 +85,7 @@ mod ipm;
 mod kkt;
 mod options;
 pub mod polish;
+mod product;
 pub mod residual;
 mod vector;
 mod weights;

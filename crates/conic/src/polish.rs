@@ -27,7 +27,10 @@
 //! leaves no trace in the step. For a ball (b = (ε, q), rows (0; I)) the curvature term is y/ε I,
 //! positive; for a direction wedge it is indefinite along the axis, and the penalty on the normal
 //! makes the factored matrix definite where the problem's second-order condition holds (Finsler's
-//! lemma). At the apex of a cone (s = 0) there is no normal and the polish declines.
+//! lemma). At the apex of a cone (s = 0) there is no normal and the polish declines. The backend
+//! sees Θ_b with its structure ([`crate::BlockWeight::Active`], [`crate::BlockWeight::Diagonal`]);
+//! when a step's refinement stalls far from its target the backend is asked to factor more
+//! exactly ([`crate::KktSystem::escalate`]) and the step is repeated.
 //!
 //! After each step a violated inactive constraint joins the set and an active one whose
 //! multiplier turned negative leaves it (a primal active-set method started from the
@@ -56,12 +59,13 @@ struct Con {
     y: f64,
 }
 
-/// The row-space normal u (unit), value c and |J s| of a constraint at slack s.
-fn normal(con: &Con, s: &[f64], range: std::ops::Range<usize>, u: &mut Vec<f64>) -> (f64, f64) {
-    u.clear();
-    u.resize(range.len(), 0.0);
+/// The row-space normal u (unit, into `u`: the block's rows), value c and |J s| of a
+/// constraint at slack s.
+#[inline]
+fn normal(con: &Con, s: &[f64], range: std::ops::Range<usize>, u: &mut [f64]) -> (f64, f64) {
     match con.row {
         Some(k) => {
+            u.fill(0.0);
             u[k - range.start] = 1.0;
             (s[k], 1.0)
         }
@@ -73,6 +77,56 @@ fn normal(con: &Con, s: &[f64], range: std::ops::Range<usize>, u: &mut Vec<f64>)
             let nj = norm(u).max(f64::MIN_POSITIVE);
             u.iter_mut().for_each(|v| *v /= nj);
             (0.5 * soc_residual(sb) / nj, nj)
+        }
+    }
+}
+
+/// The normals of the active constraints at one slack, flat: constraint ci's normal over its
+/// block's rows at `u[off[ci]..off[ci + 1]]`, its value c and |J s|.
+#[derive(Default)]
+struct Normals {
+    u: Vec<f64>,
+    off: Vec<usize>,
+    c: Vec<f64>,
+    js: Vec<f64>,
+}
+
+impl Normals {
+    /// The normals of `cons` at slack `s`.
+    fn at(&mut self, cons: &[Con], cones: &crate::Cones, s: &[f64]) {
+        self.off.clear();
+        self.off.push(0);
+        self.c.clear();
+        self.js.clear();
+        let total: usize = cons.iter().map(|c| cones.range(c.block).len()).sum();
+        self.u.resize(total, 0.0);
+        for con in cons {
+            let r = cones.range(con.block);
+            let start = self.off[self.off.len() - 1];
+            let end = start + r.len();
+            let (c, js) = normal(con, s, r, &mut self.u[start..end]);
+            self.off.push(end);
+            self.c.push(c);
+            self.js.push(js);
+        }
+    }
+
+    /// Constraint ci's normal.
+    #[inline]
+    fn of(&self, ci: usize) -> &[f64] {
+        &self.u[self.off[ci]..self.off[ci + 1]]
+    }
+
+    /// z = Σ y_ci u_ci over the rows (z zeroed first).
+    #[inline]
+    fn scatter(&self, cons: &[Con], cones: &crate::Cones, w: impl Fn(usize) -> f64, z: &mut [f64]) {
+        z.fill(0.0);
+        for (ci, con) in cons.iter().enumerate() {
+            let r = cones.range(con.block);
+            let wi = w(ci);
+            for (zk, uj) in z[r].iter_mut().zip(self.of(ci)) {
+                *zk += wi * uj;
+            }
         }
     }
 }
@@ -103,21 +157,17 @@ pub fn polish_solution<K: KktSystem + ?Sized>(
     Some(out)
 }
 
-/// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if the active
-/// set cannot be formed (a cone at its apex) or no step succeeds.
-pub(crate) fn polish<K: KktSystem + ?Sized>(
-    kkt: &mut K,
+/// The active set the polish starts from (module docs): the constraints, sorted by block and
+/// row, and which rows they hold; `None` when an active second-order block is at its apex.
+fn active_set<K: KktSystem + ?Sized>(
+    kkt: &K,
     pt: &Point,
     res: &Residuals,
-    opts: &Options,
-    iterations: usize,
-    floors: crate::Scales,
-) -> Option<Solution> {
-    let po = opts.polish.as_ref()?;
-    let cones = kkt.cones().clone();
-    let (n, m) = (kkt.num_vars(), cones.rows());
+    po: &crate::PolishOptions,
+) -> Option<(Vec<Con>, Vec<bool>)> {
+    let cones = kkt.cones();
+    let m = cones.rows();
     let (force, length) = (res.force, res.length);
-    // The active set.
     let mut cons: Vec<Con> = Vec::new();
     let mut member = vec![false; m];
     for (bi, cone) in cones.blocks().iter().enumerate() {
@@ -177,100 +227,152 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
         }
     }
+    Some((cons, member))
+}
+
+/// Which blocks hold a constraint of the active set the polish would start from at `sol`
+/// (its x, s and z; module docs), `None` when it cannot be formed (a second-order block at its
+/// apex, a malformed solution, no polish options). A caller may pose the polish's problem on
+/// those blocks alone.
+pub fn active_blocks<K: KktSystem + ?Sized>(
+    kkt: &mut K,
+    sol: &Solution,
+    opts: &Options,
+) -> Option<Vec<bool>> {
+    let po = opts.polish.as_ref()?;
+    let (n, m) = (kkt.num_vars(), kkt.cones().rows());
+    if sol.x.len() != n || sol.s.len() != m || sol.z.len() != m {
+        return None;
+    }
+    let floors = crate::ipm::floors(kkt);
+    let pt = Point {
+        x: sol.x.clone(),
+        s: sol.s.clone(),
+        z: sol.z.clone(),
+    };
+    let mut w = crate::ipm::Work::new(n, m);
+    let (res, _) = crate::ipm::evaluate(kkt, &pt, &mut w, floors);
+    let (cons, _) = active_set(kkt, &pt, &res, po)?;
+    let mut blocks = vec![false; kkt.cones().len()];
+    for c in &cons {
+        blocks[c.block] = true;
+    }
+    Some(blocks)
+}
+
+/// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if the active
+/// set cannot be formed (a cone at its apex) or no step succeeds.
+pub(crate) fn polish<K: KktSystem + ?Sized>(
+    kkt: &mut K,
+    pt: &Point,
+    res: &Residuals,
+    opts: &Options,
+    iterations: usize,
+    floors: crate::Scales,
+) -> Option<Solution> {
+    let po = opts.polish.as_ref()?;
+    let cones = kkt.cones().clone();
+    let (n, m) = (kkt.num_vars(), cones.rows());
+    let (force, length) = (res.force, res.length);
+    let (mut cons, mut member) = active_set(kkt, pt, res, po)?;
     let mut x = pt.x.clone();
     let mut best: Option<Solution> = None;
     let mut ax = vec![0.0; m];
+    let mut s = vec![0.0; m];
+    let mut z = vec![0.0; m];
     let mut g = vec![0.0; n];
-    let mut u = Vec::new();
+    let mut atz = vec![0.0; n];
+    let mut rhs1 = vec![0.0; n];
+    let mut normals = Normals::default();
     let mut changes = 0;
     let mut taken = 0;
     let mut weights = Weights::zero(&cones);
-    let mut dense = Vec::new();
+    let mut theta = Vec::new();
+    let mut delta = Vec::new();
+    let mut work = SaddleWork::new(n, m);
+    let slack = |kkt: &K, ax: &[f64], s: &mut [f64]| {
+        for ((sv, b), a) in s.iter_mut().zip(kkt.b()).zip(ax) {
+            *sv = b - a;
+        }
+    };
     while taken < po.steps {
         taken += 1;
         // s(x), normals, values, z = Σ y u.
         kkt.apply_a(&x, &mut ax);
-        let s: Vec<f64> = kkt.b().iter().zip(&ax).map(|(b, a)| b - a).collect();
-        let mut normals: Vec<(Vec<f64>, f64, f64)> = Vec::with_capacity(cons.len());
-        let mut z = vec![0.0; m];
-        for con in &cons {
-            let r = cones.range(con.block);
-            let (c, js) = normal(con, &s, r.clone(), &mut u);
-            for (j, k) in r.enumerate() {
-                z[k] += con.y * u[j];
-            }
-            normals.push((u.clone(), c, js));
-        }
-        // Θ: curvature and penalties per block.
+        slack(kkt, &ax, &mut s);
+        normals.at(&cons, &cones, &s);
+        normals.scatter(&cons, &cones, |ci| cons[ci].y, &mut z);
+        // Θ per block: curvature and penalty of an active second-order constraint, the
+        // penalties of a block's active rows.
         weights.clear();
-        let mut delta = vec![0.0; cons.len()];
-        // The constraints of each block, in order (cons is kept sorted by block).
-        let mut per_block: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
-        for (ci, con) in cons.iter().enumerate() {
-            delta[ci] = po.penalty / kkt.diagonal_scale(con.block).max(f64::MIN_POSITIVE);
-            match per_block.last_mut() {
-                Some((b, r)) if *b == con.block => r.end = ci + 1,
-                _ => per_block.push((con.block, ci..ci + 1)),
+        delta.clear();
+        let mut ci = 0;
+        while ci < cons.len() {
+            let bi = cons[ci].block;
+            let dl = po.penalty / kkt.diagonal_scale(bi).max(f64::MIN_POSITIVE);
+            if cons[ci].row.is_none() {
+                delta.push(dl);
+                weights.set_active(bi, cons[ci].y / normals.js[ci], 1.0 / dl, normals.of(ci));
+                ci += 1;
+                continue;
             }
-        }
-        for (bi, members) in per_block {
-            let mb = cones.blocks()[bi].dim();
-            dense.clear();
-            dense.resize(mb * mb, 0.0);
-            for ci in members {
-                let con = &cons[ci];
-                let (uj, _, js) = &normals[ci];
-                if con.row.is_none() {
-                    // −(y/|Js|) J.
-                    let w = con.y / js;
-                    for j in 0..mb {
-                        dense[j * mb + j] += if j == 0 { -w } else { w };
-                    }
-                }
-                for a in 0..mb {
-                    for b in 0..mb {
-                        dense[a * mb + b] += uj[a] * uj[b] / delta[ci];
-                    }
-                }
+            // The block's active rows (cons is sorted by block and row).
+            let r = cones.range(bi);
+            theta.clear();
+            theta.resize(r.len(), 0.0);
+            while ci < cons.len() && cons[ci].block == bi {
+                let k = cons[ci].row.expect("a row constraint");
+                theta[k - r.start] += 1.0 / dl;
+                delta.push(dl);
+                ci += 1;
             }
-            weights.set_dense(bi, &dense);
+            weights.set_diagonal(bi, &theta);
         }
         if kkt.factor(&weights, 0.0).is_err() {
             return best;
         }
         // Stationarity R = g + Aᵀz.
         kkt.gradient(&x, &mut g);
-        let mut atz = vec![0.0; n];
         kkt.apply_at(&z, &mut atz);
-        let rhs1: Vec<f64> = g.iter().zip(&atz).map(|(a, b)| -(a + b)).collect();
-        let cvals: Vec<f64> = normals.iter().map(|v| v.1).collect();
+        for ((r, a), b) in rhs1.iter_mut().zip(&g).zip(&atz) {
+            *r = -(a + b);
+        }
         // Inexact Newton: each solve is refined only to a hundredth of the current residual of
         // the system (stationarity over F, constraint values over L), which keeps the steps'
         // fast convergence and saves refinement solves early on.
-        let current = (inf_norm(&rhs1) / force).max(inf_norm(&cvals) / length);
+        let current = (inf_norm(&rhs1) / force).max(inf_norm(&normals.c) / length);
         let rtol = (1e-2 * current).clamp(1e-15, 1e-6);
-        let (dx, dy) = saddle_solve(
+        let accurate = saddle_solve(
             kkt,
+            &cones,
             &cons,
             &normals,
             &delta,
             &rhs1,
-            &cvals,
             po.refinement_steps,
             rtol,
+            &mut work,
         );
-        if dx.iter().chain(&dy).any(|v| !v.is_finite()) {
+        if !accurate && kkt.escalate() {
+            // The backend's factorization was too far from the system for this step (e.g. a
+            // condensation regularized where the polish leaves points free); it now factors
+            // exactly: the same step again.
+            taken -= 1;
+            continue;
+        }
+        let (dx, dy) = (&work.dx, &work.dy);
+        if dx.iter().chain(dy).any(|v| !v.is_finite()) {
             return best;
         }
-        for (a, d) in x.iter_mut().zip(&dx) {
+        for (a, d) in x.iter_mut().zip(dx) {
             *a += d;
         }
-        for (c, d) in cons.iter_mut().zip(&dy) {
+        for (c, d) in cons.iter_mut().zip(dy) {
             c.y += d;
         }
         // Active-set changes.
         kkt.apply_a(&x, &mut ax);
-        let s: Vec<f64> = kkt.b().iter().zip(&ax).map(|(b, a)| b - a).collect();
+        slack(kkt, &ax, &mut s);
         let ymax = cons.iter().fold(0.0f64, |a, c| a.max(c.y.abs()));
         let mut drop = vec![false; cons.len()];
         let mut add: Vec<Con> = Vec::new();
@@ -315,16 +417,12 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
         }
         // Certificate of the new point: z from the multipliers at the new normals.
-        let mut z = vec![0.0; m];
-        let mut active_violation: f64 = 0.0;
-        for con in &cons {
-            let r = cones.range(con.block);
-            let (c, _) = normal(con, &s, r.clone(), &mut u);
-            active_violation = active_violation.max(c.abs() / length);
-            for (j, k) in r.enumerate() {
-                z[k] += con.y * u[j];
-            }
-        }
+        normals.at(&cons, &cones, &s);
+        normals.scatter(&cons, &cones, |ci| cons[ci].y, &mut z);
+        let active_violation = normals
+            .c
+            .iter()
+            .fold(0.0f64, |a, c| a.max(c.abs() / length));
         let (cert, s_out, objective) = certify(kkt, &x, &z, floors);
         let done = cert.total <= opts.tolerance && settled(&cert, opts.tolerance);
         let hopeless = inactive_violation > opts.tolerance
@@ -336,7 +434,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             best = Some(Solution {
                 x: x.clone(),
                 s: s_out,
-                z,
+                z: z.clone(),
                 residuals: cert,
                 objective,
                 iterations,
@@ -407,34 +505,62 @@ fn settled(cert: &Residuals, tolerance: f64) -> bool {
     cert.stationarity * cert.force <= tolerance * scale
 }
 
-/// Solves [H_L G̃ᵀ; G̃ 0][dx; dy] = [b1; c] with the factorization of H_L + G̃ᵀΔ⁻¹G̃ and
-/// iterative refinement to `rtol` × the right-hand side (module docs).
+/// Work vectors of [`saddle_solve`] (allocated once per polish): the step (dx, dy) and the
+/// buffers of its refinement.
+struct SaddleWork {
+    dx: Vec<f64>,
+    dy: Vec<f64>,
+    e1: Vec<f64>,
+    e2: Vec<f64>,
+    w: Vec<f64>,
+    row: Vec<f64>,
+    extra: Vec<f64>,
+    tmp_n: Vec<f64>,
+    at: Vec<f64>,
+    r: Vec<f64>,
+    av: Vec<f64>,
+}
+
+impl SaddleWork {
+    fn new(n: usize, m: usize) -> Self {
+        SaddleWork {
+            dx: vec![0.0; n],
+            dy: Vec::new(),
+            e1: vec![0.0; n],
+            e2: Vec::new(),
+            w: Vec::new(),
+            row: vec![0.0; m],
+            extra: vec![0.0; m],
+            tmp_n: vec![0.0; n],
+            at: vec![0.0; n],
+            r: vec![0.0; n],
+            av: vec![0.0; m],
+        }
+    }
+}
+
+/// Solves [H_L G̃ᵀ; G̃ 0][dx; dy] = [b1; c] (c the normals' values) with the factorization of
+/// H_L + G̃ᵀΔ⁻¹G̃ and iterative refinement to `rtol` × the right-hand side (module docs), into
+/// `ws.dx`, `ws.dy`. Returns whether the refinement got within a hundred times `rtol` (and at
+/// least 1e-4) of its target, as the method's directions ([`crate::KktSystem::escalate`]).
 #[allow(clippy::too_many_arguments)]
 fn saddle_solve<K: KktSystem + ?Sized>(
     kkt: &mut K,
+    cones: &crate::Cones,
     cons: &[Con],
-    normals: &[(Vec<f64>, f64, f64)],
+    normals: &Normals,
     delta: &[f64],
     b1: &[f64],
-    c: &[f64],
     steps: usize,
     rtol: f64,
-) -> (Vec<f64>, Vec<f64>) {
-    let cones = kkt.cones().clone();
-    let (n, m) = (kkt.num_vars(), cones.rows());
+    ws: &mut SaddleWork,
+) -> bool {
+    let c = &normals.c;
+    let nc = cons.len();
     // G̃ v per constraint from A v; G̃ᵀ w as Aᵀ(Σ w_j u_j).
     let g_apply = |av: &[f64], ci: usize| -> f64 {
         let r = cones.range(cons[ci].block);
-        dot(&normals[ci].0, &av[r])
-    };
-    let scatter = |w: &[f64], out: &mut [f64]| {
-        out.fill(0.0);
-        for (ci, con) in cons.iter().enumerate() {
-            let r = cones.range(con.block);
-            for (j, k) in r.enumerate() {
-                out[k] += w[ci] * normals[ci].0[j];
-            }
-        }
+        dot(normals.of(ci), &av[r])
     };
     // Curvature part of H_L: Aᵀ Θc A with Θc = −(y/|Js|) J on active cones.
     let curvature = |av: &[f64], out: &mut [f64]| {
@@ -442,62 +568,66 @@ fn saddle_solve<K: KktSystem + ?Sized>(
         for (ci, con) in cons.iter().enumerate() {
             if con.row.is_none() {
                 let r = cones.range(con.block);
-                let w = con.y / normals[ci].2;
+                let w = con.y / normals.js[ci];
                 for (j, k) in r.enumerate() {
                     out[k] += if j == 0 { -w * av[k] } else { w * av[k] };
                 }
             }
         }
     };
-    let mut dx = vec![0.0; n];
-    let mut dy = vec![0.0; cons.len()];
-    let mut e1 = b1.to_vec();
-    let mut e2 = c.to_vec();
+    ws.dx.fill(0.0);
+    ws.dy.clear();
+    ws.dy.resize(nc, 0.0);
+    ws.e1.copy_from_slice(b1);
+    ws.e2.clear();
+    ws.e2.extend_from_slice(c);
     let bnorm = inf_norm(b1).max(inf_norm(c)).max(f64::MIN_POSITIVE);
-    let mut row = vec![0.0; m];
-    let mut tmp_n = vec![0.0; n];
-    let mut av = vec![0.0; m];
     let mut last = f64::INFINITY;
+    let mut reached = steps == 0;
     for step in 0..=steps {
         // ddx = K⁻¹(e1 + G̃ᵀΔ⁻¹e2), ddy = (G̃ ddx − e2)/δ.
-        let w: Vec<f64> = e2.iter().zip(delta).map(|(e, d)| e / d).collect();
-        scatter(&w, &mut row);
-        kkt.apply_at(&row, &mut tmp_n);
-        let mut r: Vec<f64> = e1.iter().zip(&tmp_n).map(|(a, b)| a + b).collect();
-        kkt.solve(&mut r);
-        kkt.apply_a(&r, &mut av);
-        for (a, b) in dx.iter_mut().zip(&r) {
+        ws.w.clear();
+        ws.w.extend(ws.e2.iter().zip(delta).map(|(e, d)| e / d));
+        let w = &ws.w;
+        normals.scatter(cons, cones, |ci| w[ci], &mut ws.row);
+        kkt.apply_at(&ws.row, &mut ws.tmp_n);
+        for ((r, a), b) in ws.r.iter_mut().zip(&ws.e1).zip(&ws.tmp_n) {
+            *r = a + b;
+        }
+        kkt.solve(&mut ws.r);
+        kkt.apply_a(&ws.r, &mut ws.av);
+        for (a, b) in ws.dx.iter_mut().zip(&ws.r) {
             *a += b;
         }
-        for ci in 0..cons.len() {
-            dy[ci] += (g_apply(&av, ci) - e2[ci]) / delta[ci];
+        for (ci, (dy, (e, dl))) in ws.dy.iter_mut().zip(ws.e2.iter().zip(delta)).enumerate() {
+            *dy += (g_apply(&ws.av, ci) - e) / dl;
         }
         if step == steps {
             break;
         }
         // e1 = b1 − H_L dx − G̃ᵀdy, e2 = c − G̃ dx.
-        kkt.apply_p(&dx, &mut tmp_n);
-        kkt.apply_a(&dx, &mut av);
-        curvature(&av, &mut row);
-        let mut extra = vec![0.0; m];
-        scatter(&dy, &mut extra);
-        for (a, b) in row.iter_mut().zip(&extra) {
+        kkt.apply_p(&ws.dx, &mut ws.tmp_n);
+        kkt.apply_a(&ws.dx, &mut ws.av);
+        curvature(&ws.av, &mut ws.row);
+        let dy = &ws.dy;
+        normals.scatter(cons, cones, |ci| dy[ci], &mut ws.extra);
+        for (a, b) in ws.row.iter_mut().zip(&ws.extra) {
             *a += b;
         }
-        let mut at = vec![0.0; n];
-        kkt.apply_at(&row, &mut at);
-        for i in 0..n {
-            e1[i] = b1[i] - tmp_n[i] - at[i];
+        kkt.apply_at(&ws.row, &mut ws.at);
+        for ((e, b), (t, a)) in ws.e1.iter_mut().zip(b1).zip(ws.tmp_n.iter().zip(&ws.at)) {
+            *e = b - t - a;
         }
-        for ci in 0..cons.len() {
-            e2[ci] = c[ci] - g_apply(&av, ci);
+        for (ci, (e, cv)) in ws.e2.iter_mut().zip(c).enumerate() {
+            *e = cv - g_apply(&ws.av, ci);
         }
-        let rn = inf_norm(&e1).max(inf_norm(&e2));
+        let rn = inf_norm(&ws.e1).max(inf_norm(&ws.e2));
+        reached = rn <= (1e2 * rtol).max(1e-4) * bnorm;
         // Stop at the target or when a step no longer halves the residual.
         if !rn.is_finite() || rn > 0.5 * last || rn <= rtol * bnorm {
             break;
         }
         last = rn;
     }
-    (dx, dy)
+    reached
 }

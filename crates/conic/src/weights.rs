@@ -5,9 +5,10 @@
 //! scaling, [`crate::cone`]) and Θ_b = I/δ_b for a zero block (δ_b the regularization of the
 //! equality rows, removed again by iterative refinement). At the start Θ = ω I. In the
 //! active-set polish Θ_b carries the curvature of an active second-order constraint and the
-//! stiff penalty on its normal ([`crate::polish`]), a dense symmetric block. A backend may
-//! read the structure (e.g. invert V⁻² per eigenspace, as the condensed backend of `refine`
-//! does) or just apply Θ_b through [`Weights::apply`].
+//! stiff penalty on its normal, c(−J) + p u uᵀ, or the penalties of a block's active rows, a
+//! diagonal ([`crate::polish`]). A backend may read the structure (e.g. invert V⁻² or the
+//! polish's weight per eigenspace, as the condensed backend of `refine` does) or just apply
+//! Θ_b through [`Weights::apply`].
 
 use crate::cone::{apply_nt, Cones, Kind};
 
@@ -24,15 +25,28 @@ pub enum BlockWeight<'a> {
     },
     /// Θ_b = c I (c ≥ 0; 0 for a block the polish treats as inactive).
     Scalar(f64),
-    /// Θ_b given densely, m × m row-major, symmetric.
-    Dense(&'a [f64]),
+    /// Θ_b = c (−J) + p u uᵀ on a second-order block, −J = diag(−1, 1, …, 1): the polish's
+    /// weight of an active second-order constraint (c = y/|Js| its curvature, u its unit normal,
+    /// p = 1/δ the stiff penalty on it).
+    Active {
+        /// c.
+        curvature: f64,
+        /// u (m entries).
+        normal: &'a [f64],
+        /// p.
+        penalty: f64,
+    },
+    /// Θ_b = diag(θ) (m entries): the polish's penalties on a block's active rows (0 on the
+    /// others).
+    Diagonal(&'a [f64]),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Tag {
     Nt(Kind),
     Scalar(f64),
-    Dense,
+    Active,
+    Diagonal,
 }
 
 /// Θ = diag(Θ_1, …, Θ_B) over the blocks of a [`Cones`].
@@ -40,7 +54,7 @@ enum Tag {
 pub struct Weights {
     tags: Vec<Tag>,
     /// Start of block b's data in `data` (NT scaling: m + 1 entries for Q^m, m for the orthant;
-    /// dense: m²).
+    /// the polish: (c, p, u) or θ).
     start: Vec<usize>,
     data: Vec<f64>,
     dims: Vec<usize>,
@@ -61,6 +75,45 @@ impl Weights {
             data: Vec::new(),
             dims: cones.blocks().iter().map(|b| b.dim()).collect(),
         }
+    }
+
+    /// Θ_b = V_b⁻² on every non-zero block of `cones` with its scaling data laid out once
+    /// (block b from the returned offset b: m + 1 entries for Q^m, m for an orthant, none for a
+    /// zero block, which is Θ_b = 0 until [`Weights::set_scalar`]), for the method to write the
+    /// scalings of each iteration in place ([`Weights::nt_data_mut`]).
+    pub(crate) fn nt_layout(cones: &Cones) -> (Self, Vec<usize>) {
+        let mut off = vec![0];
+        let mut tags = Vec::with_capacity(cones.len());
+        for b in cones.blocks() {
+            let len = match b {
+                crate::Cone::Zero(_) => 0,
+                crate::Cone::Nonnegative(m) => *m,
+                crate::Cone::SecondOrder(m) => m + 1,
+            };
+            tags.push(match b.kind() {
+                Kind::Zero => Tag::Scalar(0.0),
+                kind => Tag::Nt(kind),
+            });
+            off.push(off.last().copied().unwrap_or(0) + len);
+        }
+        let total = off.last().copied().unwrap_or(0);
+        let w = Weights {
+            tags,
+            start: off[..cones.len()].to_vec(),
+            data: vec![0.0; total],
+            dims: cones.blocks().iter().map(|b| b.dim()).collect(),
+        };
+        (w, off)
+    }
+
+    /// The scaling data of a [`Weights::nt_layout`], to write in place.
+    pub(crate) fn nt_data_mut(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+
+    /// The scaling data of a [`Weights::nt_layout`].
+    pub(crate) fn nt_data(&self) -> &[f64] {
+        &self.data
     }
 
     /// The number of blocks.
@@ -91,12 +144,22 @@ impl Weights {
         self.tags[b] = Tag::Nt(kind);
     }
 
-    /// Sets Θ_b to the dense symmetric m × m matrix `theta` (row-major).
-    pub(crate) fn set_dense(&mut self, b: usize, theta: &[f64]) {
-        debug_assert_eq!(theta.len(), self.dims[b] * self.dims[b]);
+    /// Sets Θ_b = c (−J) + p u uᵀ ([`BlockWeight::Active`]).
+    pub fn set_active(&mut self, b: usize, curvature: f64, penalty: f64, normal: &[f64]) {
+        debug_assert_eq!(normal.len(), self.dims[b]);
+        self.start[b] = self.data.len();
+        self.data.push(curvature);
+        self.data.push(penalty);
+        self.data.extend_from_slice(normal);
+        self.tags[b] = Tag::Active;
+    }
+
+    /// Sets Θ_b = diag(θ) ([`BlockWeight::Diagonal`]).
+    pub fn set_diagonal(&mut self, b: usize, theta: &[f64]) {
+        debug_assert_eq!(theta.len(), self.dims[b]);
         self.start[b] = self.data.len();
         self.data.extend_from_slice(theta);
-        self.tags[b] = Tag::Dense;
+        self.tags[b] = Tag::Diagonal;
     }
 
     /// Block b's weight.
@@ -112,7 +175,15 @@ impl Weights {
                     scaling: &self.data[self.start[b]..self.start[b] + len],
                 }
             }
-            Tag::Dense => BlockWeight::Dense(&self.data[self.start[b]..self.start[b] + m * m]),
+            Tag::Active => {
+                let d = &self.data[self.start[b]..self.start[b] + 2 + m];
+                BlockWeight::Active {
+                    curvature: d[0],
+                    penalty: d[1],
+                    normal: &d[2..],
+                }
+            }
+            Tag::Diagonal => BlockWeight::Diagonal(&self.data[self.start[b]..self.start[b] + m]),
         }
     }
 
@@ -125,23 +196,20 @@ impl Weights {
                 apply_nt(kind, scaling, u, true);
                 apply_nt(kind, scaling, u, true);
             }
-            BlockWeight::Dense(t) => {
-                let m = u.len();
-                let mut buf = [0.0; 16];
-                let mut heap = Vec::new();
-                let v: &mut [f64] = if m <= 16 {
-                    &mut buf[..m]
-                } else {
-                    heap.resize(m, 0.0);
-                    &mut heap
-                };
-                v.copy_from_slice(u);
-                for (r, ur) in u.iter_mut().enumerate() {
-                    *ur = t[r * m..(r + 1) * m]
-                        .iter()
-                        .zip(v.iter())
-                        .map(|(a, b)| a * b)
-                        .sum();
+            BlockWeight::Active {
+                curvature,
+                normal,
+                penalty,
+            } => {
+                let un: f64 = normal.iter().zip(u.iter()).map(|(a, b)| a * b).sum();
+                for (k, (x, nk)) in u.iter_mut().zip(normal).enumerate() {
+                    let j = if k == 0 { -curvature } else { curvature };
+                    *x = j * *x + penalty * un * nk;
+                }
+            }
+            BlockWeight::Diagonal(theta) => {
+                for (x, t) in u.iter_mut().zip(theta) {
+                    *x *= t;
                 }
             }
         }

@@ -347,17 +347,17 @@ impl System {
             fixed_couplings: if any_fixed {
                 self.fixed_couplings()
             } else {
-                Vec::new()
+                Couplings::default()
             },
         })
     }
 
     /// The couplings K_{free, fixed} that the elimination moves to the right-hand side: per
     /// free neighbour g (within two steps) of a fixed vertex f, the d×d block K_gf (row-major).
-    fn fixed_couplings(&self) -> Vec<(usize, usize, Vec<f64>)> {
+    fn fixed_couplings(&self) -> Couplings {
         let (n, d) = (self.len(), self.dim());
         let closed = self.topology == Topology::Closed;
-        let mut out = Vec::new();
+        let mut out = Couplings::default();
         let mut blk = vec![0.0; d * d];
         for f in (0..n).filter(|&f| self.fixed[f]) {
             // The vertices within two steps of f; on a small closed curve several steps name
@@ -378,7 +378,8 @@ impl System {
                     continue;
                 }
                 if self.band.get(g, f, &mut blk).is_ok() && blk.iter().any(|&v| v != 0.0) {
-                    out.push((g, f, blk.clone()));
+                    out.pairs.push((g, f));
+                    out.blocks.extend_from_slice(&blk);
                 }
             }
         }
@@ -392,8 +393,17 @@ pub struct Factor {
     n: usize,
     dim: usize,
     inner: Inner,
-    /// Couplings between a free and a fixed vertex: (free, fixed, K_free,fixed as d×d).
-    fixed_couplings: Vec<(usize, usize, Vec<f64>)>,
+    /// Couplings between a free and a fixed vertex.
+    fixed_couplings: Couplings,
+}
+
+/// The couplings K_{free, fixed}: the pairs (free, fixed) and their d×d blocks, flat (one
+/// allocation, not one per pair: a solve with every data vertex fixed has 4n of them per
+/// factorization).
+#[derive(Clone, Debug, Default)]
+struct Couplings {
+    pairs: Vec<(usize, usize)>,
+    blocks: Vec<f64>,
 }
 
 #[derive(Clone, Debug)]
@@ -450,7 +460,12 @@ impl Factor {
     /// b_free −= K_free,fixed x_fixed, then the eliminated system.
     fn solve_slice(&self, x: &mut [f64]) -> Result<(), Error> {
         let d = self.dim;
-        for (g, f, k) in &self.fixed_couplings {
+        let cp = &self.fixed_couplings;
+        for (&(g, f), k) in cp.pairs.iter().zip(cp.blocks.chunks_exact(d * d)) {
+            // (A direction's fixed vertices are 0: nothing to move.)
+            if x[f * d..(f + 1) * d].iter().all(|&v| v == 0.0) {
+                continue;
+            }
             for r in 0..d {
                 let s: f64 = (0..d).map(|c| k[r * d + c] * x[f * d + c]).sum();
                 x[g * d + r] -= s;

@@ -243,7 +243,21 @@ impl Condensation {
     /// are done apart, so the others index without a modulo.
     fn apply_k_d<const D: usize>(&self, y: &[f64], out: &mut [f64]) {
         let size = self.krows.len();
-        if size < 3 || !self.closed {
+        if !self.closed {
+            // Open: row j has columns j, j + 1, j + 2 (first = 1).
+            for ((o, yw), kr) in out
+                .chunks_exact_mut(D)
+                .zip(y.windows(3 * D).step_by(D))
+                .zip(&self.krows)
+            {
+                for e in 0..D {
+                    let yb = yw[D + e];
+                    o[e] = kr[0] * (yw[e] - yb) + kr[2] * (yw[2 * D + e] - yb);
+                }
+            }
+            return;
+        }
+        if size < 3 {
             return self.apply_k_any(y, D, out);
         }
         // Closed: row j has columns j − 1, j, j + 1 (first = 0).
@@ -289,10 +303,33 @@ impl Condensation {
     /// a closed curve collects rows i − 1, i, i + 1) without a modulo away from the ends.
     fn apply_kt_d<const D: usize>(&self, s: &[f64], out: &mut [f64]) {
         let size = self.krows.len();
-        if size < 3 || !self.closed {
+        if !self.closed {
+            // Open: column i gathers rows i − 2 (t = 2), i − 1 (t = 1), i (t = 0), in that order
+            // (the order of `apply_kt_any`'s sums).
+            let k = &self.krows;
+            for (i, o) in out.chunks_exact_mut(D).enumerate() {
+                for e in 0..D {
+                    let mut v = 0.0;
+                    if (2..size + 2).contains(&i) {
+                        v += k[i - 2][2] * s[(i - 2) * D + e];
+                    }
+                    if (1..size + 1).contains(&i) {
+                        v += k[i - 1][1] * s[(i - 1) * D + e];
+                    }
+                    if i < size {
+                        v += k[i][0] * s[i * D + e];
+                    }
+                    o[e] = v;
+                }
+            }
+            return;
+        }
+        if size < 3 {
             return self.apply_kt_any(s, D, out);
         }
         let k = &self.krows;
+        // (The interior columns as one loop over windows of three rows, without a call or a
+        // bounds check per point: the interior-point method's hottest pass.)
         let col = |i: usize, jp: usize, jn: usize, out: &mut [f64]| {
             for e in 0..D {
                 out[i * D + e] =
@@ -300,8 +337,15 @@ impl Condensation {
             }
         };
         col(0, size - 1, 1, out);
-        for i in 1..size - 1 {
-            col(i, i - 1, i + 1, out);
+        for ((o, sw), kw) in out[D..(size - 1) * D]
+            .chunks_exact_mut(D)
+            .zip(s.windows(3 * D).step_by(D))
+            .zip(k.windows(3))
+        {
+            let (a, b, c) = (kw[0][2], kw[1][1], kw[2][0]);
+            for e in 0..D {
+                o[e] = a * sw[e] + b * sw[D + e] + c * sw[2 * D + e];
+            }
         }
         col(size - 1, size - 2, 0, out);
     }

@@ -48,7 +48,7 @@ pub fn wavy_circle(n: usize) -> Points {
 
 /// Deterministic radii in [0.2, 0.7] × the mean data spacing (a small LCG, so the peer and
 /// repeated runs see the same problem).
-fn radii(q: &Points) -> Vec<f64> {
+pub(super) fn radii(q: &Points) -> Vec<f64> {
     let n = q.len();
     let mut spacing = 0.0;
     for i in 0..n {

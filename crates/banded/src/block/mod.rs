@@ -222,6 +222,20 @@ impl<const W: usize> BlockBand<W> {
         Ok(())
     }
 
+    /// The coupling blocks B to write in place: block row i's W + 1 blocks B_{i,i+k},
+    /// k = 0..=W (column indices mod n if cyclic; slots past the end of an open matrix are
+    /// ignored), d² entries each, row-major, at ((i·(W + 1) + k)·d²) — n·(W + 1)·d² entries.
+    /// A writer must keep B_{ii} (slot 0) symmetric; when the slots of several (i, k) name the
+    /// same block (cyclic, n ≤ 2W) they add up, as with [`add`](BlockBand::add). The storage is
+    /// allocated (zero) on first use; for assembling B row by row without the index checks of
+    /// [`add_scaled`](BlockBand::add_scaled).
+    pub fn blocks_mut(&mut self) -> &mut [f64] {
+        if self.blocks.is_empty() {
+            self.blocks = vec![0.0; self.len() * (W + 1) * self.dim * self.dim];
+        }
+        &mut self.blocks
+    }
+
     /// Writes the block A_{ij} (d² entries, row-major) into `out`: S_{ij} I_d plus every
     /// coupling block at that position (aliasing blocks summed).
     ///

@@ -30,10 +30,13 @@
 //! decreasing θ (each large θ_k then enters one new diagonal entry and no Schur complement
 //! subtracts it from a small one).
 //!
-//! The active-set polish's weights (curvature and penalties, [`conic::polish`]) may leave D
-//! singular, so its systems take the full-vertex elimination instead: H ⊗ I_d + D at W's data
-//! vertices, whose Schur complement on them is Q + D, factored by [`energy::System`] in O(N)
-//! with no D⁻¹.
+//! The active-set polish's weights ([`conic::polish`]: an active ball's c I + p ūūᵀ, c its
+//! curvature and p the stiff penalty on its normal; a polytope's penalties on its active faces; 0
+//! on an inactive point) take the condensed route too, c floored at [`POLISH_FLOOR`] × Q_jj in
+//! the inverse (refined away). When they are indefinite (a multiplier turned negative), or once a
+//! solve was too inexact ([`conic::KktSystem::escalate`]), the systems take the full-vertex
+//! elimination instead: H ⊗ I_d + D at W's data vertices, whose Schur complement on them is
+//! Q + D, factored by [`energy::System`] in O(N) with no D⁻¹.
 
 // The per-point kernels index several small arrays by the same row/column.
 #![allow(clippy::needless_range_loop)]
@@ -43,6 +46,7 @@ use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
 use divdiff::{Knots, Points};
 use energy::{Factor, System};
 
+use super::inverse::{ball_inverse, faces_inverse, faces_inverse_fixed};
 use crate::fast::Condensation;
 use crate::operator::Stencil;
 use crate::Error;
@@ -55,6 +59,15 @@ pub(crate) const REGULARIZATION: f64 = 1e-13;
 pub(crate) const REGULARIZATION_GROWTH: f64 = 100.0;
 /// Largest ρ tried, relative to the largest diagonal entry of Q.
 pub(crate) const MAX_REGULARIZATION: f64 = 1e-7;
+/// The polish's weight on a ball (its curvature across the normal, 0 on an inactive ball) is
+/// inverted as at least this times the point's Q_jj: at a point the polish leaves free, D⁻¹ of
+/// 1/ρ made T + K D⁻¹ Kᵀ lose its T entirely, and the cancellation in D⁻¹(r − Kᵀw) of the
+/// penalty's large right-hand side at its active neighbours grows as 1/(this): first solves off
+/// by 10⁴ relative at 1e-8 (the noisy star at n = 10⁵, a step after 22 constraints left the set),
+/// 10¹ at 1e-5, each followed by a full-vertex escalation at 1e-8 only. The refinement against
+/// the exact Q + D removes the floor at a rate of about this where the free points are isolated
+/// among active ones.
+pub(crate) const POLISH_FLOOR: f64 = 1e-5;
 
 /// One face n̂·y ≤ ĉ of a polytope, with unit normal and the original normal's length (the
 /// multipliers of (3.8) are for the original normals).
@@ -115,9 +128,19 @@ pub(crate) struct Condensed<'a> {
     sm_factor: BlockFactor<2>,
     touching: Vec<[(usize, f64); 3]>,
     ntouch: Vec<usize>,
-    /// (D + ρI)⁻¹ and D per variable (d × d).
+    /// (D + ρI)⁻¹ per condensed point (d × d; 0 at an interpolated point, which does not move)
+    /// and D per variable (d × d).
     dinv: Vec<f64>,
     dmat: Vec<f64>,
+    /// Every variable is a ball (apply_a / apply_at take their fixed-size kernels).
+    balls: bool,
+    /// Work space: the face weights θ of one point.
+    theta: Vec<f64>,
+    /// Every condensed point is a variable, in order (x is the condensed y itself).
+    identity: bool,
+    /// What the interpolated points of `y` hold: their data (`Some(true)`), zero
+    /// (`Some(false)`), or not yet written.
+    y_fixed: Option<bool>,
     route: Route,
     /// Every factorization takes the full-vertex route (after [`KktSystem::escalate`]).
     exact: bool,
@@ -132,149 +155,6 @@ pub(crate) struct Condensed<'a> {
     wy: Vec<f64>,
     wk: Vec<f64>,
     wkt: Vec<f64>,
-}
-
-/// (D + ρ I)⁻¹ for D = a I + b w wᵀ, inverted per eigenspace: 1/(a + ρ + b|w|²) along w,
-/// 1/(a + ρ) across.
-pub(crate) fn ball_inverse(a: f64, b: f64, w: &[f64], rho: f64, out: &mut [f64]) {
-    let d = w.len();
-    let w2 = dot(w, w);
-    let ar = a + rho;
-    let (across, along) = (1.0 / ar, 1.0 / (ar + b * w2));
-    let wn = w2.sqrt();
-    for i in 0..d {
-        for j in 0..d {
-            let id = if i == j { 1.0 } else { 0.0 };
-            let uu = if wn > 0.0 {
-                (w[i] / wn) * (w[j] / wn)
-            } else {
-                0.0
-            };
-            out[i * d + j] = across * (id - uu) + along * uu;
-        }
-    }
-}
-
-/// (ρ I + Σ_k θ_k n̂_k n̂_kᵀ)⁻¹ for unit normals, in the orthonormal basis U built by
-/// Gram–Schmidt from the normals in order of decreasing θ (module docs): C = UᵀDU has each
-/// generating normal's large θ on its own diagonal entry and nothing beyond it, so its
-/// Cholesky factorization (largest first) subtracts no large term from a small one.
-pub(crate) fn faces_inverse(
-    normals: &[&[f64]],
-    theta: &[f64],
-    rho: f64,
-    d: usize,
-    out: &mut [f64],
-) {
-    let mut order: Vec<usize> = (0..normals.len()).collect();
-    order.sort_by(|&a, &b| theta[b].total_cmp(&theta[a]));
-    // Orthonormal basis (rows of u) and, per face, its coordinates in that basis.
-    let mut u: Vec<Vec<f64>> = Vec::with_capacity(d);
-    let mut coords: Vec<Vec<f64>> = vec![vec![0.0; d]; normals.len()];
-    for &k in &order {
-        let n = normals[k];
-        let mut c = vec![0.0; d];
-        let mut r = n.to_vec();
-        for (i, ui) in u.iter().enumerate() {
-            let p = dot(ui, &r);
-            c[i] = p;
-            for (x, y) in r.iter_mut().zip(ui) {
-                *x -= p * y;
-            }
-        }
-        let rn = dot(&r, &r).sqrt();
-        // A normal independent of those before (beyond rounding) opens a new direction, on
-        // which it is its basis vector exactly.
-        if u.len() < d && rn > 1e-8 {
-            c[u.len()] = rn;
-            u.push(r.iter().map(|x| x / rn).collect());
-        }
-        coords[k] = c;
-    }
-    // Complete the basis with unit vectors.
-    for e in 0..d {
-        if u.len() == d {
-            break;
-        }
-        let mut r = vec![0.0; d];
-        r[e] = 1.0;
-        for ui in &u {
-            let p = ui[e];
-            for (x, y) in r.iter_mut().zip(ui) {
-                *x -= p * y;
-            }
-        }
-        let rn = dot(&r, &r).sqrt();
-        if rn > 0.5 {
-            u.push(r.iter().map(|x| x / rn).collect());
-        }
-    }
-    // C = ρ I + Σ θ c cᵀ, Cholesky, and C⁻¹ column by column.
-    let mut cm = vec![0.0; d * d];
-    for i in 0..d {
-        cm[i * d + i] = rho;
-    }
-    for (k, c) in coords.iter().enumerate() {
-        for i in 0..d {
-            if c[i] == 0.0 {
-                continue;
-            }
-            for j in 0..d {
-                cm[i * d + j] += theta[k] * c[i] * c[j];
-            }
-        }
-    }
-    let mut l = cm.clone();
-    for j in 0..d {
-        let mut v = l[j * d + j];
-        for t in 0..j {
-            v -= l[j * d + t] * l[j * d + t];
-        }
-        let piv = v.max(f64::MIN_POSITIVE).sqrt();
-        l[j * d + j] = piv;
-        for i in j + 1..d {
-            let mut w = l[i * d + j];
-            for t in 0..j {
-                w -= l[i * d + t] * l[j * d + t];
-            }
-            l[i * d + j] = w / piv;
-        }
-    }
-    let mut cinv = vec![0.0; d * d];
-    let mut col = vec![0.0; d];
-    for e in 0..d {
-        col.fill(0.0);
-        col[e] = 1.0;
-        for i in 0..d {
-            let mut v = col[i];
-            for t in 0..i {
-                v -= l[i * d + t] * col[t];
-            }
-            col[i] = v / l[i * d + i];
-        }
-        for i in (0..d).rev() {
-            let mut v = col[i];
-            for t in i + 1..d {
-                v -= l[t * d + i] * col[t];
-            }
-            col[i] = v / l[i * d + i];
-        }
-        for i in 0..d {
-            cinv[i * d + e] = col[i];
-        }
-    }
-    // D⁻¹ = Uᵀ C⁻¹ U (rows of `u` are the basis vectors).
-    for a in 0..d {
-        for b in 0..d {
-            let mut acc = 0.0;
-            for i in 0..d {
-                for j in 0..d {
-                    acc += u[i][a] * cinv[i * d + j] * u[j][b];
-                }
-            }
-            out[a * d + b] = acc;
-        }
-    }
 }
 
 impl<'a> Condensed<'a> {
@@ -382,6 +262,17 @@ impl<'a> Condensed<'a> {
             }
         }
         let nv = var_point.len();
+        let balls = var_point
+            .iter()
+            .all(|&j| matches!(sets[j], PointSet::Ball(_)));
+        // S = T ⊗ I_d + K D⁻¹ Kᵀ: the scalar part T once, the blocks at each factorization.
+        let mut sm = BlockBand::zeros(size, d, topology).map_err(|_| singular(0))?;
+        for j in 0..size {
+            let _ = sm.add_scalar(j, j, cond.diag[j]);
+            if closed || j + 1 < size {
+                let _ = sm.add_scalar(j, (j + 1) % size, cond.off[j]);
+            }
+        }
         Ok(Condensed {
             cond,
             knots,
@@ -397,12 +288,16 @@ impl<'a> Condensed<'a> {
             s: vec![0.0; size * d],
             y: vec![0.0; n * d],
             g: vec![0.0; n * d],
-            sm: BlockBand::zeros(size, d, topology).map_err(|_| singular(0))?,
+            sm,
             sm_factor: BlockFactor::default(),
             touching,
             ntouch,
-            dinv: vec![0.0; nv * d * d],
+            dinv: vec![0.0; n * d * d],
             dmat: vec![0.0; nv * d * d],
+            balls,
+            theta: Vec::new(),
+            identity: nv == n,
+            y_fixed: None,
             route: Route::Condensed,
             exact: false,
             full: None,
@@ -418,6 +313,11 @@ impl<'a> Condensed<'a> {
             wk: vec![0.0; size * d],
             wkt: vec![0.0; n * d],
         })
+    }
+
+    /// The condensed point of each variable (the interpolated points are not variables).
+    pub(crate) fn variables(&self) -> &[usize] {
+        &self.var_point
     }
 
     /// The rows of variable `v`'s block.
@@ -485,8 +385,9 @@ impl<'a> Condensed<'a> {
             .iter()
             .flat_map(|&j| self.q[j * d..(j + 1) * d].to_vec())
             .collect();
-        let mut g = vec![0.0; x.len()];
-        self.gradient(&x, &mut g);
+        // The forces at every condensed point (the interpolated ones too).
+        self.scatter(&x, true);
+        self.apply_q();
         let f0 = self.g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let f = if f0 > 0.0 { f0 } else { self.scales.force };
         let m = self.cones.rows();
@@ -502,17 +403,26 @@ impl<'a> Condensed<'a> {
         })
     }
 
-    /// Scatters the variables into the condensed y (fixed points at their data).
+    /// Scatters the variables into the condensed y (interpolated points at their data, or at 0
+    /// for a direction).
     fn scatter(&mut self, x: &[f64], with_fixed: bool) {
         let d = self.d;
-        if with_fixed {
+        if self.identity {
+            self.y.copy_from_slice(x);
+            return;
+        }
+        if self.y_fixed != Some(with_fixed) {
             for (j, set) in self.sets.iter().enumerate() {
                 if *set == PointSet::Fixed {
-                    self.y[j * d..(j + 1) * d].copy_from_slice(&self.q[j * d..(j + 1) * d]);
+                    let yj = &mut self.y[j * d..(j + 1) * d];
+                    if with_fixed {
+                        yj.copy_from_slice(&self.q[j * d..(j + 1) * d]);
+                    } else {
+                        yj.fill(0.0);
+                    }
                 }
             }
-        } else {
-            self.y.fill(0.0);
+            self.y_fixed = Some(with_fixed);
         }
         for (v, &j) in self.var_point.iter().enumerate() {
             self.y[j * d..(j + 1) * d].copy_from_slice(&x[v * d..(v + 1) * d]);
@@ -528,6 +438,26 @@ impl<'a> Condensed<'a> {
         let _ = self.t.solve_in_place(&mut self.s, d);
         self.cond.apply_kt(&self.s, d, &mut self.g);
         0.5 * dot(&self.u, &self.s)
+    }
+
+    /// Q y at the variables into `out`, E(y) returned, for the variables `x` (interpolated
+    /// points at their data with `with_fixed`, else at 0).
+    fn q_at_variables(&mut self, x: &[f64], with_fixed: bool, out: &mut [f64]) -> f64 {
+        let d = self.d;
+        if self.identity {
+            // x is y: no scatter, Kᵀs straight into `out`.
+            self.cond.apply_k(x, d, &mut self.u);
+            self.s.copy_from_slice(&self.u);
+            let _ = self.t.solve_in_place(&mut self.s, d);
+            self.cond.apply_kt(&self.s, d, out);
+            return 0.5 * dot(&self.u, &self.s);
+        }
+        self.scatter(x, with_fixed);
+        let e = self.apply_q();
+        for (v, &j) in self.var_point.iter().enumerate() {
+            out[v * d..(v + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
+        }
+        e
     }
 
     /// The refined curve for the variables x (data vertices of W at y, free vertices by the
@@ -582,70 +512,18 @@ impl<'a> Condensed<'a> {
 
     /// The condensed route: (D + ρI)⁻¹ per variable from the NT weights, S = T + K D⁻¹ Kᵀ.
     fn factor_condensed(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
-        let d = self.d;
         let size = self.cond.len();
-        let closed = self.cond.closed;
+        // Without aliasing blocks (a cyclic S of more than 2W + 1 rows), balls in d ≤ 3 take
+        // the fixed-size kernels.
+        let fixed = !self.cond.closed || size > 5;
         loop {
-            // (indices within the band by construction: the adds cannot fail)
-            self.sm.clear();
-            for j in 0..size {
-                let _ = self.sm.add_scalar(j, j, self.cond.diag[j]);
-                if closed || j + 1 < size {
-                    let _ = self.sm.add_scalar(j, (j + 1) % size, self.cond.off[j]);
-                }
-            }
-            for v in 0..self.var_point.len() {
-                let j = self.var_point[v];
-                let shift = self.rho + sigma * self.qdiag[j];
-                let di = &mut self.dinv[v * d * d..(v + 1) * d * d];
-                let dm = &mut self.dmat[v * d * d..(v + 1) * d * d];
-                match (weights.block(v), &self.sets[j]) {
-                    (BlockWeight::Nt { scaling, .. }, PointSet::Ball(_)) => {
-                        // V⁻² lower-right block: η⁻²(I + 2 w̄₁w̄₁ᵀ).
-                        let eta2 = scaling[0] * scaling[0];
-                        let w1 = &scaling[2..];
-                        ball_inverse(1.0 / eta2, 2.0 / eta2, w1, shift, di);
-                        for a in 0..d {
-                            for b in 0..d {
-                                let id = if a == b { 1.0 } else { 0.0 };
-                                dm[a * d + b] = (id + 2.0 * w1[a] * w1[b]) / eta2;
-                            }
-                        }
-                    }
-                    (BlockWeight::Nt { scaling, .. }, PointSet::Faces(faces)) => {
-                        let theta: Vec<f64> = scaling.iter().map(|v| 1.0 / (v * v)).collect();
-                        let normals: Vec<&[f64]> =
-                            faces.iter().map(|f| f.normal.as_slice()).collect();
-                        faces_inverse(&normals, &theta, shift, d, di);
-                        for a in 0..d {
-                            for b in 0..d {
-                                dm[a * d + b] = faces
-                                    .iter()
-                                    .zip(&theta)
-                                    .map(|(f, t)| t * f.normal[a] * f.normal[b])
-                                    .sum::<f64>();
-                            }
-                        }
-                    }
-                    _ => {
-                        return Err(conic::Error::Singular {
-                            index: self.cond.vertices[j],
-                        })
-                    }
-                }
-                let di = &self.dinv[v * d * d..(v + 1) * d * d];
-                let nt = self.ntouch[j];
-                for x in 0..nt {
-                    let (jx, kx) = self.touching[j][x];
-                    let _ = self.sm.add_scaled(jx, jx, kx * kx, di);
-                    for &(jy, ky) in &self.touching[j][x + 1..nt] {
-                        // A row touching the point twice (a closed curve of two condensed
-                        // points) meets itself: both (jx, jy) and (jy, jx) are its diagonal.
-                        let f = if jx == jy { 2.0 * kx * ky } else { kx * ky };
-                        let _ = self.sm.add_scaled(jx, jy, f, di);
-                    }
-                }
-            }
+            let assembled = match (fixed, self.d) {
+                (true, 1) => self.assemble_fixed::<1>(weights, sigma),
+                (true, 2) => self.assemble_fixed::<2>(weights, sigma),
+                (true, 3) => self.assemble_fixed::<3>(weights, sigma),
+                _ => self.assemble_general(weights, sigma),
+            };
+            assembled?;
             match self.sm.factor_into(&cholesky(), &mut self.sm_factor) {
                 Ok(()) => return Ok(()),
                 Err(e) => {
@@ -659,6 +537,236 @@ impl<'a> Condensed<'a> {
                 }
             }
         }
+    }
+
+    /// (D + ρI)⁻¹ and D of every variable and the blocks K (D + ρI)⁻¹ Kᵀ of S, any sets.
+    fn assemble_general(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
+        let d = self.d;
+        let normal_zero = vec![0.0; d];
+        self.sm.clear_blocks();
+        for v in 0..self.var_point.len() {
+            let j = self.var_point[v];
+            let shift = self.rho + sigma * self.qdiag[j];
+            let di = &mut self.dinv[j * d * d..(j + 1) * d * d];
+            let dm = &mut self.dmat[v * d * d..(v + 1) * d * d];
+            match (weights.block(v), &self.sets[j]) {
+                (BlockWeight::Nt { scaling, .. }, PointSet::Ball(_)) => {
+                    // V⁻² lower-right block: η⁻²(I + 2 w̄₁w̄₁ᵀ).
+                    let eta2 = scaling[0] * scaling[0];
+                    let w1 = &scaling[2..];
+                    ball_inverse(1.0 / eta2, 2.0 / eta2, w1, shift, di);
+                    for a in 0..d {
+                        for b in 0..d {
+                            let id = if a == b { 1.0 } else { 0.0 };
+                            dm[a * d + b] = (id + 2.0 * w1[a] * w1[b]) / eta2;
+                        }
+                    }
+                }
+                (weight, PointSet::Ball(_)) => {
+                    // The polish: c I + p ūūᵀ (an active ball), or c I.
+                    let (a, b, w1): (f64, f64, &[f64]) = match weight {
+                        BlockWeight::Active {
+                            curvature,
+                            normal,
+                            penalty,
+                        } => (curvature, penalty, &normal[1..]),
+                        BlockWeight::Scalar(c) => (c, 0.0, &normal_zero[..d]),
+                        _ => {
+                            return Err(conic::Error::Singular {
+                                index: self.cond.vertices[j],
+                            })
+                        }
+                    };
+                    ball_inverse(a.max(POLISH_FLOOR * self.qdiag[j]), b, w1, shift, di);
+                    for r in 0..d {
+                        for c in 0..d {
+                            let id = if r == c { a } else { 0.0 };
+                            dm[r * d + c] = id + b * w1[r] * w1[c];
+                        }
+                    }
+                }
+                (weight, PointSet::Faces(faces)) => {
+                    let theta: Vec<f64> = match weight {
+                        BlockWeight::Nt { scaling, .. } => {
+                            scaling.iter().map(|v| 1.0 / (v * v)).collect()
+                        }
+                        BlockWeight::Diagonal(t) => t.to_vec(),
+                        BlockWeight::Scalar(c) => vec![c; faces.len()],
+                        BlockWeight::Active { .. } => {
+                            return Err(conic::Error::Singular {
+                                index: self.cond.vertices[j],
+                            })
+                        }
+                    };
+                    let normals: Vec<&[f64]> = faces.iter().map(|f| f.normal.as_slice()).collect();
+                    faces_inverse(&normals, &theta, shift, d, di);
+                    for a in 0..d {
+                        for b in 0..d {
+                            dm[a * d + b] = faces
+                                .iter()
+                                .zip(&theta)
+                                .map(|(f, t)| t * f.normal[a] * f.normal[b])
+                                .sum::<f64>();
+                        }
+                    }
+                }
+                _ => {
+                    return Err(conic::Error::Singular {
+                        index: self.cond.vertices[j],
+                    })
+                }
+            }
+            let di = &self.dinv[j * d * d..(j + 1) * d * d];
+            let nt = self.ntouch[j];
+            for x in 0..nt {
+                let (jx, kx) = self.touching[j][x];
+                let _ = self.sm.add_scaled(jx, jx, kx * kx, di);
+                for &(jy, ky) in &self.touching[j][x + 1..nt] {
+                    // A row touching the point twice (a closed curve of two condensed
+                    // points) meets itself: both (jx, jy) and (jy, jx) are its diagonal.
+                    let f = if jx == jy { 2.0 * kx * ky } else { kx * ky };
+                    let _ = self.sm.add_scaled(jx, jy, f, di);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Condensed::assemble_general`] in a compile-time d = `D` without aliasing blocks:
+    /// (D + ρI)⁻¹ per point as in [`ball_inverse`] and [`faces_inverse`] (without allocating),
+    /// then each row j of S written whole from the three points its row of K touches —
+    /// S_jj = T_jj I + Σ_t K_jt² D⁻¹_(j,t), S_j,j+1 = T_j,j+1 I + K_j1 K_j+1,0 D⁻¹_(j,1) +
+    /// K_j2 K_j+1,1 D⁻¹_(j,2), S_j,j+2 = K_j2 K_j+2,0 D⁻¹_(j,2) — instead of six scattered adds
+    /// per point (the same sums).
+    fn assemble_fixed<const D: usize>(
+        &mut self,
+        weights: &Weights,
+        sigma: f64,
+    ) -> Result<(), conic::Error> {
+        let dd = D * D;
+        for v in 0..self.var_point.len() {
+            let j = self.var_point[v];
+            if let PointSet::Faces(faces) = &self.sets[j] {
+                let shift = self.rho + sigma * self.qdiag[j];
+                let di = &mut self.dinv[j * dd..(j + 1) * dd];
+                let dm = &mut self.dmat[v * dd..(v + 1) * dd];
+                let theta = &mut self.theta;
+                theta.clear();
+                match weights.block(v) {
+                    BlockWeight::Nt { scaling, .. } => {
+                        theta.extend(scaling.iter().map(|v| 1.0 / (v * v)));
+                    }
+                    BlockWeight::Diagonal(t) => theta.extend_from_slice(t),
+                    BlockWeight::Scalar(c) => theta.resize(faces.len(), c),
+                    BlockWeight::Active { .. } => {
+                        return Err(conic::Error::Singular {
+                            index: self.cond.vertices[j],
+                        })
+                    }
+                }
+                faces_inverse_fixed::<D>(faces, theta, shift, di);
+                for a in 0..D {
+                    for b in 0..D {
+                        dm[a * D + b] = faces
+                            .iter()
+                            .zip(theta.iter())
+                            .map(|(f, t)| t * f.normal[a] * f.normal[b])
+                            .sum::<f64>();
+                    }
+                }
+                continue;
+            }
+            let shift = self.rho + sigma * self.qdiag[j];
+            // D = a I + b w wᵀ: the NT weight η⁻²(I + 2 w̄₁w̄₁ᵀ), or the polish's c I + p ūūᵀ
+            // (an active ball) or c I.
+            let (a, b, w, nt): (f64, f64, [f64; D], Option<f64>) = match weights.block(v) {
+                BlockWeight::Nt { scaling, .. } => {
+                    let eta2 = scaling[0] * scaling[0];
+                    (
+                        1.0 / eta2,
+                        2.0 / eta2,
+                        std::array::from_fn(|k| scaling[2 + k]),
+                        Some(eta2),
+                    )
+                }
+                BlockWeight::Active {
+                    curvature,
+                    normal,
+                    penalty,
+                } => (
+                    curvature,
+                    penalty,
+                    std::array::from_fn(|k| normal[1 + k]),
+                    None,
+                ),
+                BlockWeight::Scalar(c) => (c, 0.0, [0.0; D], None),
+                BlockWeight::Diagonal(_) => {
+                    return Err(conic::Error::Singular {
+                        index: self.cond.vertices[j],
+                    })
+                }
+            };
+            // ball_inverse, unrolled (the polish's weight floored, see POLISH_FLOOR).
+            let mut w2 = 0.0;
+            for k in 0..D {
+                w2 += w[k] * w[k];
+            }
+            let floor = if nt.is_none() {
+                POLISH_FLOOR * self.qdiag[j]
+            } else {
+                0.0
+            };
+            let ar = a.max(floor) + shift;
+            let (across, along) = (1.0 / ar, 1.0 / (ar + b * w2));
+            let wn = w2.sqrt();
+            let di = &mut self.dinv[j * dd..(j + 1) * dd];
+            let dm = &mut self.dmat[v * dd..(v + 1) * dd];
+            for r in 0..D {
+                for c in 0..D {
+                    let id = if r == c { 1.0 } else { 0.0 };
+                    let uu = if wn > 0.0 {
+                        (w[r] / wn) * (w[c] / wn)
+                    } else {
+                        0.0
+                    };
+                    di[r * D + c] = across * (id - uu) + along * uu;
+                    dm[r * D + c] = match nt {
+                        Some(eta2) => (id + 2.0 * w[r] * w[c]) / eta2,
+                        None => id * a + b * w[r] * w[c],
+                    };
+                }
+            }
+        }
+        let size = self.cond.len();
+        let closed = self.cond.closed;
+        let cond = self.cond;
+        let dinv = &self.dinv;
+        let di = |p: usize| -> &[f64] { &dinv[p * dd..(p + 1) * dd] };
+        let blocks = self.sm.blocks_mut();
+        for j in 0..size {
+            let kr = cond.krows[j];
+            let (c0, c1, c2) = (cond.col(j, 0), cond.col(j, 1), cond.col(j, 2));
+            let row = &mut blocks[j * 3 * dd..(j + 1) * 3 * dd];
+            let (d0, d1, d2) = (di(c0), di(c1), di(c2));
+            let (f0, f1, f2) = (kr[0] * kr[0], kr[1] * kr[1], kr[2] * kr[2]);
+            for e in 0..dd {
+                row[e] = f0 * d0[e] + f1 * d1[e] + f2 * d2[e];
+            }
+            if closed || j + 1 < size {
+                let next = cond.krows[(j + 1) % size];
+                let (g1, g2) = (kr[1] * next[0], kr[2] * next[1]);
+                for e in 0..dd {
+                    row[dd + e] = g1 * d1[e] + g2 * d2[e];
+                }
+            }
+            if closed || j + 2 < size {
+                let h = kr[2] * cond.krows[(j + 2) % size][0];
+                for e in 0..dd {
+                    row[2 * dd + e] = h * d2[e];
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The full-vertex route: H ⊗ I + D at W's data vertices.
@@ -706,6 +814,69 @@ impl<'a> Condensed<'a> {
     }
 }
 
+impl Condensed<'_> {
+    /// The condensed route's solve (see [`KktSystem::solve`]) with d a compile-time constant
+    /// for d ≤ 3 (`D` = 0: `self.d`).
+    fn solve_condensed<const D: usize>(&mut self, r: &mut [f64]) {
+        let d = if D == 0 { self.d } else { D };
+        let dd = d * d;
+        // (wy stays 0 at interpolated points.)
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let di = &self.dinv[j * dd..(j + 1) * dd];
+            let rv = &r[v * d..(v + 1) * d];
+            let out = &mut self.wy[j * d..(j + 1) * d];
+            for a in 0..d {
+                let mut acc = 0.0;
+                for b in 0..d {
+                    acc += di[a * d + b] * rv[b];
+                }
+                out[a] = acc;
+            }
+        }
+        self.cond.apply_k(&self.wy, d, &mut self.wk);
+        let _ = self.sm_factor.solve_in_place(&mut self.wk, 1);
+        self.cond.apply_kt(&self.wk, d, &mut self.wkt);
+        let mut buf = [0.0; 16];
+        let mut heap = Vec::new();
+        let t: &mut [f64] = if d <= 16 {
+            &mut buf[..d]
+        } else {
+            heap.resize(d, 0.0);
+            &mut heap
+        };
+        for (v, &j) in self.var_point.iter().enumerate() {
+            let di = &self.dinv[j * dd..(j + 1) * dd];
+            let rv = &mut r[v * d..(v + 1) * d];
+            let wv = &self.wkt[j * d..(j + 1) * d];
+            for b in 0..d {
+                t[b] = rv[b] - wv[b];
+            }
+            for a in 0..d {
+                let mut acc = 0.0;
+                for b in 0..d {
+                    acc += di[a * d + b] * t[b];
+                }
+                rv[a] = acc;
+            }
+        }
+    }
+
+    /// y = A x for balls alone (rows (0; I) per ball), d a compile-time constant.
+    fn apply_a_balls<const D: usize>(&self, x: &[f64], out: &mut [f64]) {
+        for (xv, o) in x.chunks_exact(D).zip(out.chunks_exact_mut(D + 1)) {
+            o[0] = 0.0;
+            o[1..].copy_from_slice(xv);
+        }
+    }
+
+    /// out = Aᵀ z for balls alone, d a compile-time constant.
+    fn apply_at_balls<const D: usize>(&self, z: &[f64], out: &mut [f64]) {
+        for (o, zv) in out.chunks_exact_mut(D).zip(z.chunks_exact(D + 1)) {
+            o.copy_from_slice(&zv[1..]);
+        }
+    }
+}
+
 impl KktSystem for Condensed<'_> {
     fn num_vars(&self) -> usize {
         self.var_point.len() * self.d
@@ -720,26 +891,23 @@ impl KktSystem for Condensed<'_> {
     }
 
     fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> f64 {
-        let d = self.d;
-        self.scatter(x, true);
-        let e = self.apply_q();
-        for (v, &j) in self.var_point.iter().enumerate() {
-            g[v * d..(v + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
-        }
-        e
+        self.q_at_variables(x, true, g)
     }
 
     fn apply_p(&mut self, v: &[f64], y: &mut [f64]) {
-        let d = self.d;
-        self.scatter(v, false);
-        self.apply_q();
-        for (k, &j) in self.var_point.iter().enumerate() {
-            y[k * d..(k + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
-        }
+        self.q_at_variables(v, false, y);
     }
 
     fn apply_a(&self, x: &[f64], out: &mut [f64]) {
         let d = self.d;
+        if self.balls {
+            match d {
+                1 => return self.apply_a_balls::<1>(x, out),
+                2 => return self.apply_a_balls::<2>(x, out),
+                3 => return self.apply_a_balls::<3>(x, out),
+                _ => {}
+            }
+        }
         for (v, &j) in self.var_point.iter().enumerate() {
             let r = self.row_start[v];
             let xv = &x[v * d..(v + 1) * d];
@@ -761,6 +929,14 @@ impl KktSystem for Condensed<'_> {
 
     fn apply_at(&self, z: &[f64], out: &mut [f64]) {
         let d = self.d;
+        if self.balls {
+            match d {
+                1 => return self.apply_at_balls::<1>(z, out),
+                2 => return self.apply_at_balls::<2>(z, out),
+                3 => return self.apply_at_balls::<3>(z, out),
+                _ => {}
+            }
+        }
         for (v, &j) in self.var_point.iter().enumerate() {
             let r = self.row_start[v];
             let o = &mut out[v * d..(v + 1) * d];
@@ -788,16 +964,32 @@ impl KktSystem for Condensed<'_> {
     }
 
     fn factor(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
-        let nt = !self.exact
-            && (0..self.var_point.len())
-                .all(|v| matches!(weights.block(v), BlockWeight::Nt { .. }));
-        if nt {
+        // The interior-point weights (NT) and the polish's (an active ball's c I + p ūūᵀ, a
+        // polytope's penalties on its active faces, 0 on inactive points) have D ⪰ 0 of known
+        // structure: the condensed route. The polish's D may be indefinite (a multiplier turned
+        // negative): then the exact full-vertex route.
+        let nt =
+            (0..self.var_point.len()).all(|v| matches!(weights.block(v), BlockWeight::Nt { .. }));
+        let structured = (0..self.var_point.len()).all(|v| {
+            match (weights.block(v), &self.sets[self.var_point[v]]) {
+                (BlockWeight::Nt { .. } | BlockWeight::Scalar(_), _) => true,
+                (BlockWeight::Active { curvature, .. }, PointSet::Ball(_)) => curvature >= 0.0,
+                (BlockWeight::Diagonal(_), PointSet::Faces(_)) => true,
+                _ => false,
+            }
+        });
+        if !self.exact && structured {
             self.route = Route::Condensed;
-            self.factor_condensed(weights, sigma)
-        } else {
-            self.route = Route::Full;
-            self.factor_full(weights, sigma)
+            let rho = self.rho;
+            match self.factor_condensed(weights, sigma) {
+                Ok(()) => return Ok(()),
+                Err(e) if nt => return Err(e),
+                // (The polish's system on the full route, with the regularization it found.)
+                Err(_) => self.rho = rho,
+            }
         }
+        self.route = Route::Full;
+        self.factor_full(weights, sigma)
     }
 
     fn factor_is_exact(&self) -> bool {
@@ -835,32 +1027,11 @@ impl KktSystem for Condensed<'_> {
             Route::Condensed => {
                 // dy ← D⁻¹ r (temporarily, in condensed y-space), w = K D⁻¹ r, w ← S⁻¹ w,
                 // dy = D⁻¹(r − Kᵀ w).
-                self.wy.fill(0.0);
-                for (v, &j) in self.var_point.iter().enumerate() {
-                    let di = &self.dinv[v * d * d..(v + 1) * d * d];
-                    for a in 0..d {
-                        self.wy[j * d + a] = (0..d).map(|b| di[a * d + b] * r[v * d + b]).sum();
-                    }
-                }
-                self.cond.apply_k(&self.wy, d, &mut self.wk);
-                let _ = self.sm_factor.solve_in_place(&mut self.wk, 1);
-                self.cond.apply_kt(&self.wk, d, &mut self.wkt);
-                for (v, &j) in self.var_point.iter().enumerate() {
-                    let di = &self.dinv[v * d * d..(v + 1) * d * d];
-                    let mut out = [0.0; 16];
-                    let mut heap = Vec::new();
-                    let o: &mut [f64] = if d <= 16 {
-                        &mut out[..d]
-                    } else {
-                        heap.resize(d, 0.0);
-                        &mut heap
-                    };
-                    for a in 0..d {
-                        o[a] = (0..d)
-                            .map(|b| di[a * d + b] * (r[v * d + b] - self.wkt[j * d + b]))
-                            .sum();
-                    }
-                    r[v * d..(v + 1) * d].copy_from_slice(o);
+                match d {
+                    1 => self.solve_condensed::<1>(r),
+                    2 => self.solve_condensed::<2>(r),
+                    3 => self.solve_condensed::<3>(r),
+                    _ => self.solve_condensed::<0>(r),
                 }
             }
             Route::Full => {
@@ -899,148 +1070,5 @@ fn pivot_row(e: &banded::Error) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::{ball_inverse, faces_inverse};
-
-    fn matmul(a: &[f64], b: &[f64], d: usize) -> Vec<f64> {
-        let mut c = vec![0.0; d * d];
-        for i in 0..d {
-            for j in 0..d {
-                c[i * d + j] = (0..d).map(|k| a[i * d + k] * b[k * d + j]).sum();
-            }
-        }
-        c
-    }
-
-    /// The structured inverses invert: (D + ρI) · inverse = I on well-conditioned cases.
-    #[test]
-    fn structured_inverses_invert() {
-        let d = 3;
-        let w = [0.3, -0.4, 0.5];
-        let mut inv = vec![0.0; 9];
-        ball_inverse(2.0, 4.0, &w, 0.1, &mut inv);
-        let mut m = vec![0.0; 9];
-        for i in 0..d {
-            for j in 0..d {
-                m[i * d + j] = 4.0 * w[i] * w[j] + if i == j { 2.1 } else { 0.0 };
-            }
-        }
-        let id = matmul(&m, &inv, d);
-        for i in 0..d {
-            for j in 0..d {
-                let want = if i == j { 1.0 } else { 0.0 };
-                assert!((id[i * d + j] - want).abs() < 1e-12, "{id:?}");
-            }
-        }
-        let n1 = [0.6, 0.8, 0.0];
-        let n2 = [0.0, 0.6, 0.8];
-        let theta = [3.0, 0.5];
-        faces_inverse(&[&n1, &n2], &theta, 0.2, d, &mut inv);
-        for i in 0..d {
-            for j in 0..d {
-                m[i * d + j] = theta[0] * n1[i] * n1[j]
-                    + theta[1] * n2[i] * n2[j]
-                    + if i == j { 0.2 } else { 0.0 };
-            }
-        }
-        let id = matmul(&m, &inv, d);
-        for i in 0..d {
-            for j in 0..d {
-                let want = if i == j { 1.0 } else { 0.0 };
-                assert!((id[i * d + j] - want).abs() < 1e-12, "{id:?}");
-            }
-        }
-    }
-
-    /// With one face stiff (θ = 1e20) and ρ = 1e-13 the inverse across that face is 1/ρ-scale
-    /// and exact to rounding (a dense inverse loses it completely: the determinant cancels).
-    #[test]
-    fn a_stiff_face_does_not_swamp_the_small_directions() {
-        let d = 2;
-        let s = 0.5f64.sqrt();
-        let n1 = [s, s];
-        let n2 = [s, -s];
-        let mut inv = vec![0.0; 4];
-        faces_inverse(&[&n1, &n2], &[1e20, 1e-3], 1e-13, d, &mut inv);
-        // Across n1 (along n2): 1/(1e-13 + 1e-3); along n1: 1/(1e20 + 1e-13).
-        let along_n2: f64 = (0..d)
-            .map(|i| (0..d).map(|j| n2[i] * inv[i * d + j] * n2[j]).sum::<f64>())
-            .sum();
-        let want = 1.0 / (1e-13 + 1e-3);
-        assert!(
-            (along_n2 - want).abs() <= 1e-12 * want,
-            "{along_n2} vs {want}"
-        );
-        let along_n1: f64 = (0..d)
-            .map(|i| (0..d).map(|j| n1[i] * inv[i * d + j] * n1[j]).sum::<f64>())
-            .sum();
-        assert!(
-            (along_n1 - 1e-20).abs() <= 1e-3 * 1e-20 + 1e-16 * want,
-            "{along_n1}"
-        );
-    }
-}
-
-#[cfg(test)]
-mod route_tests {
-    use super::{Condensed, Face, PointSet};
-    use crate::fast::Condensation;
-    use crate::operator::Stencil;
-    use conic::{KktSystem, Weights};
-    use divdiff::{Knots, Topology};
-
-    /// The condensed elimination and the full-vertex one solve the same Newton system
-    /// (Q + D)Δy = r for polytopes with orthant NT weights of widely spread size.
-    #[test]
-    fn both_routes_solve_the_same_system() {
-        let (n, m, d) = (6usize, 3usize, 2usize);
-        let t: Vec<f64> = (0..=n * m)
-            .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
-            .collect();
-        let kn = Knots::new(Topology::Closed, t).unwrap();
-        let stencil = Stencil::new(&kn);
-        let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
-        let q: Vec<f64> = (0..n * d)
-            .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
-            .collect();
-        let face = |nx: f64, ny: f64, c: f64| {
-            let l = (nx * nx + ny * ny).sqrt();
-            Face {
-                normal: vec![nx / l, ny / l],
-                offset: c / l,
-                norm: l,
-            }
-        };
-        let sets: Vec<PointSet> = (0..n)
-            .map(|i| {
-                PointSet::Faces(vec![
-                    face(1.0, 0.0, 1.0 + i as f64),
-                    face(-1.0, 0.2, 1.0),
-                    face(0.3, -1.0, 2.0),
-                ])
-            })
-            .collect();
-        let mut be = Condensed::new(&cond, &kn, q, sets, d).unwrap();
-        let cones = be.cones().clone();
-        // NT weights with θ spread over 1e-8 … 1e8.
-        let mut w = Weights::zero(&cones);
-        for b in 0..cones.len() {
-            let v: Vec<f64> = (0..3)
-                .map(|k| 10f64.powf(((b * 3 + k) % 9) as f64 - 4.0))
-                .collect();
-            w.set_nt(b, conic::Kind::Nonnegative, &v);
-        }
-        let r: Vec<f64> = (0..n * d).map(|k| ((k * 5) % 11) as f64 - 5.0).collect();
-        be.factor(&w, 0.0).unwrap();
-        let mut a = r.clone();
-        be.solve(&mut a);
-        be.route = super::Route::Full;
-        be.factor_full(&w, 0.0).unwrap();
-        let mut b = r.clone();
-        be.solve(&mut b);
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (x, y) in a.iter().zip(&b) {
-            assert!((x - y).abs() <= 1e-6 * scale, "{a:?}\n{b:?}");
-        }
-    }
-}
+#[path = "condensed_routes.rs"]
+mod routes;

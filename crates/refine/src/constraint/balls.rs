@@ -76,10 +76,11 @@ impl Kind for Balls<'_> {
         rows: &Rows,
         hp: &[f64],
     ) -> Vec<Vec<f64>> {
+        let forces = super::interpolate::derivative_forces(stage, sol, rows);
         (0..stage.q.len())
             .map(|i| match rows.data[i] {
                 Some(c) => vec![sol.ball_weights[c].unwrap_or(0.0)],
-                None => super::interpolate::reaction(stage, sol, rows, hp, i),
+                None => super::interpolate::reaction(stage, &forces, hp, i),
             })
             .collect()
     }

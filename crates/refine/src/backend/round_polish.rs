@@ -1,0 +1,386 @@
+//! The polish of the working set's rounds: calls of [`conic::polish::polish_solution`] on the
+//! condensed backend, each polished curve judged (the constraints it does not hold) and certified
+//! by the caller; on W's condensation, or on a condensation onto W's active points alone when a
+//! fifth or more of W is inactive ([`ActivePolish`]).
+
+use divdiff::{Knots, Points};
+
+use super::condensed::{Condensed, PointSet};
+use super::working_set::Certify;
+use crate::fast::Condensation;
+use crate::operator::Stencil;
+use crate::Error;
+
+/// A curve with the caller's certificate of it: its residual `k`, what the caller keeps, and
+/// the multipliers it was certified with.
+pub(super) struct Certified<C> {
+    pub(super) k: f64,
+    pub(super) certificate: C,
+    pub(super) points: Points,
+    pub(super) multipliers: Vec<Vec<f64>>,
+}
+
+/// The polish calls ([`conic::polish::polish_solution`]) from `sol`, whose curve is `best`
+/// (`None`: not certified yet): each polished curve is judged (`judge`: the constraints outside
+/// W) and certified, and the calls go on from the polished point while the certificate is above
+/// `target` and falls, at most [`POLISH_ROUNDS`]. `None` when a polished curve left a constraint
+/// outside W.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn polish_rounds<C>(
+    be: &mut Condensed<'_>,
+    stencil: &Stencil,
+    wsets: &[PointSet],
+    d: usize,
+    conic_opts: &conic::Options,
+    mut sol: conic::Solution,
+    mut best: Option<Certified<C>>,
+    target: f64,
+    judge: &mut dyn FnMut(&Points) -> bool,
+    certify: Certify<'_, C>,
+    left: Option<&mut Option<(conic::Solution, Points)>>,
+) -> Result<Option<Polished<C>>, Error> {
+    let mut calls = 0;
+    let mut settled = false;
+    let mut opts = conic_opts.clone();
+    if let Some(po) = opts.polish.as_mut() {
+        po.penalty = po.penalty.max(CONDENSED_PENALTY);
+    }
+    let conic_opts = &opts;
+    while calls < POLISH_ROUNDS {
+        if best.as_ref().is_some_and(|b| b.k <= target) || conic_opts.polish.is_none() {
+            break;
+        }
+        let Some(p) = conic::polish::polish_solution(be, &sol, conic_opts) else {
+            break;
+        };
+        calls += 1;
+        let (points, g) = be.curve(&p.x, stencil)?;
+        if !judge(&points) {
+            if let Some(left) = left {
+                *left = Some((p, points));
+            }
+            return Ok(None);
+        }
+        let multipliers = multipliers(be, wsets, &p.z, &g, d);
+        let (k, certificate) = certify(&points, &multipliers);
+        // (NaN is never better.)
+        if k.is_nan() || best.as_ref().is_some_and(|b| k >= b.k) {
+            // A call whose point the method certifies at its tolerance without lowering `k`:
+            // the caller's certificate is at its floor.
+            settled = p.residuals.total <= conic_opts.tolerance;
+            break;
+        }
+        best = Some(Certified {
+            k,
+            certificate,
+            points,
+            multipliers,
+        });
+        if p.residuals.total <= ROUNDING_LEVEL * conic_opts.tolerance {
+            // The method certifies the point at its rounding: another call would take its
+            // Newton steps again from a converged point; the caller's certificate is at its
+            // floor.
+            settled = true;
+            break;
+        }
+        sol = p;
+    }
+    Ok(Some(Polished {
+        best,
+        calls,
+        settled,
+    }))
+}
+
+/// What [`polish_rounds`] ends with: the best certified curve (if any), the calls made, and
+/// whether they ended settled (a call certified by the method at its tolerance did not lower
+/// the caller's certificate: that is at its floor).
+pub(super) struct Polished<C> {
+    pub(super) best: Option<Certified<C>>,
+    pub(super) calls: usize,
+    pub(super) settled: bool,
+}
+
+/// The polish of a round from an interior-point iterate that the judge accepted at the round
+/// tolerance (`run_round`): on W's backend when W is mostly active (or holds polytopes), else on
+/// a backend over the active points of W alone. The polish's systems on W's condensation leave
+/// its inactive points free with no weight, which the condensed route regularizes (a run of them
+/// makes its solves inexact, and the polish then takes the full-vertex route over every vertex of
+/// the curve); condensed onto the active points, the inactive ones are free vertices of the
+/// energy, as outside W, and every condensed point carries its constraint's curvature and
+/// penalty. The polished curve is judged against every constraint it left out.
+pub(super) struct ActivePolish<'e, 'c> {
+    pub(super) be: &'e mut Condensed<'c>,
+    pub(super) cond: &'e Condensation,
+    pub(super) knots: &'e Knots,
+    pub(super) stencil: &'e Stencil,
+    pub(super) qw: &'e [f64],
+    pub(super) wsets: &'e [PointSet],
+    pub(super) d: usize,
+    pub(super) conic_opts: &'e conic::Options,
+    pub(super) margin: f64,
+    pub(super) target: f64,
+}
+
+/// At most this fraction of W's variables inactive: the polish runs on W's own backend.
+const POLISH_ON_W: f64 = 0.2;
+
+impl ActivePolish<'_, '_> {
+    /// Whether the polish from `sol` would run on a condensation onto W's active points (W of
+    /// balls alone, a fifth or more of it inactive).
+    pub(super) fn prefers_subset(&mut self, sol: &conic::Solution) -> bool {
+        if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
+            return false;
+        }
+        let Some(active) = conic::polish::active_blocks(self.be, sol, self.conic_opts) else {
+            return false;
+        };
+        let inactive = active.iter().filter(|a| !**a).count();
+        inactive as f64 > POLISH_ON_W * active.len() as f64
+    }
+
+    /// The polish calls from `sol` ([`polish_rounds`], none certified yet), on W or on its
+    /// active points; `None` when a polished curve left a constraint it does not hold.
+    pub(super) fn run<C>(
+        self,
+        sol: &conic::Solution,
+        judge: &mut dyn FnMut(&Points) -> bool,
+        certify: Certify<'_, C>,
+    ) -> Result<Option<Polished<C>>, Error> {
+        let ActivePolish {
+            be,
+            cond,
+            knots,
+            stencil,
+            qw,
+            wsets,
+            d,
+            conic_opts,
+            margin,
+            target,
+        } = self;
+        let vars = be.variables().to_vec();
+        let active = conic::polish::active_blocks(be, sol, conic_opts);
+        let balls = wsets.iter().all(|s| !matches!(s, PointSet::Faces(_)));
+        let n_w = wsets.len();
+        // W's positions kept: the interpolated and active points, and the ends the
+        // condensation starts at.
+        let mut keep = vec![false; n_w];
+        for (j, set) in wsets.iter().enumerate() {
+            keep[j] = *set == PointSet::Fixed;
+        }
+        keep[0] = true;
+        if !cond.closed {
+            keep[n_w - 1] = true;
+        }
+        let mut inactive = 0;
+        if let Some(active) = &active {
+            for (v, &j) in vars.iter().enumerate() {
+                if active[v] {
+                    keep[j] = true;
+                } else {
+                    inactive += 1;
+                }
+            }
+        }
+        let need = if cond.closed { 2 } else { 3 };
+        if active.is_none()
+            || !balls
+            || inactive as f64 <= POLISH_ON_W * vars.len() as f64
+            || keep.iter().filter(|&&k| k).count() < need
+        {
+            return polish_rounds(
+                be,
+                stencil,
+                wsets,
+                d,
+                conic_opts,
+                sol.clone(),
+                None,
+                target,
+                judge,
+                certify,
+                None,
+            );
+        }
+        let mut var_of = vec![usize::MAX; n_w];
+        for (v, &j) in vars.iter().enumerate() {
+            var_of[j] = v;
+        }
+        // The points of W left out that a polished curve violates join, and the polish is
+        // repeated on the larger set from that curve (the points joining on their boundary
+        // side, where the polish takes them as active), a few times at most.
+        // The start: the iterate on W's variables (x, its slack and dual per variable).
+        let mut from: Vec<Option<VariableStart>> = vec![None; n_w];
+        for (v, &j) in vars.iter().enumerate() {
+            let r = be.rows(v);
+            from[j] = Some((
+                sol.x[v * d..(v + 1) * d].to_vec(),
+                sol.s[r.clone()].to_vec(),
+                sol.z[r].to_vec(),
+            ));
+        }
+        for attempt in 1..=SUBSET_ATTEMPTS {
+            let pos: Vec<usize> = (0..n_w).filter(|&j| keep[j]).collect();
+            let sub_cond = Condensation::at_vertices_reusing(
+                knots,
+                stencil,
+                pos.iter().map(|&j| cond.vertices[j]).collect(),
+                None,
+            )?;
+            let qs: Vec<f64> = pos
+                .iter()
+                .flat_map(|&j| qw[j * d..(j + 1) * d].iter().copied())
+                .collect();
+            let ss: Vec<PointSet> = pos.iter().map(|&j| wsets[j].clone()).collect();
+            let mut sub = Condensed::new(&sub_cond, knots, qs, ss.clone(), d)?;
+            let (mut x, mut s, mut z) = (Vec::new(), Vec::new(), Vec::new());
+            for &j in &pos {
+                if let Some((xj, sj, zj)) = &from[j] {
+                    x.extend_from_slice(xj);
+                    s.extend_from_slice(sj);
+                    z.extend_from_slice(zj);
+                }
+            }
+            let sub_sol = conic::Solution {
+                x,
+                s,
+                z,
+                residuals: conic::Residuals::default(),
+                objective: 0.0,
+                iterations: sol.iterations,
+                status: sol.status,
+                polished: false,
+            };
+            // The judge: the points of W left out (with the margin), then those outside W.
+            let dropped: Vec<usize> = (0..n_w).filter(|&j| !keep[j]).collect();
+            let mut violated: Vec<usize> = Vec::new();
+            let mut judge_sub = |p: &Points| {
+                violated.clear();
+                violated.extend(dropped.iter().copied().filter(|&j| {
+                    wsets[j].closeness(p.point(cond.vertices[j]), &qw[j * d..(j + 1) * d], 0.0)
+                        >= 1.0 - margin
+                }));
+                violated.is_empty() && judge(p)
+            };
+            // The certificate: W's multipliers, 0 on the points left out.
+            let mut certify_sub = |p: &Points, m: &[Vec<f64>]| {
+                let mut wm: Vec<Vec<f64>> = wsets
+                    .iter()
+                    .map(|set| match set {
+                        PointSet::Fixed => vec![0.0; d],
+                        PointSet::Ball(_) => vec![0.0],
+                        PointSet::Faces(f) => vec![0.0; f.len()],
+                    })
+                    .collect();
+                for (mm, &j) in m.iter().zip(&pos) {
+                    wm[j].clone_from(mm);
+                }
+                certify(p, &wm)
+            };
+            let mut left = None;
+            let polished = polish_rounds(
+                &mut sub,
+                stencil,
+                &ss,
+                d,
+                conic_opts,
+                sub_sol,
+                None,
+                target,
+                &mut judge_sub,
+                &mut certify_sub,
+                Some(&mut left),
+            )?;
+            if polished.is_some() || violated.is_empty() || attempt == SUBSET_ATTEMPTS {
+                return Ok(polished);
+            }
+            // The next start: the polished point, and the violated points where its curve put
+            // them (outside their balls: the polish takes them as active, with multiplier 0).
+            if let Some((p, points)) = left {
+                let sub_vars = sub.variables();
+                for (v, &sj) in sub_vars.iter().enumerate() {
+                    let r = sub.rows(v);
+                    from[pos[sj]] = Some((
+                        p.x[v * d..(v + 1) * d].to_vec(),
+                        p.s[r.clone()].to_vec(),
+                        p.z[r].to_vec(),
+                    ));
+                }
+                for &j in &violated {
+                    let PointSet::Ball(radius) = wsets[j] else {
+                        continue;
+                    };
+                    let xj = points.point(cond.vertices[j]).to_vec();
+                    let mut sj = vec![radius];
+                    sj.extend(qw[j * d..(j + 1) * d].iter().zip(&xj).map(|(q, x)| q - x));
+                    from[j] = Some((xj, sj, vec![0.0; d + 1]));
+                }
+            }
+            for &j in &violated {
+                keep[j] = true;
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// A variable's part of a start: its x, s and z.
+type VariableStart = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// Polishes on a condensation onto W's active points, each with the points of W the previous
+/// one's curve left, at most this many.
+const SUBSET_ATTEMPTS: usize = 3;
+
+/// The polish's penalty on the normals of active constraints on the condensed backend, relative
+/// to each point's Q_jj (as [`conic::PolishOptions::penalty`], whose default of 1e-9 a caller's
+/// larger value overrides): the condensed route inverts the polish's weight cI + pūūᵀ per point,
+/// and the penalty's right-hand side along the normals, 1/δ times the constraint values, leaves
+/// the rounding of its cancellation across them multiplied by 1/c. At 1e-6 the first solve of
+/// a polish step is accurate to ~1e-4 where 1e-9 left it at 10³–10⁴ relative and the refinement
+/// took five or six solves (noisy star, n = 10⁴); the penalty's own error, δ times the
+/// multipliers' change, is refined away at a rate of about δ per solve.
+const CONDENSED_PENALTY: f64 = 1e-6;
+
+/// A polished point the method certifies at this fraction of its tolerance is converged: no
+/// further polish call is made from it.
+const ROUNDING_LEVEL: f64 = 1e-2;
+
+/// Most polish calls per accepted round (each one or more Newton steps on the active set; the
+/// steps converge quadratically, so a call that does not lower the certificate ends them).
+pub(super) const POLISH_ROUNDS: usize = 4;
+
+/// Multipliers of W's points: balls w = z₀/ε (Kersey (3.5)); faces w_k = z_k/|n_k| ((3.8) for
+/// the original normals); interpolated points the reaction −(Hp)_v = −(Qy)_j (`g`).
+pub(super) fn multipliers(
+    be: &Condensed<'_>,
+    wsets: &[PointSet],
+    z: &[f64],
+    g: &[f64],
+    d: usize,
+) -> Vec<Vec<f64>> {
+    let mut var = 0;
+    let mut mult = Vec::with_capacity(wsets.len());
+    for (j, set) in wsets.iter().enumerate() {
+        match set {
+            PointSet::Fixed => mult.push(g[j * d..(j + 1) * d].iter().map(|v| -v).collect()),
+            PointSet::Ball(r) => {
+                let rows = be.rows(var);
+                mult.push(vec![z[rows.start] / r]);
+                var += 1;
+            }
+            PointSet::Faces(faces) => {
+                let rows = be.rows(var);
+                mult.push(
+                    faces
+                        .iter()
+                        .zip(&z[rows])
+                        .map(|(f, z)| z / f.norm)
+                        .collect(),
+                );
+                var += 1;
+            }
+        }
+    }
+    mult
+}
