@@ -29,15 +29,41 @@ use banded::vector::dot;
 /// ```
 pub fn alphas(knots: &Knots) -> Vec<[f64; 3]> {
     let mut a = vec![[0.0; 3]; knots.vertex_count()];
-    for i in interior_rows(knots) {
-        let hl = knots.h(i as isize - 1);
-        let hr = knots.h(i as isize);
-        let root = (2.0 / (hl + hr)).sqrt();
-        let a1 = root / hl;
-        let a3 = root / hr;
-        a[i] = [a1, -a1 - a3, a3];
-    }
+    for_each_row(knots, |i, row| a[i] = row);
     a
+}
+
+/// The row α of vertex i from the spans h_{i−1} (left) and h_i (right), as in [`alphas`].
+#[inline(always)]
+fn alpha_row(hl: f64, hr: f64) -> [f64; 3] {
+    let root = (2.0 / (hl + hr)).sqrt();
+    let a1 = root / hl;
+    let a3 = root / hr;
+    [a1, -a1 - a3, a3]
+}
+
+/// Calls `f(i, α_i)` for every interior row i of [`interior_rows`] in increasing order, the span
+/// lengths read from the knot values directly (h_j = t_{j+1} − t_j, as [`Knots::h`], whose
+/// periodic index reduction costs an integer division per call).
+#[inline(always)]
+fn for_each_row(knots: &Knots, mut f: impl FnMut(usize, [f64; 3])) {
+    let t = knots.values();
+    let n = knots.vertex_count();
+    match knots.topology() {
+        Topology::Open => {
+            for (k, w) in t.windows(3).enumerate() {
+                f(k + 1, alpha_row(w[1] - w[0], w[2] - w[1]));
+            }
+        }
+        Topology::Closed if n == 0 => {}
+        Topology::Closed => {
+            // t has N + 1 values (t_N = t_0 + T): h_{−1} = h_{N−1}.
+            f(0, alpha_row(t[n] - t[n - 1], t[1] - t[0]));
+            for (k, w) in t.windows(3).enumerate() {
+                f(k + 1, alpha_row(w[1] - w[0], w[2] - w[1]));
+            }
+        }
+    }
 }
 
 /// The Hessian H = AᵀA of Kersey's energy E(f) = ½ pᵀHp (Kersey (2.1), §3.6), stored as three bands.
@@ -66,23 +92,44 @@ impl Hessian {
     /// ```
     pub fn new(knots: &Knots) -> Hessian {
         let n = knots.vertex_count();
-        let closed = knots.is_closed();
         let mut diag = vec![0.0; n];
         let mut off1 = vec![0.0; n];
         let mut off2 = vec![0.0; n];
-        let a = alphas(knots);
-        for i in interior_rows(knots) {
-            let [a0, a1, a2] = a[i];
-            // Row i touches columns l = i − 1, i, r = i + 1 (mod N for closed curves; an open
-            // curve's non-zero rows are interior, so no wrap is needed there).
-            let l = if closed { (i + n - 1) % n } else { i - 1 };
-            let r = if closed { (i + 1) % n } else { i + 1 };
-            diag[l] += a0 * a0;
-            diag[i] += a1 * a1;
-            diag[r] += a2 * a2;
-            off1[l] += a0 * a1; // entry (i − 1, i)
-            off1[i] += a1 * a2; // entry (i, i + 1)
-            off2[l] += a0 * a2; // entry (i − 1, i + 1)
+        // Row i touches columns l = i − 1, i, r = i + 1 (mod N for closed curves; an open
+        // curve's non-zero rows are interior, so no wrap is needed there). The rows in
+        // increasing order, as `alphas` gives them: every entry sums its terms in that order.
+        let (dg, o1, o2) = (&mut diag[..], &mut off1[..], &mut off2[..]);
+        let mut add = |i: usize, l: usize, r: usize, [a0, a1, a2]: [f64; 3]| {
+            dg[l] += a0 * a0;
+            dg[i] += a1 * a1;
+            dg[r] += a2 * a2;
+            o1[l] += a0 * a1; // entry (i − 1, i)
+            o1[i] += a1 * a2; // entry (i, i + 1)
+            o2[l] += a0 * a2; // entry (i − 1, i + 1)
+        };
+        let t = knots.values();
+        match knots.topology() {
+            Topology::Open => {
+                for (k, w) in t.windows(3).enumerate() {
+                    add(k + 1, k, k + 2, alpha_row(w[1] - w[0], w[2] - w[1]));
+                }
+            }
+            Topology::Closed if n == 0 => {}
+            Topology::Closed => {
+                // t has N + 1 values; the last interior row (N − 1) wraps to column 0.
+                add(0, n - 1, 1 % n, alpha_row(t[n] - t[n - 1], t[1] - t[0]));
+                if n >= 2 {
+                    for (k, w) in t[..n].windows(3).enumerate() {
+                        add(k + 1, k, k + 2, alpha_row(w[1] - w[0], w[2] - w[1]));
+                    }
+                    add(
+                        n - 1,
+                        n - 2,
+                        0,
+                        alpha_row(t[n - 1] - t[n - 2], t[n] - t[n - 1]),
+                    );
+                }
+            }
         }
         Hessian {
             topology: knots.topology(),
@@ -115,6 +162,12 @@ impl Hessian {
     /// entry and their contributions ADD. For open curves off1\[N−1\] = off2\[N−2\] = off2\[N−1\] = 0.
     pub fn bands(&self) -> (&[f64], &[f64], &[f64]) {
         (&self.diag, &self.off1, &self.off2)
+    }
+
+    /// The bands of [`Hessian::bands`], moved out (`(diag, off1, off2)`), e.g. for
+    /// [`crate::System::from_bands`] without a copy.
+    pub fn into_bands(self) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        (self.diag, self.off1, self.off2)
     }
 
     /// Hp, applied to each coordinate column of `p`, in O(N d).

@@ -32,6 +32,52 @@ proptest! {
         }
     }
 
+    /// The rows read off the knot values equal Kersey's formula through `Knots::h` (its periodic
+    /// index), bit for bit, open and closed.
+    #[test]
+    fn alphas_are_the_formula_through_knots_h(pr in problem(2..=12)) {
+        let k = &pr.knots;
+        let n = k.vertex_count();
+        let rows: Vec<usize> = if k.is_closed() { (0..n).collect() } else { (1..n - 1).collect() };
+        for (i, got) in alphas(k).iter().enumerate() {
+            let want = if rows.contains(&i) {
+                let (hl, hr) = (k.h(i as isize - 1), k.h(i as isize));
+                let root = (2.0 / (hl + hr)).sqrt();
+                [root / hl, -root / hl - root / hr, root / hr]
+            } else {
+                [0.0; 3]
+            };
+            prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "row {}", i);
+        }
+    }
+
+    /// H's bands are AᵀA summed row by row in increasing row order (the reference scatter,
+    /// indices mod N), bit for bit.
+    #[test]
+    fn hessian_bands_are_the_row_by_row_sums(pr in problem(2..=12)) {
+        let k = &pr.knots;
+        let n = k.vertex_count();
+        let rows: Vec<usize> = if k.is_closed() { (0..n).collect() } else { (1..n - 1).collect() };
+        let (mut d0, mut d1, mut d2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let a = alphas(k);
+        for &i in &rows {
+            let [a0, a1, a2] = a[i];
+            let (l, r) = ((i + n - 1) % n, (i + 1) % n);
+            d0[l] += a0 * a0;
+            d0[i] += a1 * a1;
+            d0[r] += a2 * a2;
+            d1[l] += a0 * a1;
+            d1[i] += a1 * a2;
+            d2[l] += a0 * a2;
+        }
+        let h = Hessian::new(k);
+        let (g0, g1, g2) = h.bands();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        prop_assert_eq!(bits(g0), bits(&d0));
+        prop_assert_eq!(bits(g1), bits(&d1));
+        prop_assert_eq!(bits(g2), bits(&d2));
+    }
+
     #[test]
     fn apply_matches_dense_product(pr in problem(2..=12)) {
         let hess = Hessian::new(&pr.knots);

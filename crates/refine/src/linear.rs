@@ -1,23 +1,17 @@
 //! The linear fixed-knot problems: interpolation (3.3) and smoothing (3.6) — one banded solve,
 //! exact to rounding — and the banded system H ⊗ I_d they share with the paper's iteration.
 
-use divdiff::{Knots, Points};
+use divdiff::Points;
 use energy::{Hessian, System};
 
 use crate::stage::{FixedProblem, FixedSolution};
 use crate::Error;
 
-/// The system H ⊗ I_d on the given knots.
-pub(crate) fn hessian_system(knots: &Knots, dim: usize) -> Result<System, Error> {
-    let h = Hessian::new(knots);
-    let (d0, d1, d2) = h.bands();
-    Ok(System::from_bands(
-        knots.topology(),
-        d0.to_vec(),
-        d1.to_vec(),
-        d2.to_vec(),
-        dim,
-    )?)
+/// The system H ⊗ I_d of the Hessian `h` (its bands moved in).
+pub(crate) fn hessian_system(h: Hessian, dim: usize) -> Result<System, Error> {
+    let topology = h.topology();
+    let (d0, d1, d2) = h.into_bands();
+    Ok(System::from_bands(topology, d0, d1, d2, dim)?)
 }
 
 /// The weight from which smoothing is interpolation to rounding: w ≥ ‖H‖_∞/ε. At the optimum
@@ -38,7 +32,7 @@ pub(crate) fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result
     let d = fp.q.dim();
     let h = Hessian::new(fp.knots);
     let stiff = stiff_weight(&h);
-    let mut sys = hessian_system(fp.knots, d)?;
+    let mut sys = hessian_system(h, d)?;
     let mut rhs = vec![0.0; n_vert * d];
     for (i, &v) in fp.data_vertex.iter().enumerate() {
         let qi = fp.q.point(i);

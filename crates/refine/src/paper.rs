@@ -99,7 +99,7 @@ fn paper_slots(
     let floor = fp.options.paper.weight_floor * h.bands().0.iter().sum::<f64>() / h.len() as f64;
     let mut w: Vec<Vec<f64>> = all.iter().map(|s| vec![1.0; s.len()]).collect();
     let solve = |w: &[Vec<f64>]| -> Result<Points, Error> {
-        let mut sys = crate::linear::hessian_system(fp.knots, d)?;
+        let mut sys = crate::linear::hessian_system(h.clone(), d)?;
         let mut rhs = vec![0.0; fp.knots.vertex_count() * d];
         for (i, slots) in all.iter().enumerate() {
             let v = fp.data_vertex[i];
