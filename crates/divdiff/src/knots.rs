@@ -127,9 +127,10 @@ impl Knots {
     /// For an open curve, if `i` is outside `0..span_count()`.
     pub fn h(&self, i: isize) -> f64 {
         let s = self.span_count() as isize;
+        // (The periodic reduction, an integer division, only for an index out of range.)
         let j = match self.topology {
-            Topology::Open => i,
-            Topology::Closed => i.rem_euclid(s),
+            Topology::Closed if !(0..s).contains(&i) => i.rem_euclid(s),
+            _ => i,
         } as usize;
         self.t[j + 1] - self.t[j]
     }
@@ -144,6 +145,10 @@ impl Knots {
             Topology::Open => self.t[i as usize],
             Topology::Closed => {
                 let n = self.vertex_count() as isize;
+                if (0..n).contains(&i) {
+                    // k = 0 below: the same sum t_i + 0, without the two divisions.
+                    return self.t[i as usize] + 0.0;
+                }
                 let k = i.div_euclid(n);
                 self.t[i.rem_euclid(n) as usize] + k as f64 * self.length()
             }
