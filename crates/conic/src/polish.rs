@@ -140,6 +140,18 @@ pub fn polish_solution<K: KktSystem + ?Sized>(
     sol: &Solution,
     opts: &Options,
 ) -> Option<Solution> {
+    let (pt, res, floors) = evaluated(kkt, sol)?;
+    let mut out = polish(kkt, &pt, &res, opts, sol.iterations, floors)?;
+    out.status = sol.status;
+    Some(out)
+}
+
+/// `sol` as an iterate of `kkt` with its residuals and the backend's floors; `None` when its
+/// vectors do not fit the program.
+fn evaluated<K: KktSystem + ?Sized>(
+    kkt: &mut K,
+    sol: &Solution,
+) -> Option<(Point, Residuals, crate::Scales)> {
     let (n, m) = (kkt.num_vars(), kkt.cones().rows());
     if sol.x.len() != n || sol.s.len() != m || sol.z.len() != m {
         return None;
@@ -152,9 +164,7 @@ pub fn polish_solution<K: KktSystem + ?Sized>(
     };
     let mut w = crate::ipm::Work::new(n, m);
     let (res, _) = crate::ipm::evaluate(kkt, &pt, &mut w, floors);
-    let mut out = polish(kkt, &pt, &res, opts, sol.iterations, floors)?;
-    out.status = sol.status;
-    Some(out)
+    Some((pt, res, floors))
 }
 
 /// The active set the polish starts from (module docs): the constraints, sorted by block and
@@ -240,18 +250,7 @@ pub fn active_blocks<K: KktSystem + ?Sized>(
     opts: &Options,
 ) -> Option<Vec<bool>> {
     let po = opts.polish.as_ref()?;
-    let (n, m) = (kkt.num_vars(), kkt.cones().rows());
-    if sol.x.len() != n || sol.s.len() != m || sol.z.len() != m {
-        return None;
-    }
-    let floors = crate::ipm::floors(kkt);
-    let pt = Point {
-        x: sol.x.clone(),
-        s: sol.s.clone(),
-        z: sol.z.clone(),
-    };
-    let mut w = crate::ipm::Work::new(n, m);
-    let (res, _) = crate::ipm::evaluate(kkt, &pt, &mut w, floors);
+    let (pt, res, _) = evaluated(kkt, sol)?;
     let (cons, _) = active_set(kkt, &pt, &res, po)?;
     let mut blocks = vec![false; kkt.cones().len()];
     for c in &cons {
