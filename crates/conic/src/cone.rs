@@ -332,27 +332,34 @@ pub fn step_to_boundary(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
             let a = soc_residual(du);
             let b = 2.0 * (u[0] * du[0] - dot(&u[1..], &du[1..]));
             let c = soc_residual(u);
-            let mut best = cap;
-            let disc = b * b - 4.0 * a * c;
-            if a.abs() <= f64::EPSILON * (b.abs() + c.abs()) {
-                if b < 0.0 {
-                    best = best.min(-c / b);
-                }
-            } else if disc >= 0.0 {
-                let q = -0.5 * (b + b.signum() * disc.sqrt());
-                for r in [q / a, if q != 0.0 { c / q } else { f64::INFINITY }] {
-                    if r > 0.0 {
-                        best = best.min(r);
-                    }
-                }
-            }
-            // Stay in the same nappe (u_0 + α du_0 ≥ 0).
-            if du[0] < 0.0 {
-                best = best.min(-u[0] / du[0]);
-            }
-            best.max(0.0)
+            soc_step_from(a, b, c, u[0], du[0], cap)
         }
     }
+}
+
+/// The largest α in [0, `cap`] with J(u + α du) = a α² + b α + c ≥ 0 (c = J(u) > 0: the first
+/// positive root) and u₀ + α du₀ ≥ 0 (the same nappe): the second-order case of
+/// [`step_to_boundary`], shared with the fixed-size kernels of `product`.
+#[inline(always)]
+pub(crate) fn soc_step_from(a: f64, b: f64, c: f64, u0: f64, du0: f64, cap: f64) -> f64 {
+    let mut best = cap;
+    let disc = b * b - 4.0 * a * c;
+    if a.abs() <= f64::EPSILON * (b.abs() + c.abs()) {
+        if b < 0.0 {
+            best = best.min(-c / b);
+        }
+    } else if disc >= 0.0 {
+        let q = -0.5 * (b + b.signum() * disc.sqrt());
+        for r in [q / a, if q != 0.0 { c / q } else { f64::INFINITY }] {
+            if r > 0.0 {
+                best = best.min(r);
+            }
+        }
+    }
+    if du0 < 0.0 {
+        best = best.min(-u0 / du0);
+    }
+    best.max(0.0)
 }
 
 /// The Euclidean projection onto the cone of the block's *dual*: the orthant and Q^m are

@@ -13,8 +13,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::cone::{
-    add_identity, apply_nt, jordan_divide, jordan_product, nt_scaling, step_to_boundary, Cones,
-    Kind, Layout,
+    add_identity, apply_nt, jordan_divide, jordan_product, nt_scaling, soc_step_from,
+    step_to_boundary, Cones, Kind, Layout,
 };
 
 /// J(u) = (u_0 − |ū|)(u_0 + |ū|) of a block of M rows ([`soc_residual`]).
@@ -84,27 +84,7 @@ fn soc_step<const M: usize>(u: &[f64; M], du: &[f64; M], cap: f64) -> f64 {
     }
     let b = 2.0 * (u[0] * du[0] - ud);
     let c = soc_j(u);
-    let mut best = cap;
-    let disc = b * b - 4.0 * a * c;
-    if a.abs() <= f64::EPSILON * (b.abs() + c.abs()) {
-        if b < 0.0 {
-            best = best.min(-c / b);
-        }
-    } else if disc >= 0.0 {
-        let q = -0.5 * (b + b.signum() * disc.sqrt());
-        let r1 = q / a;
-        if r1 > 0.0 {
-            best = best.min(r1);
-        }
-        let r2 = if q != 0.0 { c / q } else { f64::INFINITY };
-        if r2 > 0.0 {
-            best = best.min(r2);
-        }
-    }
-    if du[0] < 0.0 {
-        best = best.min(-u[0] / du[0]);
-    }
-    best.max(0.0)
+    soc_step_from(a, b, c, u[0], du[0], cap)
 }
 
 /// The Jordan product u ∘ v on Q^M, as [`jordan_product`].
