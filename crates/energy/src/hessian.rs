@@ -98,39 +98,16 @@ impl Hessian {
         // Row i touches columns l = i − 1, i, r = i + 1 (mod N for closed curves; an open
         // curve's non-zero rows are interior, so no wrap is needed there). The rows in
         // increasing order, as `alphas` gives them: every entry sums its terms in that order.
-        let (dg, o1, o2) = (&mut diag[..], &mut off1[..], &mut off2[..]);
-        let mut add = |i: usize, l: usize, r: usize, [a0, a1, a2]: [f64; 3]| {
-            dg[l] += a0 * a0;
-            dg[i] += a1 * a1;
-            dg[r] += a2 * a2;
-            o1[l] += a0 * a1; // entry (i − 1, i)
-            o1[i] += a1 * a2; // entry (i, i + 1)
-            o2[l] += a0 * a2; // entry (i − 1, i + 1)
-        };
-        let t = knots.values();
-        match knots.topology() {
-            Topology::Open => {
-                for (k, w) in t.windows(3).enumerate() {
-                    add(k + 1, k, k + 2, alpha_row(w[1] - w[0], w[2] - w[1]));
-                }
-            }
-            Topology::Closed if n == 0 => {}
-            Topology::Closed => {
-                // t has N + 1 values; the last interior row (N − 1) wraps to column 0.
-                add(0, n - 1, 1 % n, alpha_row(t[n] - t[n - 1], t[1] - t[0]));
-                if n >= 2 {
-                    for (k, w) in t[..n].windows(3).enumerate() {
-                        add(k + 1, k, k + 2, alpha_row(w[1] - w[0], w[2] - w[1]));
-                    }
-                    add(
-                        n - 1,
-                        n - 2,
-                        0,
-                        alpha_row(t[n - 1] - t[n - 2], t[n] - t[n - 1]),
-                    );
-                }
-            }
-        }
+        for_each_row(knots, |i, [a0, a1, a2]| {
+            let l = if i == 0 { n - 1 } else { i - 1 };
+            let r = if i + 1 == n { 0 } else { i + 1 };
+            diag[l] += a0 * a0;
+            diag[i] += a1 * a1;
+            diag[r] += a2 * a2;
+            off1[l] += a0 * a1; // entry (i − 1, i)
+            off1[i] += a1 * a2; // entry (i, i + 1)
+            off2[l] += a0 * a2; // entry (i − 1, i + 1)
+        });
         Hessian {
             topology: knots.topology(),
             diag,
