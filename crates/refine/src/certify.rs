@@ -483,15 +483,12 @@ pub(crate) fn certify(
     let d = p.dim();
     let n = q.len();
     let nv = p.len();
-    let mut centroid = vec![0.0; d];
-    for x in q.iter() {
-        for (c, v) in centroid.iter_mut().zip(x) {
-            *c += v;
-        }
-    }
-    for c in &mut centroid {
-        *c /= n as f64;
-    }
+    // Coordinate by coordinate, each sum in a register (the same order of additions as point
+    // by point).
+    let qc = q.coords();
+    let centroid: Vec<f64> = (0..d)
+        .map(|c| qc[c..].iter().step_by(d).sum::<f64>() / n as f64)
+        .collect();
     let derivative_kinds = kinds.iter().any(|k| k.on_derivatives());
     // Without derivative forces, stationarity away from the data vertices is |Hp| alone, so the
     // pass keeps Hp only at the data vertices (when they are in order, as every stage's are).
@@ -499,13 +496,13 @@ pub(crate) fn certify(
         && data_vertex.windows(2).all(|w| w[0] < w[1])
         && data_vertex.last().is_none_or(|&v| v < nv);
     let mut pass = pass(knots, p, &centroid, compact.then_some(data_vertex));
-    let q_extent = q
-        .iter()
-        .map(|x| {
-            x.iter()
-                .zip(&centroid)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max)
+    let q_extent = (0..d)
+        .map(|c| {
+            let m = centroid[c];
+            qc[c..]
+                .iter()
+                .step_by(d)
+                .fold(0.0f64, |a, x| a.max((x - m).abs()))
         })
         .fold(0.0, f64::max);
     let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);

@@ -207,21 +207,31 @@ impl Problem {
             Topology::Open => n - 1,
             Topology::Closed => n,
         };
-        for i in 0..spans {
-            let j = if i + 1 == n { 0 } else { i + 1 };
-            if self.points.point(i) == self.points.point(j) {
-                return Err(Error::CoincidentPoints { index: i, next: j });
+        // Branch-free scans first (the index is searched for only when one fails): a row at a
+        // time they were ~1.5 ms of a 10⁵-point solve.
+        let x = self.points.coords();
+        let consecutive = x.chunks_exact(d).zip(x[d..].chunks_exact(d));
+        let wrap = (spans == n).then(|| (&x[(n - 1) * d..], &x[..d]));
+        let any_coincident = consecutive
+            .chain(wrap)
+            .fold(false, |any, (a, b)| any | (a == b));
+        if any_coincident {
+            for i in 0..spans {
+                let j = if i + 1 == n { 0 } else { i + 1 };
+                if self.points.point(i) == self.points.point(j) {
+                    return Err(Error::CoincidentPoints { index: i, next: j });
+                }
             }
         }
-        let (far, extent) = (0..n)
-            .map(|i| {
-                (
-                    i,
-                    banded::vector::dist(self.points.point(i), self.points.point(0)),
-                )
-            })
-            .fold((0, 0.0f64), |a, b| if b.1 > a.1 { b } else { a });
+        let extent = banded::vector::max_dist_from(x, self.points.point(0));
         if !(EXTENT_RANGE.0..=EXTENT_RANGE.1).contains(&extent) {
+            // The first point farthest from points[0] (where the extent is not NaN).
+            let far = (0..n)
+                .position(|i| {
+                    let r = banded::vector::dist(self.points.point(i), self.points.point(0));
+                    r.to_bits() == extent.to_bits()
+                })
+                .unwrap_or(0);
             return Err(Error::InvalidValue {
                 field: "points",
                 index: far,
