@@ -66,9 +66,7 @@ impl Knots {
             });
         }
         // A branch-free scan first (it vectorizes); the index is searched only on failure.
-        let finite = crate::points::all_finite(t);
-        let increasing = finite && min_step(t) > 0.0;
-        if finite && increasing {
+        if finite_and_increasing(t) {
             return Ok(());
         }
         if let Some(i) = t.iter().position(|x| !x.is_finite()) {
@@ -158,19 +156,32 @@ impl Knots {
 
 /// The smallest step t_{i+1} − t_i of finite values (+∞ for fewer than two), by a branch-free
 /// scan in four independent lanes (it vectorizes).
-fn min_step(t: &[f64]) -> f64 {
-    let mut acc = [f64::INFINITY; 4];
-    let steps = t.len().saturating_sub(1);
-    let body = steps - steps % 4;
-    for i in (0..body).step_by(4) {
+/// Whether every value is finite and every step t_{i+1} − t_i positive: one branch-free pass,
+/// each step's test `t_{i+1} > t_i` (false for NaN) and the exponent bits of t_{i+1} OR-ed into
+/// four lanes (it vectorizes; two passes, the finiteness scan and a NaN-aware minimum of the
+/// steps, were 0.7 ms of a 10⁵-point solve's 8·10⁵ refined knots).
+fn finite_and_increasing(t: &[f64]) -> bool {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    let Some(first) = t.first() else {
+        return true;
+    };
+    let (lo, hi) = (&t[..t.len() - 1], &t[1..]);
+    let mut bad = [0u64; 4];
+    let (mut l4, mut h4) = (lo.chunks_exact(4), hi.chunks_exact(4));
+    let ok = |l: f64, h: f64| {
+        let increasing = h > l; // false for NaN
+        let finite = h.to_bits() & EXPONENT != EXPONENT;
+        u64::from(!(increasing && finite))
+    };
+    for (l, h) in (&mut l4).zip(&mut h4) {
         for j in 0..4 {
-            acc[j] = acc[j].min(t[i + j + 1] - t[i + j]);
+            bad[j] |= ok(l[j], h[j]);
         }
     }
-    for i in body..steps {
-        acc[0] = acc[0].min(t[i + 1] - t[i]);
+    for (&l, &h) in l4.remainder().iter().zip(h4.remainder()) {
+        bad[0] |= ok(l, h);
     }
-    acc.iter().fold(f64::INFINITY, |a, &b| a.min(b))
+    first.is_finite() && (bad[0] | bad[1] | bad[2] | bad[3]) == 0
 }
 
 #[cfg(test)]
