@@ -144,8 +144,12 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
         center,
         data,
     };
-    let parts = crate::par::map(chunks, |(chunk, hp, data)| {
-        sweep(&input, &chunk, (hp, data))
+    let parts = crate::par::map(chunks, |(chunk, hp, out)| {
+        crate::par::vectorized(Sweep {
+            input: &input,
+            chunk: &chunk,
+            out: (hp, out),
+        })
     });
     let mut out = Pass::default();
     for part in &parts {
@@ -272,10 +276,26 @@ fn wrap(g: isize, n: usize, closed: bool) -> Option<usize> {
     }
 }
 
+/// One chunk's [`sweep`], as [`crate::par::vectorized`] runs it.
+struct Sweep<'a, 'b> {
+    input: &'a Input<'b>,
+    chunk: &'a Chunk,
+    out: HpOut<'a>,
+}
+
+impl pulp::WithSimd for Sweep<'_, '_> {
+    type Output = Pass;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Pass {
+        sweep(self.input, self.chunk, self.out)
+    }
+}
+
 /// [`pass`] over `chunk`'s vertices, block by block: the geometry of a block (reciprocal
 /// spacings, widths, the ‖H‖_∞ row sums) once, then each coordinate through slopes, second
 /// differences and Hp — each step a straight loop over equally long slices of the block's
 /// arrays, which the compiler vectorizes.
+#[inline(always)]
 fn sweep(
     &Input {
         knots,

@@ -41,6 +41,24 @@ pub(crate) fn map<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + S
     items.into_iter().map(f).collect()
 }
 
+/// Runs `op` compiled for the widest vector instructions this processor has, chosen at run time
+/// (pulp's dispatch: AVX2 on an x86-64 that has it, the target's baseline otherwise), so that
+/// a pass's straight loops over the vertices run four doubles at a time instead of SSE2's two.
+/// Only code inlined into `op`'s `with_simd` gets the wider instructions, so it and the kernels
+/// it calls are `#[inline(always)]` (a closure would be inlined or not at the compiler's whim).
+/// The same bits either way: the loops keep their order of operations, and Rust does not fuse
+/// a·b + c into one rounding unless the code calls `mul_add`.
+///
+/// Used where it was measured to pay (the noisy star, closed, N = 8·10⁵, minima of 30 solves in
+/// paired runs on two cores): the certificate's sweep (its pass 4.5–5.1 ms → 3.4–3.7 ms) and the
+/// closed form's table of data rows (`uniform::data_alphas`, square roots and divisions four
+/// at a time). The units of [`fill_units`] (the closed form's spans, the knot split) were tried
+/// and gained nothing: their loops are a span long.
+#[inline(always)]
+pub(crate) fn vectorized<Op: pulp::WithSimd>(op: Op) -> Op::Output {
+    pulp::Arch::new().dispatch(op)
+}
+
 /// Runs `f` on a thread of the pool and waits for it: a solve whose passes run in parallel
 /// then forks each pass from a worker, which takes part in it, instead of waking the pool from
 /// outside and sleeping once per pass (measured at N = 8·10⁵: 20–22 → 17 ms, median of 40). A
