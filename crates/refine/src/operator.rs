@@ -13,7 +13,7 @@ pub(crate) struct Stencil {
 }
 
 /// α of the row between spans of lengths `hl` (left) and `hr` (right).
-#[inline]
+#[inline(always)]
 pub(crate) fn alpha_row(hl: f64, hr: f64) -> [f64; 3] {
     let r = (2.0 / (hl + hr)).sqrt();
     let a1 = r / hl;

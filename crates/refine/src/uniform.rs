@@ -69,18 +69,8 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
 
     let gg_unit = k * (2.0 * k + 1.0) / (6.0 * mf);
     let gh_unit = k * (k + 2.0) / (6.0 * mf);
-    // The data rows (α_{v_i,1}, α_{v_i,2}, α_{v_i,3}); zero rows at the ends of an open curve.
-    // Formed where they are used (here and in the spans' pass), not kept: an n-row table was
-    // 2.4 MB of fresh memory at n = 10⁵.
-    let row = |i: usize| -> [f64; 3] {
-        if closed {
-            alpha_row(h[if i == 0 { spans - 1 } else { i - 1 }], h[i % spans])
-        } else if i == 0 || i + 1 == n {
-            [0.0; 3]
-        } else {
-            alpha_row(h[i - 1], h[i])
-        }
-    };
+    // α₁ and α₃ of the data rows (α₂ = −α₁ − α₃ is not needed).
+    let (a1s, a3s) = data_alphas(h, closed, n);
 
     let first = usize::from(!closed);
     let last = if closed { n } else { n - 1 }; // exclusive
@@ -92,16 +82,13 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
         let mut diag = vec![0.0; size];
         let mut off = vec![[0.0]; size];
         let rhs = &mut s[first * d..last * d];
-        let mut ar = row(first);
         for (j, i) in (first..last).enumerate() {
-            let [a1, _, a3] = ar;
-            let an = row(yn(i + 1));
+            let (a1, a3) = (a1s[i], a3s[i]);
             let prev = if i == 0 { spans - 1 } else { i - 1 };
-            let cur = i % spans;
-            let (h3p, h3c) = (h[prev].powi(3), h[cur].powi(3));
+            let (h3p, h3c) = (h[prev].powi(3), h[i].powi(3)); // (i < spans)
             diag[j] = 1.0 + (a1 * a1 * h3p + a3 * a3 * h3c) * gg_unit;
             if i + 1 < last || closed {
-                off[j] = [a3 * an[0] * gh_unit * h3c];
+                off[j] = [a3 * a1s[yn(i + 1)] * gh_unit * h3c];
             }
             let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, yn(i + 1));
             for c in 0..d {
@@ -111,7 +98,6 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                 // form, exact under translation of the data.
                 rhs[j * d + c] = (a1 * (yp - yi) + a3 * (ynx - yi)) / mf;
             }
-            ar = an;
         }
         crate::fast::solve_band(diag, off, rhs, d, closed && size >= 3).map_err(|j| {
             Error::from(energy::Error::Singular {
@@ -142,7 +128,7 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
         let r = yn(i + 1);
         let h3 = h[i].powi(3);
         let (ya, yb) = (&y[i * d..(i + 1) * d], &y[r * d..(r + 1) * d]);
-        let (a3, b1) = (row(i)[2], row(r)[0]);
+        let (a3, b1) = (a3s[i], a1s[r]);
         for c in 0..d {
             mu[c] = a3 * s[i * d + c] * h3;
             nu[c] = b1 * s[r * d + c] * h3;
@@ -163,6 +149,52 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
     };
     let scratch = || (vec![0.0; d], vec![0.0; d], vec![0.0; d]);
     Ok(crate::par::points_by_units(d, total, m, scratch, span)?)
+}
+
+/// α₁ and α₃ of every data row ([`alpha_row`] of the sub-spans on either side, bit for bit;
+/// zero rows at the ends of an open curve), in one [`crate::par::vectorized`] pass. Why a
+/// table (1.6 MB at n = 10⁵): formed where they were used, in the system's assembly and in
+/// every span of the spans' pass, the rows' square roots and divisions were a call each, a
+/// latency chain the processor could not overlap — 15 % of a certified 10⁵-point solve.
+fn data_alphas(h: &[f64], closed: bool, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let (mut a1, mut a3) = (vec![0.0; n], vec![0.0; n]);
+    // Rows 1 .. end read the sub-spans h_{i−1}, h_i; row 0 of a closed curve wraps.
+    let end = if closed { n } else { n - 1 };
+    if end > 1 {
+        crate::par::vectorized(Alphas {
+            hl: &h[..end - 1],
+            hr: &h[1..end],
+            a1: &mut a1[1..end],
+            a3: &mut a3[1..end],
+        });
+    }
+    if closed {
+        let [x, _, z] = alpha_row(h[n - 1], h[0]);
+        (a1[0], a3[0]) = (x, z);
+    }
+    (a1, a3)
+}
+
+/// [`data_alphas`]' straight loop, as [`crate::par::vectorized`] runs it.
+struct Alphas<'a> {
+    hl: &'a [f64],
+    hr: &'a [f64],
+    a1: &'a mut [f64],
+    a3: &'a mut [f64],
+}
+
+impl pulp::WithSimd for Alphas<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let len = self.a1.len();
+        let (hl, hr, a3) = (&self.hl[..len], &self.hr[..len], &mut self.a3[..len]);
+        for j in 0..len {
+            let [x, _, z] = alpha_row(hl[j], hr[j]);
+            self.a1[j] = x;
+            a3[j] = z;
+        }
+    }
 }
 
 /// One span's vertices (the data vertex, then the free ones) for fixed dimension D (see the
