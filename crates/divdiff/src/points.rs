@@ -140,6 +140,36 @@ impl Points {
     pub fn to_rows(&self) -> Vec<Vec<f64>> {
         self.iter().map(<[f64]>::to_vec).collect()
     }
+
+    /// The first span whose two ends coincide, as the pair of indices `(i, j)` with
+    /// point i == point j: j = i + 1, and with `wrap` also the closing span (n − 1, 0). `None`
+    /// when every span has length (the condition the spans' parametrization needs). One
+    /// branch-free scan first; the index is searched for only when it finds a repeat.
+    ///
+    /// ```
+    /// use divdiff::Points;
+    /// let p = Points::from_rows(&[[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]]).unwrap();
+    /// assert_eq!(p.coincident_span(false), None);
+    /// assert_eq!(p.coincident_span(true), Some((2, 0)));
+    /// ```
+    pub fn coincident_span(&self, wrap: bool) -> Option<(usize, usize)> {
+        let (n, d, x) = (self.len(), self.dim, &self.coords[..]);
+        if n < 2 {
+            return None;
+        }
+        let consecutive = x.chunks_exact(d).zip(x[d..].chunks_exact(d));
+        let closing = wrap.then(|| (&x[(n - 1) * d..], &x[..d]));
+        let any = consecutive
+            .chain(closing)
+            .fold(false, |any, (a, b)| any | (a == b));
+        if !any {
+            return None;
+        }
+        let spans = if wrap { n } else { n - 1 };
+        (0..spans)
+            .map(|i| (i, if i + 1 == n { 0 } else { i + 1 }))
+            .find(|&(i, j)| self.point(i) == self.point(j))
+    }
 }
 
 /// Whether every value is finite, by a branch-free scan that vectorizes (a short-circuiting

@@ -209,20 +209,10 @@ impl Problem {
         };
         // Branch-free scans first (the index is searched for only when one fails): a row at a
         // time they were ~1.5 ms of a 10⁵-point solve.
-        let x = self.points.coords();
-        let consecutive = x.chunks_exact(d).zip(x[d..].chunks_exact(d));
-        let wrap = (spans == n).then(|| (&x[(n - 1) * d..], &x[..d]));
-        let any_coincident = consecutive
-            .chain(wrap)
-            .fold(false, |any, (a, b)| any | (a == b));
-        if any_coincident {
-            for i in 0..spans {
-                let j = if i + 1 == n { 0 } else { i + 1 };
-                if self.points.point(i) == self.points.point(j) {
-                    return Err(Error::CoincidentPoints { index: i, next: j });
-                }
-            }
+        if let Some((index, next)) = self.points.coincident_span(spans == n) {
+            return Err(Error::CoincidentPoints { index, next });
         }
+        let x = self.points.coords();
         let extent = banded::vector::max_dist_from(x, self.points.point(0));
         if !(EXTENT_RANGE.0..=EXTENT_RANGE.1).contains(&extent) {
             // The first point farthest from points[0] (where the extent is not NaN).

@@ -101,17 +101,13 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     }
     // Rows guarantee one dimension d ≥ 1 and finite coordinates.
     let d = p.points.dim();
-    let spans = if p.closed { n } else { n - 1 };
-    for i in 0..spans {
-        let j = (i + 1) % n;
-        if p.points.point(i) == p.points.point(j) {
-            return Err(InputError::new(
-                format!("points[{j}]"),
-                format!(
-                    "coincides with points[{i}] (consecutive points must differ: zero-length span)"
-                ),
-            ));
-        }
+    if let Some((i, j)) = p.points.coincident_span(p.closed) {
+        return Err(InputError::new(
+            format!("points[{j}]"),
+            format!(
+                "coincides with points[{i}] (consecutive points must differ: zero-length span)"
+            ),
+        ));
     }
     if let Some(t) = &p.knots {
         let want = if p.closed { n + 1 } else { n };
