@@ -154,8 +154,6 @@ impl Knots {
     }
 }
 
-/// The smallest step t_{i+1} − t_i of finite values (+∞ for fewer than two), by a branch-free
-/// scan in four independent lanes (it vectorizes).
 /// Whether every value is finite and every step t_{i+1} − t_i positive: one branch-free pass,
 /// each step's test `t_{i+1} > t_i` (false for NaN) and the exponent bits of t_{i+1} OR-ed into
 /// four lanes (it vectorizes; two passes, the finiteness scan and a NaN-aware minimum of the

@@ -203,17 +203,15 @@ impl Problem {
                 got: n,
             });
         }
-        let spans = match self.topology {
-            Topology::Open => n - 1,
-            Topology::Closed => n,
-        };
         // Branch-free scans first (the index is searched for only when one fails): a row at a
         // time they were ~1.5 ms of a 10⁵-point solve.
-        if let Some((index, next)) = self.points.coincident_span(spans == n) {
+        if let Some((index, next)) = self
+            .points
+            .coincident_span(self.topology == Topology::Closed)
+        {
             return Err(Error::CoincidentPoints { index, next });
         }
-        let x = self.points.coords();
-        let extent = banded::vector::max_dist_from(x, self.points.point(0));
+        let extent = banded::vector::max_dist_from(self.points.coords(), self.points.point(0));
         if !(EXTENT_RANGE.0..=EXTENT_RANGE.1).contains(&extent) {
             // The first point farthest from points[0] (where the extent is not NaN).
             let far = (0..n)

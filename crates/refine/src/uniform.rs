@@ -198,12 +198,10 @@ impl pulp::WithSimd for Alphas<'_> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) {
-        let len = self.a1.len();
-        let (hl, hr, a3) = (&self.hl[..len], &self.hr[..len], &mut self.a3[..len]);
-        for j in 0..len {
-            let [x, _, z] = alpha_row(hl[j], hr[j]);
-            self.a1[j] = x;
-            a3[j] = z;
+        let Alphas { hl, hr, a1, a3 } = self;
+        for (((a1, a3), &hl), &hr) in a1.iter_mut().zip(a3).zip(hl).zip(hr) {
+            let [x, _, z] = alpha_row(hl, hr);
+            (*a1, *a3) = (x, z);
         }
     }
 }
