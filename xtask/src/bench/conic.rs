@@ -170,15 +170,7 @@ fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
     for topology in [Topology::Closed, Topology::Open] {
         for &n in sizes {
             let star = problem(Class::Balls, n, 3, topology, 3, 7);
-            let wavy = {
-                let q = super::refine::wavy_circle(n);
-                let r = super::refine::radii(&q);
-                refine::Problem::new(q)
-                    .with_topology(topology)
-                    .with_k(3)
-                    .with_knot_iterations(0)
-                    .with_constraint(refine::Constraint::Balls(r))
-            };
+            let wavy = wavy_balls(n, topology);
             for (name, p) in [("noisy star, d = 3", star), ("wavy circle", wavy)] {
                 table_row(name, topology, n, &p, n <= 10_000)?;
             }
@@ -186,6 +178,18 @@ fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
     }
     println!();
     Ok(())
+}
+
+/// The bench's smooth wavy circle with balls of radii 0.2–0.7 of the spacing (a sparse active
+/// set), k = 3, no knot update.
+fn wavy_balls(n: usize, topology: Topology) -> refine::Problem {
+    let q = super::refine::wavy_circle(n);
+    let r = super::refine::radii(&q);
+    refine::Problem::new(q)
+        .with_topology(topology)
+        .with_k(3)
+        .with_knot_iterations(0)
+        .with_constraint(refine::Constraint::Balls(r))
 }
 
 /// Algorithm 4.1 with the default three knot updates (four fixed-knot solves, each after the
@@ -204,13 +208,7 @@ fn knot_updates(opts: Opts) -> anyhow::Result<()> {
     };
     for &n in sizes {
         let star = problem(Class::Balls, n, 2, Topology::Closed, 3, 7);
-        let wavy = {
-            let q = super::refine::wavy_circle(n);
-            let r = super::refine::radii(&q);
-            refine::Problem::new(q)
-                .with_k(3)
-                .with_constraint(refine::Constraint::Balls(r))
-        };
+        let wavy = wavy_balls(n, Topology::Closed);
         for (name, p) in [("noisy star", star), ("wavy circle", wavy)] {
             let once = p.clone().with_knot_iterations(0);
             let three = p.with_knot_iterations(3);
