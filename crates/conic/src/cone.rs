@@ -339,7 +339,8 @@ pub fn step_to_boundary(kind: Kind, u: &[f64], du: &[f64], cap: f64) -> f64 {
 
 /// The largest α in [0, `cap`] with J(u + α du) = a α² + b α + c ≥ 0 (c = J(u) > 0: the first
 /// positive root) and u₀ + α du₀ ≥ 0 (the same nappe): the second-order case of
-/// [`step_to_boundary`], shared with the fixed-size kernels of `product`.
+/// [`step_to_boundary`]. (`product`'s kernel for Q³ and Q⁴ computes the same candidates for many
+/// blocks at once without branches, and is tested against this.)
 #[inline(always)]
 pub(crate) fn soc_step_from(a: f64, b: f64, c: f64, u0: f64, du0: f64, cap: f64) -> f64 {
     let mut best = cap;
