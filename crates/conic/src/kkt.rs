@@ -89,8 +89,9 @@ pub trait KktSystem {
 
     /// Called when a direction's iterative refinement stalled far from its target: the last
     /// factorization is too far from K(Θ, σ). A backend that can factor more exactly (at a
-    /// higher cost) switches to that for the rest of the solve and returns `true`; the method
-    /// then repeats the iteration. The default returns `false` (nothing better to offer).
+    /// higher cost) switches to that — for the repeated iteration at least, for the rest of the
+    /// solve at most, as it sees fit — and returns `true`; the method then repeats the iteration.
+    /// The default returns `false` (nothing better to offer).
     fn escalate(&mut self) -> bool {
         false
     }

@@ -163,3 +163,74 @@ mod polish_route_tests {
         }
     }
 }
+
+mod escalation_tests {
+    use super::super::{Condensed, Face, PointSet, Route};
+    use crate::fast::Condensation;
+    use crate::operator::Stencil;
+    use conic::{KktSystem, Weights};
+    use divdiff::{Knots, Topology};
+
+    /// Route of each of `k` factorizations of `w`, with an escalation after the ones marked.
+    fn routes(be: &mut Condensed<'_>, w: &Weights, escalate_after: &[bool]) -> Vec<Route> {
+        escalate_after
+            .iter()
+            .map(|&esc| {
+                be.factor(w, 0.0).unwrap();
+                let route = be.route;
+                if esc {
+                    be.escalate();
+                }
+                route
+            })
+            .collect()
+    }
+
+    /// Balls: the first escalation sends the repeated step alone to the full-vertex route, the
+    /// second every later system; polytopes: the first already does. A full-route factor is not
+    /// escalated again (`escalate` is false: nothing more exact to offer).
+    #[test]
+    fn escalation_is_once_then_for_good_on_balls_and_for_good_on_polytopes() {
+        let (n, m, d) = (6usize, 3usize, 2usize);
+        let t: Vec<f64> = (0..=n * m)
+            .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
+            .collect();
+        let kn = Knots::new(Topology::Closed, t).unwrap();
+        let stencil = Stencil::new(&kn);
+        let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
+        let q: Vec<f64> = (0..n * d)
+            .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
+            .collect();
+        let (c, f) = (Route::Condensed, Route::Full);
+
+        let mut be =
+            Condensed::new(&cond, &kn, q.clone(), vec![PointSet::Ball(0.2); n], d).unwrap();
+        let mut w = Weights::zero(&be.cones().clone());
+        for b in 0..n {
+            // (η, w̄) with w̄₀² − |w̄₁|² = 1.
+            w.set_nt(b, conic::Kind::SecondOrder, &[1.0, 1.25, 0.45, 0.6]);
+        }
+        assert_eq!(
+            routes(
+                &mut be,
+                &w,
+                &[false, true, false, false, true, false, false]
+            ),
+            [c, c, f, c, c, f, f]
+        );
+        assert!(!be.escalate(), "already exact");
+
+        let face = Face {
+            normal: vec![1.0, 0.0],
+            offset: 1.0,
+            norm: 1.0,
+        };
+        let sets = vec![PointSet::Faces(vec![face]); n];
+        let mut be = Condensed::new(&cond, &kn, q, sets, d).unwrap();
+        let mut w = Weights::zero(&be.cones().clone());
+        for b in 0..n {
+            w.set_nt(b, conic::Kind::Nonnegative, &[1.0]);
+        }
+        assert_eq!(routes(&mut be, &w, &[true, false, false]), [c, f, f]);
+    }
+}
