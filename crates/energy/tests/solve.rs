@@ -592,3 +592,44 @@ fn apply_flat_and_clear_blocks_match_a_fresh_system() {
         }
     }
 }
+
+/// One `Factor` refilled by `factor_into` across systems of both kinds (coupling blocks or
+/// not), sizes, dimensions, with and without fixed vertices, and after a failed factorization,
+/// solves exactly as a fresh factor of each (bit for bit); a failure leaves it empty (its solves
+/// report the wrong length).
+#[test]
+fn a_refilled_factor_is_a_fresh_one() {
+    let mut f = energy::Factor::empty();
+    let mut rng = Rng(77);
+    let mut seed = 1;
+    for top in [Topology::Open, Topology::Closed] {
+        for (n, d, coupling) in [
+            (9, 2, true),
+            (9, 2, false),
+            (30, 3, true),
+            (5, 1, false),
+            (30, 2, true),
+        ] {
+            seed += 1;
+            let p = random_problem(top, n, d, coupling, seed);
+            p.system.factor_into(energy::PIVOT_RTOL, &mut f).unwrap();
+            let b = Points::new(d, (0..n * d).map(|_| rng.range(-1.0, 1.0)).collect()).unwrap();
+            let want = p.system.factor().unwrap().solve(&b).unwrap();
+            let got = f.solve(&b).unwrap();
+            assert!(
+                want.coords()
+                    .iter()
+                    .zip(got.coords())
+                    .all(|(a, c)| a.to_bits() == c.to_bits()),
+                "{top:?} n={n} d={d} coupling {coupling}"
+            );
+            // A singular system (no weights): the error, and an empty factor after it.
+            let s = bare(top, n, d);
+            assert!(matches!(
+                s.factor_into(energy::PIVOT_RTOL, &mut f),
+                Err(Error::Singular { .. })
+            ));
+            assert!(matches!(f.solve(&b), Err(Error::WrongLength { .. })));
+        }
+    }
+}

@@ -802,15 +802,16 @@ impl<'a> Condensed<'a> {
         }
         let (sys, factor) = self.full.as_mut().expect("built above");
         sys.clear_blocks();
-        *factor = None;
+        // The last factor's storage, refilled (`energy::System::factor_into`).
+        let mut f = factor.take().unwrap_or_else(Factor::empty);
         for (v, &j) in self.var_point.iter().enumerate() {
             sys.add_block(self.cond.vertices[j], &blocks[v * d * d..(v + 1) * d * d])
                 .map_err(|_| conic::Error::Singular {
                     index: self.cond.vertices[j],
                 })?;
         }
-        match sys.factor_with_tolerance(super::full::NEWTON_PIVOT_RTOL) {
-            Ok(f) => {
+        match sys.factor_into(super::full::NEWTON_PIVOT_RTOL, &mut f) {
+            Ok(()) => {
                 *factor = Some(f);
                 Ok(())
             }

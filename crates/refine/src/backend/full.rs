@@ -513,7 +513,8 @@ impl KktSystem for FullVertex {
 
     fn factor(&mut self, weights: &Weights, sigma: f64) -> Result<(), conic::Error> {
         let d = self.d;
-        self.factor = None;
+        // The last factor's storage, refilled (`energy::System::factor_into`).
+        let mut factor = self.factor.take().unwrap_or_else(Factor::empty);
         if sigma > 0.0 {
             self.work = self.base.clone();
         } else {
@@ -559,9 +560,9 @@ impl KktSystem for FullVertex {
                 }
             }
         }
-        match self.work.factor_with_tolerance(NEWTON_PIVOT_RTOL) {
-            Ok(f) => {
-                self.factor = Some(f);
+        match self.work.factor_into(NEWTON_PIVOT_RTOL, &mut factor) {
+            Ok(()) => {
+                self.factor = Some(factor);
                 Ok(())
             }
             Err(energy::Error::Singular { vertex }) => {
