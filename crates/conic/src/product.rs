@@ -78,14 +78,18 @@ fn soc_scaling<const M: usize>(s: &[f64; M], z: &[f64; M], sc: &mut [f64]) {
 /// chain that [`soc_max_step`] computes without branches (its reference in the tests).
 #[cfg(test)]
 fn soc_step<const M: usize>(u: &[f64; M], du: &[f64; M], cap: f64) -> f64 {
-    let a = soc_j(du);
+    let [a, b, c] = soc_quadratic(u, du);
+    crate::cone::soc_step_from(a, b, c, u[0], du[0], cap)
+}
+
+/// J(u + α du) = a α² + b α + c of a block of M rows: [a, b, c].
+#[inline(always)]
+fn soc_quadratic<const M: usize>(u: &[f64; M], du: &[f64; M]) -> [f64; 3] {
     let mut ud = 0.0;
     for k in 1..M {
         ud += u[k] * du[k];
     }
-    let b = 2.0 * (u[0] * du[0] - ud);
-    let c = soc_j(u);
-    crate::cone::soc_step_from(a, b, c, u[0], du[0], cap)
+    [soc_j(du), 2.0 * (u[0] * du[0] - ud), soc_j(u)]
 }
 
 /// The Jordan product u ∘ v on Q^M, as [`jordan_product`].
@@ -232,9 +236,16 @@ pub(crate) fn max_step(
     cap: f64,
 ) -> f64 {
     match cones.layout() {
-        Layout::Soc3 => soc_max_step::<3>(s, ds, z, dz, cap),
-        Layout::Soc4 => soc_max_step::<4>(s, ds, z, dz, cap),
-        Layout::Orthant => pulp::Arch::new().dispatch(OrthantMaxStep { s, ds, z, dz, cap }),
+        layout @ (Layout::Soc3 | Layout::Soc4 | Layout::Orthant) => {
+            pulp::Arch::new().dispatch(UniformStep {
+                layout,
+                s,
+                ds,
+                z,
+                dz,
+                cap,
+            })
+        }
         Layout::Mixed => {
             let mut a = cap;
             for (bi, cone) in cones.blocks().iter().enumerate() {
@@ -247,13 +258,16 @@ pub(crate) fn max_step(
     }
 }
 
-/// Blocks per tile of [`soc_max_step`].
+/// Blocks (or orthant rows) per tile of the uniform steps.
 const STEP_TILE: usize = 32;
 
-/// [`max_step`] on one orthant: min(cap, −x/dx over the falling rows of s and z), in
-/// [`STEP_TILE`] lanes of running minima without a branch (masked candidates are +∞), combined at
-/// the end: the same number as the row-by-row chain (min is exact; both skip NaN), vectorized.
-struct OrthantMaxStep<'a> {
+/// [`max_step`] when every block is Q³, every block Q⁴, or the product one orthant, compiled
+/// for the widest vector instructions of the processor, chosen at run time (pulp: AVX2 on
+/// x86-64 when present, the baseline otherwise; the same bits either way — the loops keep their
+/// operations, and nothing is fused into a·b + c). Its body and the kernels it calls are
+/// `#[inline(always)]`: only inlined code gets the wider instructions.
+struct UniformStep<'a> {
+    layout: Layout,
     s: &'a [f64],
     ds: &'a [f64],
     z: &'a [f64],
@@ -261,26 +275,45 @@ struct OrthantMaxStep<'a> {
     cap: f64,
 }
 
-impl pulp::WithSimd for OrthantMaxStep<'_> {
+impl pulp::WithSimd for UniformStep<'_> {
     type Output = f64;
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> f64 {
-        let OrthantMaxStep { s, ds, z, dz, cap } = self;
-        let mut lanes = [cap; STEP_TILE];
-        let mut a = cap;
-        for (u, du) in [(s, ds), (z, dz)] {
-            let (uc, duc) = (u.chunks_exact(STEP_TILE), du.chunks_exact(STEP_TILE));
-            for (x, dx) in uc.remainder().iter().zip(duc.remainder()) {
-                a = a.min(candidate(*x, *dx));
-            }
-            for (x, dx) in uc.zip(duc) {
-                for j in 0..STEP_TILE {
-                    lanes[j] = lanes[j].min(candidate(x[j], dx[j]));
-                }
+        let UniformStep {
+            layout,
+            s,
+            ds,
+            z,
+            dz,
+            cap,
+        } = self;
+        match layout {
+            Layout::Soc3 => soc_max_step::<3>(s, ds, z, dz, cap),
+            Layout::Soc4 => soc_max_step::<4>(s, ds, z, dz, cap),
+            _ => orthant_max_step(s, ds, z, dz, cap),
+        }
+    }
+}
+
+/// [`max_step`] on one orthant: min(cap, −x/dx over the falling rows of s and z), in
+/// [`STEP_TILE`] lanes of running minima without a branch (masked candidates are +∞), combined at
+/// the end: the same number as the row-by-row chain (min is exact; both skip NaN), vectorized.
+#[inline(always)]
+fn orthant_max_step(s: &[f64], ds: &[f64], z: &[f64], dz: &[f64], cap: f64) -> f64 {
+    let mut lanes = [cap; STEP_TILE];
+    let mut a = cap;
+    for (u, du) in [(s, ds), (z, dz)] {
+        let (uc, duc) = (u.chunks_exact(STEP_TILE), du.chunks_exact(STEP_TILE));
+        for (x, dx) in uc.remainder().iter().zip(duc.remainder()) {
+            a = a.min(candidate(*x, *dx));
+        }
+        for (x, dx) in uc.zip(duc) {
+            for j in 0..STEP_TILE {
+                lanes[j] = lanes[j].min(candidate(x[j], dx[j]));
             }
         }
-        lanes.iter().fold(a, |a, &l| a.min(l))
     }
+    lanes.iter().fold(a, |a, &l| a.min(l))
 }
 
 /// The step to the boundary of one falling row (−x/dx), +∞ for a rising or NaN one.
@@ -301,39 +334,8 @@ fn candidate(x: f64, dx: f64) -> f64 {
 /// max(min(α, candidates), 0) block after block, is max(min(cap, every candidate), 0): the same
 /// number, since min is exact and both skip NaN (tested bit for bit). The branches of the chain
 /// went either way at random on a dense active set (11 % of a balls solve at n = 10⁴).
-fn soc_max_step<const M: usize>(s: &[f64], ds: &[f64], z: &[f64], dz: &[f64], cap: f64) -> f64 {
-    pulp::Arch::new().dispatch(SocMaxStep::<M> { s, ds, z, dz, cap })
-}
-
-/// [`soc_max_step`] compiled for the widest vector instructions of the processor, chosen at run
-/// time (pulp: AVX2 on x86-64 when present, the baseline otherwise; the same bits either way —
-/// the loops keep their operations, and nothing is fused into a·b + c). Its body and the
-/// kernels it calls are `#[inline(always)]`: only inlined code gets the wider instructions.
-struct SocMaxStep<'a, const M: usize> {
-    s: &'a [f64],
-    ds: &'a [f64],
-    z: &'a [f64],
-    dz: &'a [f64],
-    cap: f64,
-}
-
-impl<const M: usize> pulp::WithSimd for SocMaxStep<'_, M> {
-    type Output = f64;
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) -> f64 {
-        let SocMaxStep { s, ds, z, dz, cap } = self;
-        soc_max_step_tiles::<M>(s, ds, z, dz, cap)
-    }
-}
-
 #[inline(always)]
-fn soc_max_step_tiles<const M: usize>(
-    s: &[f64],
-    ds: &[f64],
-    z: &[f64],
-    dz: &[f64],
-    cap: f64,
-) -> f64 {
+fn soc_max_step<const M: usize>(s: &[f64], ds: &[f64], z: &[f64], dz: &[f64], cap: f64) -> f64 {
     let mut best = cap;
     let mut q = QuadTile::default();
     for (u, du) in [(s, ds), (z, dz)] {
@@ -341,13 +343,7 @@ fn soc_max_step_tiles<const M: usize>(
             let nb = ut.len() / M;
             for (j, (ub, dub)) in ut.chunks_exact(M).zip(dut.chunks_exact(M)).enumerate() {
                 let (ub, dub) = (arr::<M>(ub), arr::<M>(dub));
-                let mut ud = 0.0;
-                for k in 1..M {
-                    ud += ub[k] * dub[k];
-                }
-                q.a[j] = soc_j(&dub);
-                q.b[j] = 2.0 * (ub[0] * dub[0] - ud);
-                q.c[j] = soc_j(&ub);
+                [q.a[j], q.b[j], q.c[j]] = soc_quadratic(&ub, &dub);
                 q.u0[j] = ub[0];
                 q.du0[j] = dub[0];
             }
@@ -361,24 +357,13 @@ fn soc_max_step_tiles<const M: usize>(
 }
 
 /// Per block of a tile: J(u + α du) = a α² + b α + c, u₀ and du₀.
+#[derive(Default)]
 struct QuadTile {
     a: [f64; STEP_TILE],
     b: [f64; STEP_TILE],
     c: [f64; STEP_TILE],
     u0: [f64; STEP_TILE],
     du0: [f64; STEP_TILE],
-}
-
-impl Default for QuadTile {
-    fn default() -> Self {
-        QuadTile {
-            a: [0.0; STEP_TILE],
-            b: [0.0; STEP_TILE],
-            c: [0.0; STEP_TILE],
-            u0: [0.0; STEP_TILE],
-            du0: [0.0; STEP_TILE],
-        }
-    }
 }
 
 /// The smallest candidate step of each block of the tile, +∞ where none applies: the candidates
@@ -711,13 +696,9 @@ mod tests {
     /// rising, zero and NaN rows; lengths around the lane count).
     #[test]
     fn the_orthant_step_is_the_chain_of_row_steps() {
-        let cones = Cones::new(vec![Cone::Nonnegative(1)]).unwrap();
         for len in [0usize, 1, 7, STEP_TILE, STEP_TILE + 5, 4 * STEP_TILE + 3] {
-            let cones = if len == 0 {
-                cones.clone()
-            } else {
-                Cones::new(vec![Cone::Nonnegative(len)]).unwrap()
-            };
+            // (An orthant has a row at least; with no rows the layout is the same.)
+            let cones = Cones::new(vec![Cone::Nonnegative(len.max(1))]).unwrap();
             for seed in 0..20usize {
                 let val = |k: usize, salt: usize| -> f64 {
                     let h = (k * 2654435761 + seed * 40503 + salt * 97) % 1000;
