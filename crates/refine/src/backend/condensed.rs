@@ -143,12 +143,9 @@ pub(crate) struct Condensed<'a> {
     /// (`Some(false)`), or not yet written.
     y_fixed: Option<bool>,
     route: Route,
-    /// Every factorization takes the full-vertex route (after a second
-    /// [`KktSystem::escalate`]).
-    exact: bool,
     /// The next factorization takes the full-vertex route (after a first escalation).
     once: bool,
-    /// Escalations so far.
+    /// Escalations so far ([`Condensed::exact`]).
     escalations: usize,
     full: Option<(System, Option<Factor>)>,
     rhs_full: Vec<f64>,
@@ -305,7 +302,6 @@ impl<'a> Condensed<'a> {
             identity: nv == n,
             y_fixed: None,
             route: Route::Condensed,
-            exact: false,
             once: false,
             escalations: 0,
             full: None,
@@ -466,6 +462,12 @@ impl<'a> Condensed<'a> {
             out[v * d..(v + 1) * d].copy_from_slice(&self.g[j * d..(j + 1) * d]);
         }
         e
+    }
+
+    /// Whether every factorization takes the full-vertex route: after the second escalation
+    /// with balls, after the first with polytopes ([`KktSystem::escalate`]).
+    fn exact(&self) -> bool {
+        self.escalations >= if self.balls { 2 } else { 1 }
     }
 
     /// The refined curve for the variables x (data vertices of W at y, free vertices by the
@@ -987,7 +989,7 @@ impl KktSystem for Condensed<'_> {
                 _ => false,
             }
         });
-        if !self.exact && !self.once && structured {
+        if !self.exact() && !self.once && structured {
             self.route = Route::Condensed;
             let rho = self.rho;
             match self.factor_condensed(weights, sigma) {
@@ -1017,15 +1019,11 @@ impl KktSystem for Condensed<'_> {
         // condensed factorization at most. With polytopes for the rest of the solve at once:
         // there a condensed step after an escalation could be accurate by the refinement's
         // test and still leave the answer uncertified (the half-space property test).
-        if self.exact || self.route != Route::Condensed {
+        if self.exact() || self.route != Route::Condensed {
             return false;
         }
         self.escalations += 1;
-        if self.escalations >= 2 || !self.balls {
-            self.exact = true;
-        } else {
-            self.once = true;
-        }
+        self.once = !self.exact();
         true
     }
 

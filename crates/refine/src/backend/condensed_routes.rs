@@ -1,26 +1,33 @@
 //! Both routes of the condensed backend solve the same systems (tests).
 
+use divdiff::{Knots, Topology};
+
+/// The closed test curve: n data points m vertices apart on unequal knots, and their data (n × d).
+fn closed_case(n: usize, m: usize, d: usize) -> (Knots, Vec<f64>) {
+    let t: Vec<f64> = (0..=n * m)
+        .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
+        .collect();
+    let kn = Knots::new(Topology::Closed, t).unwrap();
+    let q = (0..n * d)
+        .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
+        .collect();
+    (kn, q)
+}
+
 mod route_tests {
     use super::super::{Condensed, Face, PointSet};
     use crate::fast::Condensation;
     use crate::operator::Stencil;
     use conic::{KktSystem, Weights};
-    use divdiff::{Knots, Topology};
 
     /// The condensed elimination and the full-vertex one solve the same Newton system
     /// (Q + D)Δy = r for polytopes with orthant NT weights of widely spread size.
     #[test]
     fn both_routes_solve_the_same_system() {
         let (n, m, d) = (6usize, 3usize, 2usize);
-        let t: Vec<f64> = (0..=n * m)
-            .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
-            .collect();
-        let kn = Knots::new(Topology::Closed, t).unwrap();
+        let (kn, q) = super::closed_case(n, m, d);
         let stencil = Stencil::new(&kn);
         let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
-        let q: Vec<f64> = (0..n * d)
-            .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
-            .collect();
         let face = |nx: f64, ny: f64, c: f64| {
             let l = (nx * nx + ny * ny).sqrt();
             Face {
@@ -169,7 +176,6 @@ mod escalation_tests {
     use crate::fast::Condensation;
     use crate::operator::Stencil;
     use conic::{KktSystem, Weights};
-    use divdiff::{Knots, Topology};
 
     /// Route of each of `k` factorizations of `w`, with an escalation after the ones marked.
     fn routes(be: &mut Condensed<'_>, w: &Weights, escalate_after: &[bool]) -> Vec<Route> {
@@ -192,15 +198,9 @@ mod escalation_tests {
     #[test]
     fn escalation_is_once_then_for_good_on_balls_and_for_good_on_polytopes() {
         let (n, m, d) = (6usize, 3usize, 2usize);
-        let t: Vec<f64> = (0..=n * m)
-            .map(|j| j as f64 * 0.7 + 0.1 * ((j * 7) % 5) as f64)
-            .collect();
-        let kn = Knots::new(Topology::Closed, t).unwrap();
+        let (kn, q) = super::closed_case(n, m, d);
         let stencil = Stencil::new(&kn);
         let cond = Condensation::new(&kn, &stencil, n, m).unwrap();
-        let q: Vec<f64> = (0..n * d)
-            .map(|k| ((k * 13) % 7) as f64 * 0.3 - 1.0)
-            .collect();
         let (c, f) = (Route::Condensed, Route::Full);
 
         let mut be =
