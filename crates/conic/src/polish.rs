@@ -13,6 +13,10 @@
 //!   ([`crate::KktSystem::diagonal_scale`]) (or near its boundary) becomes
 //!   c(x) = ½ J(s(x)) / |J s| = 0 (the boundary |s̄| = s_0, scaled to unit normal in row space)
 //!   with z = y J s/|J s|;
+//! - a second-order block at its apex — z inside the dual cone with a margin z₀ − |z̄| whose
+//!   stiffness over |s| competes with P's, or a slack within 1e-9 L of 0 — becomes the
+//!   equalities s_b(x) = 0 on all its rows, with multipliers y = z_b (a direction wedge whose
+//!   derivative vanishes at the optimum: a cusp the wedge allows);
 //! - every zero-cone row stays an equality.
 //!
 //! With the unit row-space normals u_j (e_k, or J s/|J s|), G̃_j = u_jᵀA_b and the Lagrangian
@@ -27,13 +31,19 @@
 //! leaves no trace in the step. For a ball (b = (ε, q), rows (0; I)) the curvature term is y/ε I,
 //! positive; for a direction wedge it is indefinite along the axis, and the penalty on the normal
 //! makes the factored matrix definite where the problem's second-order condition holds (Finsler's
-//! lemma). At the apex of a cone (s = 0) there is no normal and the polish declines. The backend
+//! lemma). At the apex of a cone (s = 0) there is no normal: a boundary constraint whose curvature
+//! y/|J s| outgrows 1e3 × the block's diagonal scale (collapsing onto the apex, where it would
+//! make the factored matrix indefinite), reaches the apex or crosses it onto the reflected cone
+//! s₀ = −|s̄| (where c = 0 holds as well) is held at the apex instead. The backend
 //! sees Θ_b with its structure ([`crate::BlockWeight::Active`], [`crate::BlockWeight::Diagonal`]);
 //! when a step's refinement stalls far from its target the backend is asked to factor more
 //! exactly ([`crate::KktSystem::escalate`]) and the step is repeated.
 //!
-//! After each step a violated inactive constraint joins the set and an active one whose
-//! multiplier turned negative leaves it (a primal active-set method started from the
+//! After each step a violated inactive constraint joins the set (held at the apex if it joins
+//! there) and an active one whose multiplier turned negative leaves it — a block held at its
+//! apex when its multiplier left the dual cone along every direction its rows leave free (a
+//! wedge's rows (v·a / cos θ, v) are dependent: z_b is unique only up to A_bᵀw = 0, and the
+//! best such w is taken first) (a primal active-set method started from the
 //! interior-point iterate), the step being retried from the previous point, at most
 //! [`crate::PolishOptions::active_changes`] times. Every step's point is certified
 //! ([`crate::Residuals`]) and the best is kept. The steps go on (at most
@@ -132,8 +142,8 @@ impl Normals {
 }
 
 /// Polishes a returned solution (its x, s and z; e.g. one the caller's own certificate does
-/// not accept): the polish of [`crate::solve`] run on demand. `None` if the active set cannot be
-/// formed or no step succeeds; otherwise the polished point with its certificate (keep it only
+/// not accept): the polish of [`crate::solve`] run on demand. `None` if the solution does not
+/// fit the program or no step succeeds; otherwise the polished point with its certificate (keep it only
 /// if that is better).
 pub fn polish_solution<K: KktSystem + ?Sized>(
     kkt: &mut K,
@@ -168,13 +178,13 @@ fn evaluated<K: KktSystem + ?Sized>(
 }
 
 /// The active set the polish starts from (module docs): the constraints, sorted by block and
-/// row, and which rows they hold; `None` when an active second-order block is at its apex.
+/// row, and which rows they hold.
 fn active_set<K: KktSystem + ?Sized>(
     kkt: &K,
     pt: &Point,
     res: &Residuals,
     po: &crate::PolishOptions,
-) -> Option<(Vec<Con>, Vec<bool>)> {
+) -> (Vec<Con>, Vec<bool>) {
     let cones = kkt.cones();
     let m = cones.rows();
     let (force, length) = (res.force, res.length);
@@ -218,13 +228,16 @@ fn active_set<K: KktSystem + ?Sized>(
                 // the point away from the optimum, which the steps left after dropping it again do
                 // not recover (ROBUSTNESS.md, limit 10).
                 let y = z[0] / s[0].max(f64::MIN_POSITIVE) * norm(s);
-                let engaged = norm(s) * norm(z) >= po.soc_ratio * dot(s, z)
-                    && y >= boundary * kkt.diagonal_scale(bi);
-                if engaged || boundary <= po.active_rtol * s[0] {
-                    if norm(s) <= 1e-9 * length {
-                        // The apex: J s carries no direction.
-                        return None;
-                    }
+                let scale = kkt.diagonal_scale(bi);
+                let engaged =
+                    norm(s) * norm(z) >= po.soc_ratio * dot(s, z) && y >= boundary * scale;
+                // At the apex (s → 0 with z inside the dual cone, e.g. a direction wedge whose
+                // derivative vanishes) the block holds the point with the stiffness of its dual
+                // margin z₀ − |z̄| over |s|; J s has no limit direction there.
+                let apex = z[0] - norm(&z[1..]) >= norm(s) * scale;
+                if apex || ((engaged || boundary <= po.active_rtol * s[0]) && at_apex(s, length)) {
+                    push_apex(&mut cons, &mut member, bi, r, |j| z[j]);
+                } else if engaged || boundary <= po.active_rtol * s[0] {
                     cons.push(Con {
                         block: bi,
                         row: None,
@@ -237,12 +250,148 @@ fn active_set<K: KktSystem + ?Sized>(
             }
         }
     }
-    Some((cons, member))
+    (cons, member)
+}
+
+/// Whether a second-order block's slack is at its apex for the polish: J s carries no
+/// direction a boundary constraint could hold.
+fn at_apex(s: &[f64], length: f64) -> bool {
+    norm(s) <= APEX_RTOL * length
+}
+
+/// A slack within this multiple of the length scale L of the apex is at the apex.
+const APEX_RTOL: f64 = 1e-9;
+
+/// A boundary constraint whose curvature y/|J s| exceeds this multiple of the block's diagonal
+/// scale is collapsing onto its apex: it is held there instead (module docs).
+const APEX_CURVATURE: f64 = 1e3;
+
+/// z₀ − |z̄|: how far z is inside the second-order cone (negative outside).
+fn margin(z: &[f64]) -> f64 {
+    z[0] - norm(&z[1..])
+}
+
+/// A direction w over rows `r` with A_rᵀ w = 0 (the rows' dependent combination: a direction
+/// wedge's axis row is a combination of its others), unit; `None` when the rows are
+/// independent or the block has more than one such direction.
+fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, r: std::ops::Range<usize>) -> Option<Vec<f64>> {
+    let (m, n) = (r.len(), kkt.num_vars());
+    let mut unit = vec![0.0; kkt.cones().rows()];
+    let cols: Vec<Vec<f64>> = r
+        .clone()
+        .map(|k| {
+            unit[k] = 1.0;
+            let mut c = vec![0.0; n];
+            kkt.apply_at(&unit, &mut c);
+            unit[k] = 0.0;
+            c
+        })
+        .collect();
+    // The Gram matrix G = A_r A_rᵀ, eliminated with full pivoting; rank m − 1 gives the null
+    // vector by back substitution.
+    let mut g: Vec<Vec<f64>> = (0..m)
+        .map(|i| (0..m).map(|j| dot(&cols[i], &cols[j])).collect())
+        .collect();
+    let scale = (0..m).fold(0.0f64, |a, i| a.max(g[i][i]));
+    if scale <= 0.0 {
+        return None;
+    }
+    let mut perm: Vec<usize> = (0..m).collect();
+    let mut rank = 0;
+    for col in 0..m {
+        let (mut bi, mut bj, mut bv) = (col, col, 0.0);
+        for (i, row) in g.iter().enumerate().skip(col) {
+            for (j, v) in row.iter().enumerate().skip(col) {
+                if v.abs() > bv {
+                    (bi, bj, bv) = (i, j, v.abs());
+                }
+            }
+        }
+        if bv <= 1e-10 * scale {
+            break;
+        }
+        g.swap(col, bi);
+        for row in g.iter_mut() {
+            row.swap(col, bj);
+        }
+        perm.swap(col, bj);
+        for i in col + 1..m {
+            let f = g[i][col] / g[col][col];
+            let pivot_row = g[col].clone();
+            for (v, p) in g[i].iter_mut().zip(&pivot_row).skip(col) {
+                *v -= f * p;
+            }
+        }
+        rank += 1;
+    }
+    if rank + 1 != m {
+        return None;
+    }
+    // Solve the leading rank × rank triangle with the last (free) unknown set to 1.
+    let mut x = vec![0.0; m];
+    x[m - 1] = 1.0;
+    for i in (0..rank).rev() {
+        let s: f64 = (i + 1..m).map(|j| g[i][j] * x[j]).sum();
+        x[i] = -s / g[i][i];
+    }
+    let mut w = vec![0.0; m];
+    for (i, &p) in perm.iter().enumerate() {
+        w[p] = x[i];
+    }
+    let nw = norm(&w);
+    w.iter_mut().for_each(|v| *v /= nw);
+    Some(w)
+}
+
+/// The t that maximizes margin(z + t w) (a concave function of t), by golden-section search on
+/// a bracket grown until the margin falls on both sides.
+fn best_shift(z: &[f64], w: &[f64]) -> f64 {
+    let f = |t: f64| {
+        let v: Vec<f64> = z.iter().zip(w).map(|(a, b)| a + t * b).collect();
+        margin(&v)
+    };
+    let mut h = norm(z).max(f64::MIN_POSITIVE);
+    let (mut lo, mut hi) = (-h, h);
+    for _ in 0..60 {
+        if f(hi) < f(0.0) && f(lo) < f(0.0) {
+            break;
+        }
+        h *= 2.0;
+        (lo, hi) = (-h, h);
+    }
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..100 {
+        let (a, b) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
+        if f(a) < f(b) {
+            lo = a;
+        } else {
+            hi = b;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Holds second-order block `bi` (rows `r`) at its apex: every row an equality with
+/// multiplier `y(j)` (the block's z), the rows marked as members.
+fn push_apex(
+    cons: &mut Vec<Con>,
+    member: &mut [bool],
+    bi: usize,
+    r: std::ops::Range<usize>,
+    y: impl Fn(usize) -> f64,
+) {
+    for (j, k) in r.enumerate() {
+        cons.push(Con {
+            block: bi,
+            row: Some(k),
+            y: y(j),
+        });
+        member[k] = true;
+    }
 }
 
 /// Which blocks hold a constraint of the active set the polish would start from at `sol`
-/// (its x, s and z; module docs), `None` when it cannot be formed (a second-order block at its
-/// apex, a malformed solution, no polish options). A caller may pose the polish's problem on
+/// (its x, s and z; module docs), `None` for a malformed solution or without polish options. A caller may pose the polish's problem on
 /// those blocks alone.
 pub fn active_blocks<K: KktSystem + ?Sized>(
     kkt: &mut K,
@@ -251,7 +400,7 @@ pub fn active_blocks<K: KktSystem + ?Sized>(
 ) -> Option<Vec<bool>> {
     let po = opts.polish.as_ref()?;
     let (pt, res, _) = evaluated(kkt, sol)?;
-    let (cons, _) = active_set(kkt, &pt, &res, po)?;
+    let (cons, _) = active_set(kkt, &pt, &res, po);
     let mut blocks = vec![false; kkt.cones().len()];
     for c in &cons {
         blocks[c.block] = true;
@@ -259,8 +408,8 @@ pub fn active_blocks<K: KktSystem + ?Sized>(
     Some(blocks)
 }
 
-/// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if the active
-/// set cannot be formed (a cone at its apex) or no step succeeds.
+/// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if no step
+/// succeeds.
 pub(crate) fn polish<K: KktSystem + ?Sized>(
     kkt: &mut K,
     pt: &Point,
@@ -273,7 +422,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
     let cones = kkt.cones().clone();
     let (n, m) = (kkt.num_vars(), cones.rows());
     let (force, length) = (res.force, res.length);
-    let (mut cons, mut member) = active_set(kkt, pt, res, po)?;
+    let (mut cons, mut member) = active_set(kkt, pt, res, po);
     let mut x = pt.x.clone();
     let mut best: Option<Solution> = None;
     let mut ax = vec![0.0; m];
@@ -375,10 +524,48 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
         let ymax = cons.iter().fold(0.0f64, |a, c| a.max(c.y.abs()));
         let mut drop = vec![false; cons.len()];
         let mut add: Vec<Con> = Vec::new();
-        for (ci, con) in cons.iter().enumerate() {
-            let kind = cones.blocks()[con.block].kind();
-            if kind != Kind::Zero && con.y < -1e-12 * ymax {
-                drop[ci] = true;
+        let mut to_apex = vec![false; cons.len()];
+        normals.at(&cons, &cones, &s);
+        let mut ci = 0;
+        while ci < cons.len() {
+            let con = cons[ci];
+            match (cones.blocks()[con.block].kind(), con.row) {
+                (Kind::Zero, _) => ci += 1,
+                (Kind::Nonnegative, _) => {
+                    drop[ci] = con.y < -1e-12 * ymax;
+                    ci += 1;
+                }
+                (Kind::SecondOrder, None) => {
+                    // A boundary constraint collapsing onto its apex: its curvature y/|J s|
+                    // outgrows what the penalty on its normal can hold definite.
+                    let curvature = con.y / normals.js[ci];
+                    drop[ci] = con.y < -1e-12 * ymax;
+                    // (Or through it: c = 0 also holds on the reflected cone, s₀ = −|s̄|.)
+                    let sb = &s[cones.range(con.block)];
+                    to_apex[ci] = !drop[ci]
+                        && (at_apex(sb, length)
+                            || sb[0] <= 0.0
+                            || curvature >= APEX_CURVATURE * kkt.diagonal_scale(con.block));
+                    ci += 1;
+                }
+                (Kind::SecondOrder, Some(_)) => {
+                    // A block held at its apex leaves when its multiplier leaves the dual cone
+                    // along every direction the rows leave free (their dependent combinations).
+                    let r = cones.range(con.block);
+                    let mut zb: Vec<f64> = cons[ci..ci + r.len()].iter().map(|c| c.y).collect();
+                    let tol = 1e-12 * ymax;
+                    if margin(&zb) < -tol {
+                        if let Some(w) = free_multiplier(kkt, r.clone()) {
+                            let t = best_shift(&zb, &w);
+                            zb.iter_mut().zip(&w).for_each(|(z, w)| *z += t * w);
+                            for (c, z) in cons[ci..ci + r.len()].iter_mut().zip(&zb) {
+                                c.y = *z;
+                            }
+                        }
+                    }
+                    drop[ci..ci + r.len()].fill(margin(&zb) < -tol);
+                    ci += r.len();
+                }
             }
         }
         let mut inactive_violation: f64 = 0.0;
@@ -415,8 +602,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                 }
             }
         }
-        // Certificate of the new point: z from the multipliers at the new normals.
-        normals.at(&cons, &cones, &s);
+        // Certificate of the new point: z from the multipliers at the new normals (above).
         normals.scatter(&cons, &cones, |ci| cons[ci].y, &mut z);
         let active_violation = normals
             .c
@@ -441,7 +627,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                 polished: true,
             });
         }
-        let want_change = drop.iter().any(|&d| d) || !add.is_empty();
+        let want_change = drop.iter().any(|&d| d) || !add.is_empty() || to_apex.iter().any(|&a| a);
         if want_change && changes < po.active_changes && !done {
             // Continue from the new point with the corrected set (Newton pulls a joining
             // constraint onto its boundary and lets a leaving one go); the step is not counted.
@@ -449,7 +635,17 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             taken -= 1;
             let mut kept = Vec::with_capacity(cons.len());
             for (ci, con) in cons.iter().enumerate() {
-                if drop[ci] {
+                if to_apex[ci] {
+                    // z = y u over the block's rows, held at the apex.
+                    let u = normals.of(ci);
+                    push_apex(
+                        &mut kept,
+                        &mut member,
+                        con.block,
+                        cones.range(con.block),
+                        |j| con.y * u[j],
+                    );
+                } else if drop[ci] {
                     let r = cones.range(con.block);
                     match con.row {
                         Some(k) => member[k] = false,
@@ -461,13 +657,12 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
             for con in add {
                 let r = cones.range(con.block);
-                if con.block < cones.len() && cones.blocks()[con.block].kind() == Kind::SecondOrder
+                if cones.blocks()[con.block].kind() == Kind::SecondOrder
+                    && at_apex(&s[r.clone()], length)
                 {
-                    // A second-order block joining needs a normal: not at its apex.
-                    let sb = &s[r.clone()];
-                    if norm(sb) <= 1e-9 * length {
-                        continue;
-                    }
+                    // A second-order block joining at its apex has no normal: it is held there.
+                    push_apex(&mut kept, &mut member, con.block, r, |_| 0.0);
+                    continue;
                 }
                 match con.row {
                     Some(k) => member[k] = true,
