@@ -251,9 +251,33 @@ fn full(
     if let Some(f) = from {
         opts.warm_start = Some(f.points.clone());
     }
-    let sol: ConicSolution = rows
+    // The solution in this crate's terms, with its certificate (the judge of the method's
+    // answer: `ConicProblem::solve_judged`).
+    let fixed = |sol: &ConicSolution| {
+        let hp = crate::operator::apply_h(fp.knots, &sol.points);
+        let multipliers = fp.constraint.kind().multipliers(fp, sol, &rows, &hp);
+        let derivative = rows
+            .derivative
+            .iter()
+            .map(|(c, _)| (sol.cone_duals[*c].clone(), sol.forces[*c].clone()))
+            .collect();
+        let mut out = FixedSolution {
+            derivative,
+            ..FixedSolution::new(sol.points.clone(), Some(multipliers), sol.iterations)
+        };
+        out.certificate = Some(certificate(fp, &out));
+        out
+    };
+    let (sol, fixed): (ConicSolution, FixedSolution) = rows
         .problem
-        .solve_unchecked(&opts)
+        .solve_judged(&opts, |sol| {
+            let f = fixed(sol);
+            let accepted = f
+                .certificate
+                .as_ref()
+                .is_some_and(|(c, _)| c.kkt_residual <= fp.options.accept_kkt);
+            (accepted, f)
+        })
         .map_err(|e| rows.user_error(e))?;
     if sol.kkt.total.is_nan() || sol.kkt.total > fp.options.accept_kkt {
         // Not converged: perhaps because nothing is feasible.
@@ -261,17 +285,7 @@ fn full(
             return Err(rows.user_error(e));
         }
     }
-    let hp = crate::operator::apply_h(fp.knots, &sol.points);
-    let multipliers = fp.constraint.kind().multipliers(fp, &sol, &rows, &hp);
-    let derivative = rows
-        .derivative
-        .iter()
-        .map(|(c, _)| (sol.cone_duals[*c].clone(), sol.forces[*c].clone()))
-        .collect();
-    Ok(FixedSolution {
-        derivative,
-        ..FixedSolution::new(sol.points, Some(multipliers), sol.iterations)
-    })
+    Ok(fixed)
 }
 
 #[cfg(test)]
