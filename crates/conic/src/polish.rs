@@ -343,22 +343,38 @@ fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, r: std::ops::Range<usize>) ->
     Some(w)
 }
 
-/// The t that maximizes margin(z + t w) (a concave function of t), by golden-section search on
-/// a bracket grown until the margin falls on both sides.
+/// A shift t along w for a multiplier z outside the second-order cone: margin(z + t w) is
+/// concave in t. When it grows without bound along w or −w (margin(±w) > 0), the t of
+/// margin(z) + |t| margin(±w) = 0 is returned, which puts z + t w inside (|z̄ + t w̄| ≤
+/// |z̄| + |t||w̄|); otherwise the maximizer, by golden-section search on a bracket grown until the
+/// margin falls on both sides, or 0 when none closes (a margin flat towards a limit).
 fn best_shift(z: &[f64], w: &[f64]) -> f64 {
     let f = |t: f64| {
         let v: Vec<f64> = z.iter().zip(w).map(|(a, b)| a + t * b).collect();
         margin(&v)
     };
+    let f0 = f(0.0);
+    let minus: Vec<f64> = w.iter().map(|v| -v).collect();
+    if margin(w) > 0.0 {
+        return (-f0 / margin(w)).max(0.0);
+    }
+    if margin(&minus) > 0.0 {
+        return (f0 / margin(&minus)).min(0.0);
+    }
+    // (Up to 2³⁰ |z|: farther out rounding, not the margin, decides.)
     let mut h = norm(z).max(f64::MIN_POSITIVE);
-    let (mut lo, mut hi) = (-h, h);
-    for _ in 0..60 {
-        if f(hi) < f(0.0) && f(lo) < f(0.0) {
+    let mut closed = false;
+    for _ in 0..30 {
+        if f(h) < f0 && f(-h) < f0 {
+            closed = true;
             break;
         }
         h *= 2.0;
-        (lo, hi) = (-h, h);
     }
+    if !closed {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = (-h, h);
     let phi = 0.5 * (5f64.sqrt() - 1.0);
     for _ in 0..100 {
         let (a, b) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
@@ -824,4 +840,55 @@ fn saddle_solve<K: KktSystem + ?Sized>(
         last = rn;
     }
     reached
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{best_shift, margin};
+
+    fn shifted(z: &[f64], w: &[f64], t: f64) -> Vec<f64> {
+        z.iter().zip(w).map(|(a, b)| a + t * b).collect()
+    }
+
+    /// A wedge's free direction (1, −a / cos θ) (normalized): the margin falls both ways and
+    /// the shift is its maximizer, checked against a fine grid.
+    #[test]
+    fn a_bounded_margin_is_maximized() {
+        let (theta, a) = (0.3f64, [0.6, 0.8]);
+        let mut w = vec![1.0, -a[0] / theta.cos(), -a[1] / theta.cos()];
+        let n = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+        w.iter_mut().for_each(|v| *v /= n);
+        let z = [0.5, 0.2, 0.6];
+        assert!(margin(&z) < 0.0);
+        let t = best_shift(&z, &w);
+        let best = (-20_000..=20_000)
+            .map(|k| margin(&shifted(&z, &w, k as f64 * 1e-4)))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let got = margin(&shifted(&z, &w, t));
+        assert!(got >= best - 1e-9, "{got} < {best}");
+    }
+
+    /// A ball-like block (its first row constant): the free direction e₀ lifts the margin
+    /// without bound, and the shift is the one that just reaches the cone.
+    #[test]
+    fn an_unbounded_margin_is_lifted_into_the_cone() {
+        for (z, w) in [
+            ([0.1, 1.0, 0.0], [1.0, 0.0, 0.0]),
+            ([0.1, 1.0, 0.0], [-1.0, 0.0, 0.0]),
+            ([-2.0, 0.3, -0.4], [0.8, 0.1, 0.2]),
+        ] {
+            let t = best_shift(&z, &w);
+            let m = margin(&shifted(&z, &w, t));
+            assert!(t.is_finite() && t.abs() <= 10.0, "t = {t}");
+            assert!(m >= -1e-15, "z = {z:?}, w = {w:?}: margin {m}");
+        }
+    }
+
+    /// A free direction on the cone's boundary: the margin tends to a limit; no shift.
+    #[test]
+    fn a_flat_margin_is_left_alone() {
+        let r = 0.5f64.sqrt();
+        let t = best_shift(&[0.0, 1.0, 1.0], &[r, r, 0.0]);
+        assert_eq!(t.to_bits(), 0f64.to_bits(), "t = {t}");
+    }
 }
