@@ -215,6 +215,13 @@ pub fn soc_residual(u: &[f64]) -> f64 {
     (u[0] - r) * (u[0] + r)
 }
 
+/// u_0 − |ū| of a second-order block: how far u lies inside the cone along its axis (negative
+/// outside).
+#[inline]
+pub(crate) fn soc_margin(u: &[f64]) -> f64 {
+    u[0] - norm(&u[1..])
+}
+
 /// The Nesterov–Todd scaling of one block at (s, z), both interior (module docs), into `out`:
 /// nothing for the zero cone, (√(s_i/z_i))_i for the orthant, (η, w̄_0, …, w̄_{m−1}) for Q^m.
 #[inline]

@@ -53,7 +53,7 @@
 //! of magnitude, and one more Newton step costs less than a caller's refusal. (Nocedal & Wright, *Numerical Optimization*,
 //! §18.1 for the Newton–KKT step; §16.5 for the active-set changes.)
 
-use crate::cone::{distance_to_cone, soc_residual, Kind};
+use crate::cone::{distance_to_cone, soc_margin, soc_residual, Kind};
 use crate::ipm::{certify, Point, Solution, Status};
 use crate::residual::Residuals;
 use crate::vector::{dot, inf_norm, norm};
@@ -143,8 +143,8 @@ impl Normals {
 
 /// Polishes a returned solution (its x, s and z; e.g. one the caller's own certificate does
 /// not accept): the polish of [`crate::solve`] run on demand. `None` if the solution does not
-/// fit the program or no step succeeds; otherwise the polished point with its certificate (keep it only
-/// if that is better).
+/// fit the program or no step succeeds; otherwise the polished point with its certificate (keep
+/// it only if that is better).
 pub fn polish_solution<K: KktSystem + ?Sized>(
     kkt: &mut K,
     sol: &Solution,
@@ -218,7 +218,7 @@ fn active_set<K: KktSystem + ?Sized>(
                 }
             }
             Kind::SecondOrder => {
-                let boundary = s[0] - norm(&s[1..]);
+                let boundary = soc_margin(s);
                 // y, the multiplier on the unit row-space normal J s/|J s| (|J s| = |s|), over the
                 // distance to the boundary is the stiffness with which the block holds the point;
                 // it is engaged when that competes with P's (`diagonal_scale`, in the block's own
@@ -234,10 +234,11 @@ fn active_set<K: KktSystem + ?Sized>(
                 // At the apex (s → 0 with z inside the dual cone, e.g. a direction wedge whose
                 // derivative vanishes) the block holds the point with the stiffness of its dual
                 // margin z₀ − |z̄| over |s|; J s has no limit direction there.
-                let apex = z[0] - norm(&z[1..]) >= norm(s) * scale;
-                if apex || ((engaged || boundary <= po.active_rtol * s[0]) && at_apex(s, length)) {
+                let apex = soc_margin(z) >= norm(s) * scale;
+                let active = engaged || boundary <= po.active_rtol * s[0];
+                if apex || (active && at_apex(s, length)) {
                     push_apex(&mut cons, &mut member, bi, r, |j| z[j]);
-                } else if engaged || boundary <= po.active_rtol * s[0] {
+                } else if active {
                     cons.push(Con {
                         block: bi,
                         row: None,
@@ -266,11 +267,6 @@ const APEX_RTOL: f64 = 1e-9;
 /// scale is collapsing onto its apex: it is held there instead (module docs).
 const APEX_CURVATURE: f64 = 1e3;
 
-/// z₀ − |z̄|: how far z is inside the second-order cone (negative outside).
-fn margin(z: &[f64]) -> f64 {
-    z[0] - norm(&z[1..])
-}
-
 /// A direction w over rows `r` with A_rᵀ w = 0 (the rows' dependent combination: a direction
 /// wedge's axis row is a combination of its others), unit; `None` when the rows are
 /// independent or the block has more than one such direction.
@@ -298,6 +294,7 @@ fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, r: std::ops::Range<usize>) ->
     }
     let mut perm: Vec<usize> = (0..m).collect();
     let mut rank = 0;
+    let mut pivot_row = Vec::with_capacity(m);
     for col in 0..m {
         let (mut bi, mut bj, mut bv) = (col, col, 0.0);
         for (i, row) in g.iter().enumerate().skip(col) {
@@ -315,10 +312,10 @@ fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, r: std::ops::Range<usize>) ->
             row.swap(col, bj);
         }
         perm.swap(col, bj);
-        for i in col + 1..m {
-            let f = g[i][col] / g[col][col];
-            let pivot_row = g[col].clone();
-            for (v, p) in g[i].iter_mut().zip(&pivot_row).skip(col) {
+        pivot_row.clone_from(&g[col]);
+        for row in g.iter_mut().skip(col + 1) {
+            let f = row[col] / pivot_row[col];
+            for (v, p) in row.iter_mut().zip(&pivot_row).skip(col) {
                 *v -= f * p;
             }
         }
@@ -343,23 +340,24 @@ fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, r: std::ops::Range<usize>) ->
     Some(w)
 }
 
-/// A shift t along w for a multiplier z outside the second-order cone: margin(z + t w) is
-/// concave in t. When it grows without bound along w or −w (margin(±w) > 0), the t of
-/// margin(z) + |t| margin(±w) = 0 is returned, which puts z + t w inside (|z̄ + t w̄| ≤
-/// |z̄| + |t||w̄|); otherwise the maximizer, by golden-section search on a bracket grown until the
-/// margin falls on both sides, or 0 when none closes (a margin flat towards a limit).
+/// A shift t along w for a multiplier z outside the second-order cone: the margin
+/// m(t) = [`soc_margin`](z + t w) is concave in t. When it grows without bound along w or −w
+/// (soc_margin(±w) > 0), the t of m(0) + |t| soc_margin(±w) = 0 is returned, which puts z + t w
+/// inside (|z̄ + t w̄| ≤ |z̄| + |t||w̄|); otherwise the maximizer of m, by golden-section search
+/// on a bracket grown until m falls on both sides, or 0 when none closes (m flat towards a
+/// limit).
 fn best_shift(z: &[f64], w: &[f64]) -> f64 {
     let f = |t: f64| {
         let v: Vec<f64> = z.iter().zip(w).map(|(a, b)| a + t * b).collect();
-        margin(&v)
+        soc_margin(&v)
     };
     let f0 = f(0.0);
     let minus: Vec<f64> = w.iter().map(|v| -v).collect();
-    if margin(w) > 0.0 {
-        return (-f0 / margin(w)).max(0.0);
+    if soc_margin(w) > 0.0 {
+        return (-f0 / soc_margin(w)).max(0.0);
     }
-    if margin(&minus) > 0.0 {
-        return (f0 / margin(&minus)).min(0.0);
+    if soc_margin(&minus) > 0.0 {
+        return (f0 / soc_margin(&minus)).min(0.0);
     }
     // (Up to 2³⁰ |z|: farther out rounding, not the margin, decides.)
     let mut h = norm(z).max(f64::MIN_POSITIVE);
@@ -407,8 +405,8 @@ fn push_apex(
 }
 
 /// Which blocks hold a constraint of the active set the polish would start from at `sol`
-/// (its x, s and z; module docs), `None` for a malformed solution or without polish options. A caller may pose the polish's problem on
-/// those blocks alone.
+/// (its x, s and z; module docs), `None` for a malformed solution or without polish options. A
+/// caller may pose the polish's problem on those blocks alone.
 pub fn active_blocks<K: KktSystem + ?Sized>(
     kkt: &mut K,
     sol: &Solution,
@@ -454,6 +452,9 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
     let mut theta = Vec::new();
     let mut delta = Vec::new();
     let mut work = SaddleWork::new(n, m);
+    // The free multiplier direction of each block held at its apex, once asked for.
+    let mut free: std::collections::HashMap<usize, Option<Vec<f64>>> =
+        std::collections::HashMap::new();
     let slack = |kkt: &K, ax: &[f64], s: &mut [f64]| {
         for ((sv, b), a) in s.iter_mut().zip(kkt.b()).zip(ax) {
             *sv = b - a;
@@ -570,16 +571,20 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                     let r = cones.range(con.block);
                     let mut zb: Vec<f64> = cons[ci..ci + r.len()].iter().map(|c| c.y).collect();
                     let tol = 1e-12 * ymax;
-                    if margin(&zb) < -tol {
-                        if let Some(w) = free_multiplier(kkt, r.clone()) {
-                            let t = best_shift(&zb, &w);
-                            zb.iter_mut().zip(&w).for_each(|(z, w)| *z += t * w);
+                    if soc_margin(&zb) < -tol {
+                        // (A block's rows do not change: its free direction is found once.)
+                        let free = free
+                            .entry(con.block)
+                            .or_insert_with(|| free_multiplier(kkt, r.clone()));
+                        if let Some(w) = free {
+                            let t = best_shift(&zb, w);
+                            zb.iter_mut().zip(w.iter()).for_each(|(z, w)| *z += t * w);
                             for (c, z) in cons[ci..ci + r.len()].iter_mut().zip(&zb) {
                                 c.y = *z;
                             }
                         }
                     }
-                    drop[ci..ci + r.len()].fill(margin(&zb) < -tol);
+                    drop[ci..ci + r.len()].fill(soc_margin(&zb) < -tol);
                     ci += r.len();
                 }
             }
@@ -844,7 +849,8 @@ fn saddle_solve<K: KktSystem + ?Sized>(
 
 #[cfg(test)]
 mod tests {
-    use super::{best_shift, margin};
+    use super::best_shift;
+    use crate::cone::soc_margin;
 
     fn shifted(z: &[f64], w: &[f64], t: f64) -> Vec<f64> {
         z.iter().zip(w).map(|(a, b)| a + t * b).collect()
@@ -859,12 +865,12 @@ mod tests {
         let n = w.iter().map(|v| v * v).sum::<f64>().sqrt();
         w.iter_mut().for_each(|v| *v /= n);
         let z = [0.5, 0.2, 0.6];
-        assert!(margin(&z) < 0.0);
+        assert!(soc_margin(&z) < 0.0);
         let t = best_shift(&z, &w);
         let best = (-20_000..=20_000)
-            .map(|k| margin(&shifted(&z, &w, k as f64 * 1e-4)))
+            .map(|k| soc_margin(&shifted(&z, &w, k as f64 * 1e-4)))
             .fold(f64::NEG_INFINITY, f64::max);
-        let got = margin(&shifted(&z, &w, t));
+        let got = soc_margin(&shifted(&z, &w, t));
         assert!(got >= best - 1e-9, "{got} < {best}");
     }
 
@@ -878,7 +884,7 @@ mod tests {
             ([-2.0, 0.3, -0.4], [0.8, 0.1, 0.2]),
         ] {
             let t = best_shift(&z, &w);
-            let m = margin(&shifted(&z, &w, t));
+            let m = soc_margin(&shifted(&z, &w, t));
             assert!(t.is_finite() && t.abs() <= 10.0, "t = {t}");
             assert!(m >= -1e-15, "z = {z:?}, w = {w:?}: margin {m}");
         }

@@ -413,11 +413,12 @@ impl ConicProblem {
     /// The method's answer, judged by the caller: `judge` says whether it accepts a solution
     /// and what it made of it (returned with the solution). When it refuses the answer, that
     /// answer is polished ([`conic::polish::polish_solution`], with [`REPOLISH_STEPS`] steps;
-    /// again if it was polished) and the polished point returned if the judge takes it. The method ranks its candidates by its own
-    /// residual, which sees the multipliers of a point; a caller whose certificate rebuilds the
-    /// forces from the geometry (a ball's w(p − q)) can refuse an interior iterate that residual
-    /// ranks first — its multipliers hold the active normals only to O(√μ) — and accept the
-    /// polished point (ROBUSTNESS.md §4, 13: direction wedges at their apex).
+    /// again if it was polished) and the polished point returned if the judge takes it. The
+    /// method ranks its candidates by its own residual, which sees the multipliers of a point;
+    /// a caller whose certificate rebuilds the forces from the geometry (a ball's w(p − q)) can
+    /// refuse an interior iterate that residual ranks first — its multipliers hold the active
+    /// normals only to O(√μ) — and accept the polished point (ROBUSTNESS.md §4, 13: direction
+    /// wedges at their apex).
     ///
     /// # Errors
     /// As [`ConicProblem::solve_unchecked`].

@@ -4,32 +4,16 @@
 //! wedge allows (a cusp). Before the polish held such blocks at their apex these problems were
 //! refused with `NotConverged` (this instance at 2.0e-8).
 
-use divdiff::{DerivativeRule, Points, Topology};
+use divdiff::{DerivativeRule, Topology};
 use refine::{Constraint, Problem, Tangent};
 
-/// The noisy star of the robustness note: radii alternating 1 and 1.5 with ±0.03 noise,
-/// jittered angles, a fixed-seed LCG.
-fn star(n: usize, seed: u64) -> Points {
-    let mut state = seed;
-    let mut uniform = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut rows = Vec::with_capacity(2 * n);
-    for i in 0..n {
-        let theta = 2.0 * std::f64::consts::PI * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
-        let r = 1.0 + 0.5 * (i % 2) as f64 + 0.06 * uniform() - 0.03;
-        rows.extend([r * theta.cos(), r * theta.sin()]);
-    }
-    Points::new(2, rows).unwrap()
-}
+mod noisy;
 
 #[test]
 fn balls_and_wedges_with_cusps_are_certified() {
     let (n, half_angle) = (1000, 0.2);
-    let q = star(n, 15);
+    // The noisy star of the robustness note: radii alternating 1 and 1.5 with ±0.03 noise.
+    let q = noisy::star(n, 15, 0.5, 0.03);
     let p = |i: usize| q.point(i % n).to_vec();
     let mut radii = Vec::new();
     let mut axes = Vec::new();
