@@ -58,6 +58,30 @@ pub trait KktSystem {
     /// out = Aᵀ z (n entries, overwritten).
     fn apply_at(&self, z: &[f64], out: &mut [f64]);
 
+    /// G = A_b A_bᵀ, the Gram matrix of block `block`'s rows (m_b × m_b row-major, into `out`).
+    /// The default forms it from [`KktSystem::apply_at`] on unit vectors, O(n + m) per row; a
+    /// backend that knows its blocks' rows forms it locally.
+    fn block_gram(&self, block: usize, out: &mut [f64]) {
+        let r = self.cones().range(block);
+        let n = self.num_vars();
+        let mut unit = vec![0.0; self.cones().rows()];
+        let cols: Vec<Vec<f64>> = r
+            .map(|k| {
+                unit[k] = 1.0;
+                let mut c = vec![0.0; n];
+                self.apply_at(&unit, &mut c);
+                unit[k] = 0.0;
+                c
+            })
+            .collect();
+        let m = cols.len();
+        for i in 0..m {
+            for j in 0..m {
+                out[i * m + j] = crate::vector::dot(&cols[i], &cols[j]);
+            }
+        }
+    }
+
     /// A positive estimate of P's diagonal over the variables that block `b`'s rows touch,
     /// divided by the squared size of those rows: a weight θ on the block competes with P where
     /// θ is comparable to this. The regularization δ_b of equality rows and the polish's

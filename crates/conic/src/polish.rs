@@ -267,27 +267,16 @@ const APEX_RTOL: f64 = 1e-9;
 /// scale is collapsing onto its apex: it is held there instead (module docs).
 const APEX_CURVATURE: f64 = 1e3;
 
-/// A direction w over rows `r` with A_rᵀ w = 0 (the rows' dependent combination: a direction
-/// wedge's axis row is a combination of its others), unit; `None` when the rows are
-/// independent or the block has more than one such direction.
-fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, r: std::ops::Range<usize>) -> Option<Vec<f64>> {
-    let (m, n) = (r.len(), kkt.num_vars());
-    let mut unit = vec![0.0; kkt.cones().rows()];
-    let cols: Vec<Vec<f64>> = r
-        .clone()
-        .map(|k| {
-            unit[k] = 1.0;
-            let mut c = vec![0.0; n];
-            kkt.apply_at(&unit, &mut c);
-            unit[k] = 0.0;
-            c
-        })
-        .collect();
-    // The Gram matrix G = A_r A_rᵀ, eliminated with full pivoting; rank m − 1 gives the null
-    // vector by back substitution.
-    let mut g: Vec<Vec<f64>> = (0..m)
-        .map(|i| (0..m).map(|j| dot(&cols[i], &cols[j])).collect())
-        .collect();
+/// A direction w over block `block`'s rows with A_bᵀ w = 0 (the rows' dependent combination:
+/// a direction wedge's axis row is a combination of its others), unit; `None` when the rows
+/// are independent or the block has more than one such direction.
+fn free_multiplier<K: KktSystem + ?Sized>(kkt: &K, block: usize) -> Option<Vec<f64>> {
+    let m = kkt.cones().range(block).len();
+    // The Gram matrix G = A_r A_rᵀ ([`KktSystem::block_gram`]), eliminated with full pivoting;
+    // rank m − 1 gives the null vector by back substitution.
+    let mut flat = vec![0.0; m * m];
+    kkt.block_gram(block, &mut flat);
+    let mut g: Vec<Vec<f64>> = flat.chunks_exact(m).map(<[f64]>::to_vec).collect();
     let scale = (0..m).fold(0.0f64, |a, i| a.max(g[i][i]));
     if scale <= 0.0 {
         return None;
@@ -575,7 +564,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                         // (A block's rows do not change: its free direction is found once.)
                         let free = free
                             .entry(con.block)
-                            .or_insert_with(|| free_multiplier(kkt, r.clone()));
+                            .or_insert_with(|| free_multiplier(kkt, con.block));
                         if let Some(w) = free {
                             let t = best_shift(&zb, w);
                             zb.iter_mut().zip(w.iter()).for_each(|(z, w)| *z += t * w);

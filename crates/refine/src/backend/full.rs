@@ -493,6 +493,19 @@ impl KktSystem for FullVertex {
         }
     }
 
+    fn block_gram(&self, block: usize, out: &mut [f64]) {
+        // A_b = −F ⊗ (the stencil's coefficients c): A_b A_bᵀ = (Σ c²) F Fᵀ.
+        let blk = &self.blocks[block];
+        let (d, m) = (self.d, blk.cone.dim());
+        let cc: f64 = blk.stencil.iter().map(|&(_, c)| c * c).sum();
+        for i in 0..m {
+            for j in 0..m {
+                let fij: f64 = (0..d).map(|k| blk.f[i * d + k] * blk.f[j * d + k]).sum();
+                out[i * m + j] = cc * fij;
+            }
+        }
+    }
+
     fn diagonal_scale(&self, block: usize) -> f64 {
         let blk = &self.blocks[block];
         let fmax = blk
@@ -685,5 +698,72 @@ impl conic::clarabel::Sparse for FullVertex {
             b,
             cones,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FullVertex;
+    use crate::conic_problem::{ConicProblem, ConvexSet};
+    use conic::KktSystem;
+    use divdiff::Knots;
+
+    /// The local Gram matrices are A_b A_bᵀ as `apply_at` applies A: wedges, balls, half-spaces
+    /// and a point on three-vertex stencils with a fixed vertex among them.
+    #[test]
+    fn block_gram_is_the_rows_gram() {
+        let knots = Knots::closed(vec![0.0, 0.7, 1.9, 2.4, 3.8, 4.5, 5.0]).unwrap();
+        let mut p = ConicProblem::new(&knots, 2).unwrap();
+        p.fix(0, &[1.0, 0.5]).unwrap();
+        let st = [(5, -0.4), (0, 0.1), (1, 0.3)];
+        let (c, s) = (0.6f64, 0.8f64);
+        p.add_constraint(
+            &st,
+            ConvexSet::Cone {
+                axis: vec![c, s],
+                half_angle: 0.3,
+            },
+        )
+        .unwrap();
+        p.add_constraint(
+            &[(2, 1.0)],
+            ConvexSet::Ball {
+                center: vec![0.2, -1.0],
+                radius: 0.4,
+            },
+        )
+        .unwrap();
+        let hs = vec![(vec![1.0, 2.0], 0.5), (vec![-0.3, 0.7], 1.0)];
+        p.add_constraint(&[(2, -1.5), (3, 1.0), (4, 0.5)], ConvexSet::HalfSpaces(hs))
+            .unwrap();
+        p.add_constraint(&[(3, 1.0), (4, -1.0)], ConvexSet::Point(vec![0.1, 0.2]))
+            .unwrap();
+        let be = FullVertex::new(&p).unwrap();
+        let (n, rows) = (be.num_vars(), be.cones().rows());
+        for b in 0..be.cones().len() {
+            let r = be.cones().range(b);
+            let m = r.len();
+            let cols: Vec<Vec<f64>> = r
+                .map(|k| {
+                    let mut unit = vec![0.0; rows];
+                    unit[k] = 1.0;
+                    let mut col = vec![0.0; n];
+                    be.apply_at(&unit, &mut col);
+                    col
+                })
+                .collect();
+            let mut g = vec![0.0; m * m];
+            be.block_gram(b, &mut g);
+            for i in 0..m {
+                for j in 0..m {
+                    let want: f64 = cols[i].iter().zip(&cols[j]).map(|(a, b)| a * b).sum();
+                    let scale = want.abs().max(1.0);
+                    assert!(
+                        (g[i * m + j] - want).abs() <= 1e-14 * scale,
+                        "block {b} ({i}, {j})"
+                    );
+                }
+            }
+        }
     }
 }
