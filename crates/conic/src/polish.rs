@@ -13,10 +13,10 @@
 //!   ([`crate::KktSystem::diagonal_scale`]) (or near its boundary) becomes
 //!   c(x) = ½ J(s(x)) / |J s| = 0 (the boundary |s̄| = s_0, scaled to unit normal in row space)
 //!   with z = y J s/|J s|;
-//! - a second-order block at its apex — z inside the dual cone with a margin z₀ − |z̄| whose
-//!   stiffness over |s| competes with P's, or a slack within 1e-9 L of 0 — becomes the
-//!   equalities s_b(x) = 0 on all its rows, with multipliers y = z_b (a direction wedge whose
-//!   derivative vanishes at the optimum: a cusp the wedge allows);
+//! - with [`crate::PolishOptions::apex`], a second-order block at its apex — z inside the dual
+//!   cone with a margin z₀ − |z̄| whose stiffness over |s| competes with P's, or a slack within
+//!   1e-9 L of 0 — becomes the equalities s_b(x) = 0 on all its rows, with multipliers y = z_b
+//!   (a direction wedge whose derivative vanishes at the optimum: a cusp the wedge allows);
 //! - every zero-cone row stays an equality.
 //!
 //! With the unit row-space normals u_j (e_k, or J s/|J s|), G̃_j = u_jᵀA_b and the Lagrangian
@@ -31,7 +31,8 @@
 //! leaves no trace in the step. For a ball (b = (ε, q), rows (0; I)) the curvature term is y/ε I,
 //! positive; for a direction wedge it is indefinite along the axis, and the penalty on the normal
 //! makes the factored matrix definite where the problem's second-order condition holds (Finsler's
-//! lemma). At the apex of a cone (s = 0) there is no normal: a boundary constraint whose curvature
+//! lemma). At the apex of a cone (s = 0) there is no normal: without the apex option the polish
+//! declines; with it, a boundary constraint whose curvature
 //! y/|J s| outgrows 1e3 × the block's diagonal scale (collapsing onto the apex, where it would
 //! make the factored matrix indefinite), reaches the apex or crosses it onto the reflected cone
 //! s₀ = −|s̄| (where c = 0 holds as well) is held at the apex instead. The backend
@@ -142,9 +143,9 @@ impl Normals {
 }
 
 /// Polishes a returned solution (its x, s and z; e.g. one the caller's own certificate does
-/// not accept): the polish of [`crate::solve`] run on demand. `None` if the solution does not
-/// fit the program or no step succeeds; otherwise the polished point with its certificate (keep
-/// it only if that is better).
+/// not accept): the polish of [`crate::solve`] run on demand. `None` if the active set cannot
+/// be formed or no step succeeds; otherwise the polished point with its certificate (keep it
+/// only if that is better).
 pub fn polish_solution<K: KktSystem + ?Sized>(
     kkt: &mut K,
     sol: &Solution,
@@ -178,13 +179,14 @@ fn evaluated<K: KktSystem + ?Sized>(
 }
 
 /// The active set the polish starts from (module docs): the constraints, sorted by block and
-/// row, and which rows they hold.
+/// row, and which rows they hold; `None` when an active second-order block is at its apex and
+/// [`crate::PolishOptions::apex`] is off.
 fn active_set<K: KktSystem + ?Sized>(
     kkt: &K,
     pt: &Point,
     res: &Residuals,
     po: &crate::PolishOptions,
-) -> (Vec<Con>, Vec<bool>) {
+) -> Option<(Vec<Con>, Vec<bool>)> {
     let cones = kkt.cones();
     let m = cones.rows();
     let (force, length) = (res.force, res.length);
@@ -234,8 +236,12 @@ fn active_set<K: KktSystem + ?Sized>(
                 // At the apex (s → 0 with z inside the dual cone, e.g. a direction wedge whose
                 // derivative vanishes) the block holds the point with the stiffness of its dual
                 // margin z₀ − |z̄| over |s|; J s has no limit direction there.
-                let apex = soc_margin(z) >= norm(s) * scale;
+                let apex = po.apex && soc_margin(z) >= norm(s) * scale;
                 let active = engaged || boundary <= po.active_rtol * s[0];
+                if active && at_apex(s, length) && !po.apex {
+                    // J s carries no direction.
+                    return None;
+                }
                 if apex || (active && at_apex(s, length)) {
                     push_apex(&mut cons, &mut member, bi, r, |j| z[j]);
                 } else if active {
@@ -251,7 +257,7 @@ fn active_set<K: KktSystem + ?Sized>(
             }
         }
     }
-    (cons, member)
+    Some((cons, member))
 }
 
 /// Whether a second-order block's slack is at its apex for the polish: J s carries no
@@ -394,7 +400,8 @@ fn push_apex(
 }
 
 /// Which blocks hold a constraint of the active set the polish would start from at `sol`
-/// (its x, s and z; module docs), `None` for a malformed solution or without polish options. A
+/// (its x, s and z; module docs), `None` when it cannot be formed (a second-order block at its
+/// apex without [`crate::PolishOptions::apex`], a malformed solution, no polish options). A
 /// caller may pose the polish's problem on those blocks alone.
 pub fn active_blocks<K: KktSystem + ?Sized>(
     kkt: &mut K,
@@ -403,7 +410,7 @@ pub fn active_blocks<K: KktSystem + ?Sized>(
 ) -> Option<Vec<bool>> {
     let po = opts.polish.as_ref()?;
     let (pt, res, _) = evaluated(kkt, sol)?;
-    let (cons, _) = active_set(kkt, &pt, &res, po);
+    let (cons, _) = active_set(kkt, &pt, &res, po)?;
     let mut blocks = vec![false; kkt.cones().len()];
     for c in &cons {
         blocks[c.block] = true;
@@ -411,7 +418,8 @@ pub fn active_blocks<K: KktSystem + ?Sized>(
     Some(blocks)
 }
 
-/// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if no step
+/// Polishes the interior-point iterate `pt` (with its residuals `res`); `None` if the active
+/// set cannot be formed (a cone at its apex without [`crate::PolishOptions::apex`]) or no step
 /// succeeds.
 pub(crate) fn polish<K: KktSystem + ?Sized>(
     kkt: &mut K,
@@ -425,7 +433,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
     let cones = kkt.cones().clone();
     let (n, m) = (kkt.num_vars(), cones.rows());
     let (force, length) = (res.force, res.length);
-    let (mut cons, mut member) = active_set(kkt, pt, res, po);
+    let (mut cons, mut member) = active_set(kkt, pt, res, po)?;
     let mut x = pt.x.clone();
     let mut best: Option<Solution> = None;
     let mut ax = vec![0.0; m];
@@ -548,7 +556,8 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                     drop[ci] = con.y < -1e-12 * ymax;
                     // (Or through it: c = 0 also holds on the reflected cone, s₀ = −|s̄|.)
                     let sb = &s[cones.range(con.block)];
-                    to_apex[ci] = !drop[ci]
+                    to_apex[ci] = po.apex
+                        && !drop[ci]
                         && (at_apex(sb, length)
                             || sb[0] <= 0.0
                             || curvature >= APEX_CURVATURE * kkt.diagonal_scale(con.block));
@@ -670,8 +679,11 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                 if cones.blocks()[con.block].kind() == Kind::SecondOrder
                     && at_apex(&s[r.clone()], length)
                 {
-                    // A second-order block joining at its apex has no normal: it is held there.
-                    push_apex(&mut kept, &mut member, con.block, r, |_| 0.0);
+                    // A second-order block joining at its apex has no normal: it is held there
+                    // (or, without the apex option, left out).
+                    if po.apex {
+                        push_apex(&mut kept, &mut member, con.block, r, |_| 0.0);
+                    }
                     continue;
                 }
                 match con.row {

@@ -1,8 +1,9 @@
 //! The active-set polish at a second-order cone's apex: the projection of a point onto a
 //! direction wedge {x : (x − o)·a ≥ |x − o| cos θ} whose answer is the wedge's apex x = o (the
-//! point lies in the polar cone, (c − o)·a ≤ −|c − o| sin θ). At the apex J s has no direction a boundary constraint
-//! could hold: the block is held at s = 0, its multiplier anywhere in the dual cone — here not
-//! unique, the wedge's three rows (x·a / cos θ, x) being dependent.
+//! point lies in the polar cone, (c − o)·a ≤ −|c − o| sin θ). At the apex J s has no direction
+//! a boundary constraint could hold: with [`PolishOptions::apex`] the block is held at s = 0,
+//! its multiplier anywhere in the dual cone — here not unique, the wedge's three rows
+//! (x·a / cos θ, x) being dependent.
 
 use conic::{Cone, Cones, DenseProblem, Options, PolishOptions};
 
@@ -49,6 +50,18 @@ fn cases() -> Vec<([f64; 2], [f64; 2], f64)> {
     out
 }
 
+/// The default options with the polish holding blocks at their apex
+/// ([`PolishOptions::apex`]).
+fn with_apex() -> Options {
+    Options {
+        polish: Some(PolishOptions {
+            apex: true,
+            ..PolishOptions::default()
+        }),
+        ..Options::default()
+    }
+}
+
 fn dual_margin(z: &[f64]) -> f64 {
     z[0] - z[1].hypot(z[2])
 }
@@ -68,7 +81,7 @@ fn a_loose_answer_at_the_apex_is_polished_onto_it() {
             x0 > 1e-9,
             "the loose answer is not already at the apex: {x0:e}"
         );
-        let polished = conic::polish::polish_solution(&mut p, &sol, &Options::default())
+        let polished = conic::polish::polish_solution(&mut p, &sol, &with_apex())
             .unwrap_or_else(|| panic!("no polished point for c = {c:?}, θ = {theta}"));
         let x = from_apex(&polished.x);
         assert!(x <= 1e-12, "c = {c:?}, θ = {theta}: |x − o| = {x:e}");
@@ -86,11 +99,7 @@ fn a_loose_answer_at_the_apex_is_polished_onto_it() {
 fn the_method_returns_the_apex_itself() {
     for (c, a, theta) in cases() {
         let mut p = wedge_projection(c, a, theta);
-        let opts = Options {
-            polish: Some(PolishOptions::default()),
-            ..Options::default()
-        };
-        let sol = conic::solve(&mut p, &opts).unwrap();
+        let sol = conic::solve(&mut p, &with_apex()).unwrap();
         let x = from_apex(&sol.x);
         assert!(
             sol.polished,

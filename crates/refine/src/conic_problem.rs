@@ -412,13 +412,13 @@ impl ConicProblem {
 
     /// The method's answer, judged by the caller: `judge` says whether it accepts a solution
     /// and what it made of it (returned with the solution). When it refuses the answer, that
-    /// answer is polished ([`conic::polish::polish_solution`], with [`REPOLISH_STEPS`] steps;
-    /// again if it was polished) and the polished point returned if the judge takes it. The
-    /// method ranks its candidates by its own residual, which sees the multipliers of a point;
-    /// a caller whose certificate rebuilds the forces from the geometry (a ball's w(p − q)) can
-    /// refuse an interior iterate that residual ranks first — its multipliers hold the active
-    /// normals only to O(√μ) — and accept the polished point (ROBUSTNESS.md §4, 13: direction
-    /// wedges at their apex).
+    /// answer is polished ([`conic::polish::polish_solution`], with [`REPOLISH_STEPS`] steps and
+    /// [`conic::PolishOptions::apex`]; again if it was polished) and the polished point returned
+    /// if the judge takes it. The method ranks its candidates by its own residual, which sees the
+    /// multipliers of a point; a caller whose certificate rebuilds the forces from the geometry
+    /// (a ball's w(p − q)) can refuse an interior iterate that residual ranks first — its
+    /// multipliers hold the active normals only to O(√μ) — and accept the polished point
+    /// (ROBUSTNESS.md §4, 13: direction wedges at their apex).
     ///
     /// # Errors
     /// As [`ConicProblem::solve_unchecked`].
@@ -462,11 +462,12 @@ impl ConicProblem {
         if accepted {
             return Ok((out, verdict));
         }
-        // The last attempt before the caller refuses: a longer polish (active-set changes near
-        // apex blocks leave its first steps converging linearly).
+        // The last attempt before the caller refuses: a longer polish that holds blocks at their
+        // apex (active-set changes near apex blocks leave its first steps converging linearly).
         let mut o = opts.conic.clone();
         if let Some(po) = o.polish.as_mut() {
             po.steps = po.steps.max(REPOLISH_STEPS);
+            po.apex = true;
         }
         if let Some(p) = conic::polish::polish_solution(&mut be, &sol, &o) {
             let polished = self.report(&be, &p, opts.active_rtol);

@@ -14,7 +14,7 @@
 //! | 1 | linear solve | interpolation, smoothing, balls of radius 0; no derivative constraint | a linear system: one banded solve, exact to rounding (certified with the stage) |
 //! | 2 | condensed working set | data-vertex sets alone (balls, half-spaces): no derivative constraint, enough constrained points | only the constrained data vertices are variables (O(n) per iteration), on a working set of the active ones |
 //! | 3 | condensed working set (strict) | as 2 | an active set read off at the default tolerance is sometimes not settled enough for the polish |
-//! | 4 | full-vertex interior point | every kind, first stages up to [`crate::MAX_CONIC_COORDS`] coordinates | derivative stencils and end conditions act on free vertices; the fallback of 2–3 |
+//! | 4 | full-vertex interior point | every kind, first stages up to [`crate::MAX_CONIC_COORDS`] coordinates | derivative stencils and end conditions act on free vertices; the fallback of 2–3; an answer refine's certificate refuses is polished once more, holding blocks at their apex (`ConicProblem::solve_judged`) |
 //! | 5 | full-vertex interior point (strict) | as 4 | the method's gap measure is relative to the energy: many small balls need a stricter target |
 
 use divdiff::Points;
