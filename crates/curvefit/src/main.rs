@@ -23,7 +23,9 @@ fn main() {
             stderr: std::io::stderr().is_terminal(),
         },
         &mut std::io::stdout().lock(),
-        &mut std::io::stderr().lock(),
+        // Unlocked: each write takes the lock, so a line written to standard error from another
+        // thread (a library's diagnostic) waits for one write, not for the whole run.
+        &mut std::io::stderr(),
     );
     std::process::exit(code);
 }
