@@ -394,7 +394,18 @@ fn stage_loop(
                 .and_then(|s| Some((&s.points, s.multipliers.as_deref()?))),
             options: &problem.options,
         };
-        let s = dispatch(&fp)?;
+        let s = dispatch(&fp).map_err(|e| match e {
+            // The same problem solved on the knots before this update: the update made the
+            // refined spans too unequal for the floating-point solve (ROBUSTNESS.md §4, 14).
+            Error::Energy(energy::Error::Singular { .. }) if knot_iteration > 0 => {
+                Error::InvalidParameter {
+                    field: "knot_iterations",
+                    value: problem.knot_iterations as f64,
+                    reason: "a knot update made the refined spans too unequal for a floating-point solve (the spans |p_{j+1} - p_j|^e nearly vanish where the curve almost stops, e.g. at a turning point of a heavily smoothed curve); use fewer knot updates or knot_iterations 0",
+                }
+            }
+            e => e,
+        })?;
         iterations.solves += 1;
         iterations.solver += s.iterations;
         sol = Some(s);

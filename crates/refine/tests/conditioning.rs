@@ -284,7 +284,8 @@ fn nearly_collinear_points() {
 /// points are refused ([`Error::CoincidentPoints`]); every result returned is certified to
 /// [`KKT_GOOD`] (measured ≤ 1.4e-15 down to δ = 1e-12); below δ = 1e-8 knot updates may meet
 /// coincident refined vertices ([`Error::DegenerateRefinedSpan`]) or the system may be
-/// numerically singular ([`Error::Energy`]) — typed errors, never NaN.
+/// numerically singular ([`Error::Energy`]; after a knot update, [`Error::InvalidParameter`]
+/// naming `knot_iterations`) — typed errors, never NaN.
 #[test]
 fn nearly_coincident_points() {
     eprintln!("| coincident, gap δ / kind | KKT | violation | E |");
@@ -319,6 +320,10 @@ fn nearly_coincident_points() {
                                 e,
                                 Error::DegenerateRefinedSpan { .. }
                                     | Error::Energy(_)
+                                    | Error::InvalidParameter {
+                                        field: "knot_iterations",
+                                        ..
+                                    }
                                     | Error::NotConverged { .. }
                             ),
                             "{label}: {e}"
@@ -452,5 +457,37 @@ fn large_noisy_interpolation_is_certified() {
     for span in t.chunks_exact(8).take(1000) {
         let h = span[1] - span[0];
         assert!(span.windows(2).all(|w| w[1] - w[0] == h), "{span:?}");
+    }
+}
+
+/// A heavily smoothed 1-D curve (weights 1e-6 on a sine with a trend and ±0.015 of
+/// deterministic noise, n = 2000) almost stops at a turning point: the knot update's span
+/// |p_{j+1} − p_j|^e there is ~1e-4 of the others and the next system is singular to rounding.
+/// The refusal names `knot_iterations`, the setting that caused it — not the points, which
+/// solve without the updates (ROBUSTNESS.md §4, 14).
+#[test]
+fn knot_updates_that_flatten_the_spans_name_knot_iterations() {
+    let n = 2000;
+    let rows: Vec<[f64; 1]> = (0..n)
+        .map(|i| {
+            let s = 10.0 * i as f64 / (n - 1) as f64;
+            let noise = 0.03 * ((i as f64 * 0.618_033_988_749_894_9) % 1.0 - 0.5);
+            [s.sin() + 0.05 * s + noise]
+        })
+        .collect();
+    let q = Points::from_rows(&rows).unwrap();
+    let p = Problem::new(q)
+        .with_topology(Topology::Open)
+        .with_k(3)
+        .with_constraint(Constraint::Smoothing(vec![1e-6; n]));
+    let r = p
+        .clone()
+        .with_knot_iterations(0)
+        .solve()
+        .expect("solves on the data's knots");
+    assert!(r.kkt_residual <= KKT_GOOD, "{}", r.kkt_residual);
+    match p.with_knot_iterations(3).solve() {
+        Err(Error::InvalidParameter { field, .. }) => assert_eq!(field, "knot_iterations"),
+        other => panic!("expected a refusal naming knot_iterations, got {other:?}"),
     }
 }
