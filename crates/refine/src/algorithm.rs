@@ -404,6 +404,16 @@ fn stage_loop(
                     reason: "a knot update made the refined spans too unequal for a floating-point solve (the spans |p_{j+1} - p_j|^e nearly vanish where the curve almost stops, e.g. at a turning point of a heavily smoothed curve); use fewer knot updates or knot_iterations 0",
                 }
             }
+            // Smoothing alone: H + W is singular to rounding where the weights are small
+            // against the stiffness ~1/h³ of the shortest spans (ROBUSTNESS.md §4, 5).
+            Error::Energy(energy::Error::Singular { .. }) => match constraint {
+                Constraint::Smoothing(w) => Error::InvalidParameter {
+                    field: "weights",
+                    value: w.iter().fold(0.0, |a: f64, &x| a.max(x)),
+                    reason: "the smoothing system H + W is singular to rounding: the weights are too small against the curve's stiffness (about 1/h^3 of its shortest parameter spans h); use larger weights, fewer intermediate points (k), or a parametrization with less unequal spans",
+                },
+                _ => e,
+            },
             e => e,
         })?;
         iterations.solves += 1;

@@ -243,8 +243,17 @@ fn span_ratios_up_to_1e6() {
                 assert!(viol <= KKT_GOOD, "{label}: violation {viol:e}");
                 assert!(kkt <= KKT_GOOD, "{label}: kkt {kkt:e}");
             }
+            // (Smoothing names its weights: `smoothing_weights_below_the_stiffness_name_the_weights`.)
             Err(e) => assert!(
-                ratio >= 1e6 && matches!(e, Error::Energy(_)),
+                ratio >= 1e6
+                    && matches!(
+                        e,
+                        Error::Energy(_)
+                            | Error::InvalidParameter {
+                                field: "weights",
+                                ..
+                            }
+                    ),
                 "{label}: {e}"
             ),
         }
@@ -284,8 +293,8 @@ fn nearly_collinear_points() {
 /// points are refused ([`Error::CoincidentPoints`]); every result returned is certified to
 /// [`KKT_GOOD`] (measured ≤ 1.4e-15 down to δ = 1e-12); below δ = 1e-8 knot updates may meet
 /// coincident refined vertices ([`Error::DegenerateRefinedSpan`]) or the system may be
-/// numerically singular ([`Error::Energy`]; after a knot update, [`Error::InvalidParameter`]
-/// naming `knot_iterations`) — typed errors, never NaN.
+/// numerically singular ([`Error::Energy`]; [`Error::InvalidParameter`] naming
+/// `knot_iterations` after a knot update, or the smoothing weights) — typed errors, never NaN.
 #[test]
 fn nearly_coincident_points() {
     eprintln!("| coincident, gap δ / kind | KKT | violation | E |");
@@ -321,7 +330,7 @@ fn nearly_coincident_points() {
                                 Error::DegenerateRefinedSpan { .. }
                                     | Error::Energy(_)
                                     | Error::InvalidParameter {
-                                        field: "knot_iterations",
+                                        field: "knot_iterations" | "weights",
                                         ..
                                     }
                                     | Error::NotConverged { .. }
@@ -490,4 +499,42 @@ fn knot_updates_that_flatten_the_spans_name_knot_iterations() {
         Err(Error::InvalidParameter { field, .. }) => assert_eq!(field, "knot_iterations"),
         other => panic!("expected a refusal naming knot_iterations, got {other:?}"),
     }
+}
+
+/// Smoothing weights too small against the stiffness of very unequal spans (a closed ellipse
+/// whose angular steps grow geometrically by 10⁴ over n = 5000 points, every weight 1e-6): H + W
+/// is singular to rounding (ROBUSTNESS.md §4, 5). The refusal names the weights, and the advice
+/// holds: weights of 1e-4 solve the same points.
+#[test]
+fn smoothing_weights_below_the_stiffness_name_the_weights() {
+    let n = 5000;
+    let steps: Vec<f64> = (0..n)
+        .map(|i| 1e4f64.powf(i as f64 / (n - 1) as f64))
+        .collect();
+    let total: f64 = steps[1..].iter().sum::<f64>() + steps[n - 1];
+    let mut th = 0.0;
+    let rows: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            if i > 0 {
+                th += 2.0 * std::f64::consts::PI * steps[i] / total;
+            }
+            [th.cos(), 0.6 * th.sin()]
+        })
+        .collect();
+    let q = Points::from_rows(&rows).unwrap();
+    let p = |w: f64| {
+        Problem::new(q.clone())
+            .with_topology(Topology::Closed)
+            .with_k(3)
+            .with_knot_iterations(0)
+            .with_constraint(Constraint::Smoothing(vec![w; n]))
+    };
+    match p(1e-6).solve() {
+        Err(Error::InvalidParameter { field, value, .. }) => {
+            assert_eq!((field, value), ("weights", 1e-6));
+        }
+        other => panic!("expected a refusal naming the weights, got {other:?}"),
+    }
+    let r = p(1e-4).solve().expect("larger weights solve");
+    assert!(r.kkt_residual <= KKT_GOOD, "{}", r.kkt_residual);
 }

@@ -425,7 +425,7 @@ fn user_error(e: refine::Error) -> InputError {
             reason,
             ..
         } => InputError::new(path(field, index), reason),
-        E::InvalidParameter { field, reason, .. } => InputError::new(field, reason),
+        E::InvalidParameter { field, reason, .. } => InputError::new(whole(field), reason),
         E::InvalidHalfSpace {
             field,
             point,
