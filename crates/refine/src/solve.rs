@@ -12,8 +12,10 @@ impl Problem {
     /// # Errors
     /// Any validation error of [`Problem::validate`]; [`crate::Error::DegenerateRefinedSpan`]
     /// when a knot update meets coincident refined vertices; [`crate::Error::Energy`] if a
-    /// linear system is numerically singular; [`crate::Error::Unsupported`] for combinations a
-    /// solver does not handle.
+    /// linear system is numerically singular — reported as [`crate::Error::InvalidParameter`]
+    /// naming `knot_iterations` when it turns singular after a knot update, or the smoothing
+    /// `weights` when they are too small against the curve's stiffness;
+    /// [`crate::Error::Unsupported`] for combinations a solver does not handle.
     pub fn solve(&self) -> Result<Refinement, crate::Error> {
         // Solve on data centred at their centroid and translate back: every part of the
         // problem is translation invariant, but the interior-point method measures its
