@@ -405,13 +405,20 @@ fn stage_loop(
                 }
             }
             // Smoothing alone: H + W is singular to rounding where the weights are small
-            // against the stiffness ~1/h³ of the shortest spans (ROBUSTNESS.md §4, 5).
+            // against the stiffness ~1/h³ of the shortest spans (ROBUSTNESS.md §4, 5) — a
+            // remedy only while the weight that makes a vertex fixed, ‖H‖/ε, is representable
+            // (points at 1e-100 are badly scaled, not under-weighted).
             Error::Energy(energy::Error::Singular { .. }) => match constraint {
-                Constraint::Smoothing(w) => Error::InvalidParameter {
+                Constraint::Smoothing(w)
+                    if crate::linear::stiff_weight(&energy::Hessian::new(fp.knots))
+                        .is_finite() =>
+                {
+                    Error::InvalidParameter {
                     field: "weights",
                     value: w.iter().fold(0.0, |a: f64, &x| a.max(x)),
                     reason: "the smoothing system H + W is singular to rounding: the weights are too small against the curve's stiffness (about 1/h^3 of its shortest parameter spans h); use larger weights, fewer intermediate points (k), or a parametrization with less unequal spans",
-                },
+                    }
+                }
                 _ => e,
             },
             e => e,

@@ -19,7 +19,7 @@ pub(crate) fn hessian_system(h: Hessian, dim: usize) -> Result<System, Error> {
 /// about the centroid), so |p_{i_k} − q_i| ≤ ε L: the vertex is q_i to rounding, and fixing it
 /// there is exact to the certificate's stationarity allowance w·ε·L (`constraint/smoothing.rs`)
 /// while it keeps w·q (1e300 × 1e10) from overflowing and the factorization well scaled.
-fn stiff_weight(h: &Hessian) -> f64 {
+pub(crate) fn stiff_weight(h: &Hessian) -> f64 {
     let (d0, d1, d2) = h.bands();
     let m = |b: &[f64]| b.iter().fold(0.0f64, |a, x| a.max(x.abs()));
     (m(d0) + 2.0 * m(d1) + 2.0 * m(d2)) / f64::EPSILON
