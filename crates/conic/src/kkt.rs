@@ -59,27 +59,10 @@ pub trait KktSystem {
     fn apply_at(&self, z: &[f64], out: &mut [f64]);
 
     /// G = A_b A_bᵀ, the Gram matrix of block `block`'s rows (m_b × m_b row-major, into `out`).
-    /// The default forms it from [`KktSystem::apply_at`] on unit vectors, O(n + m) per row; a
-    /// backend that knows its blocks' rows forms it locally.
+    /// The default is [`gram_through_apply_at`], O(n + m) per row; a backend that knows its
+    /// blocks' rows forms it locally.
     fn block_gram(&self, block: usize, out: &mut [f64]) {
-        let r = self.cones().range(block);
-        let n = self.num_vars();
-        let mut unit = vec![0.0; self.cones().rows()];
-        let cols: Vec<Vec<f64>> = r
-            .map(|k| {
-                unit[k] = 1.0;
-                let mut c = vec![0.0; n];
-                self.apply_at(&unit, &mut c);
-                unit[k] = 0.0;
-                c
-            })
-            .collect();
-        let m = cols.len();
-        for i in 0..m {
-            for j in 0..m {
-                out[i * m + j] = crate::vector::dot(&cols[i], &cols[j]);
-            }
-        }
+        gram_through_apply_at(self, block, out);
     }
 
     /// A positive estimate of P's diagonal over the variables that block `b`'s rows touch,
@@ -126,5 +109,29 @@ pub trait KktSystem {
     /// ([`crate::RefinementOptions::exact_from`]).
     fn factor_is_exact(&self) -> bool {
         false
+    }
+}
+
+/// [`KktSystem::block_gram`] from [`KktSystem::apply_at`] on unit vectors: A_bᵀ e_k for each of
+/// the block's rows, then their dot products (the default, and the reference a backend's own
+/// Gram matrix is tested against).
+pub fn gram_through_apply_at<K: KktSystem + ?Sized>(kkt: &K, block: usize, out: &mut [f64]) {
+    let r = kkt.cones().range(block);
+    let n = kkt.num_vars();
+    let mut unit = vec![0.0; kkt.cones().rows()];
+    let cols: Vec<Vec<f64>> = r
+        .map(|k| {
+            unit[k] = 1.0;
+            let mut c = vec![0.0; n];
+            kkt.apply_at(&unit, &mut c);
+            unit[k] = 0.0;
+            c
+        })
+        .collect();
+    let m = cols.len();
+    for i in 0..m {
+        for j in 0..m {
+            out[i * m + j] = crate::vector::dot(&cols[i], &cols[j]);
+        }
     }
 }

@@ -97,7 +97,7 @@ pub use cone::{Cone, Cones, Kind};
 pub use dense::DenseProblem;
 pub use error::Error;
 pub use ipm::{Iterate, Monitor, NoMonitor, Solution, Start, Status};
-pub use kkt::{KktSystem, Scales};
+pub use kkt::{gram_through_apply_at, KktSystem, Scales};
 pub use options::{Options, PolishOptions, RefinementOptions, Regularization};
 pub use residual::Residuals;
 pub use weights::{BlockWeight, Weights};

@@ -333,6 +333,12 @@ fn rescale_to(t: Knots, like: &Knots, stage: usize) -> Result<Knots, Error> {
     })
 }
 
+/// Why a system that turned singular after a knot update is refused (`knot_iterations`).
+const SINGULAR_AFTER_UPDATE: &str = "a knot update made the refined spans too unequal for a floating-point solve (the spans |p_{j+1} - p_j|^e nearly vanish where the curve almost stops, e.g. at a turning point of a heavily smoothed curve); use fewer knot updates or knot_iterations 0";
+
+/// Why a singular smoothing system is refused (`weights`).
+const SINGULAR_SMOOTHING: &str = "the smoothing system H + W is singular to rounding: the weights are too small against the curve's stiffness (about 1/h^3 of its shortest parameter spans h); use larger weights, fewer intermediate points (k), or a parametrization with less unequal spans";
+
 /// Solve on the initial knots, then `knot_iterations` times: update the knots from the refined
 /// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e), mapped back onto the data parameters' span
 /// ([`rescale_to`]), and solve again — so the returned points are the solution for the returned
@@ -401,22 +407,22 @@ fn stage_loop(
                 Error::InvalidParameter {
                     field: "knot_iterations",
                     value: problem.knot_iterations as f64,
-                    reason: "a knot update made the refined spans too unequal for a floating-point solve (the spans |p_{j+1} - p_j|^e nearly vanish where the curve almost stops, e.g. at a turning point of a heavily smoothed curve); use fewer knot updates or knot_iterations 0",
+                    reason: SINGULAR_AFTER_UPDATE,
                 }
             }
             // Smoothing alone: H + W is singular to rounding where the weights are small
             // against the stiffness ~1/h³ of the shortest spans (ROBUSTNESS.md §4, 5) — a
             // remedy only while the weight that makes a vertex fixed, ‖H‖/ε, is representable
-            // (points at 1e-100 are badly scaled, not under-weighted).
+            // (points at 1e-100 are badly scaled, not under-weighted). The Hessian is formed
+            // again on this error path only.
             Error::Energy(energy::Error::Singular { .. }) => match constraint {
                 Constraint::Smoothing(w)
-                    if crate::linear::stiff_weight(&energy::Hessian::new(fp.knots))
-                        .is_finite() =>
+                    if crate::linear::stiff_weight(&energy::Hessian::new(fp.knots)).is_finite() =>
                 {
                     Error::InvalidParameter {
-                    field: "weights",
-                    value: w.iter().fold(0.0, |a: f64, &x| a.max(x)),
-                    reason: "the smoothing system H + W is singular to rounding: the weights are too small against the curve's stiffness (about 1/h^3 of its shortest parameter spans h); use larger weights, fewer intermediate points (k), or a parametrization with less unequal spans",
+                        field: "weights",
+                        value: w.iter().fold(0.0, |a: f64, &x| a.max(x)),
+                        reason: SINGULAR_SMOOTHING,
                     }
                 }
                 _ => e,

@@ -739,24 +739,14 @@ mod tests {
         p.add_constraint(&[(3, 1.0), (4, -1.0)], ConvexSet::Point(vec![0.1, 0.2]))
             .unwrap();
         let be = FullVertex::new(&p).unwrap();
-        let (n, rows) = (be.num_vars(), be.cones().rows());
         for b in 0..be.cones().len() {
-            let r = be.cones().range(b);
-            let m = r.len();
-            let cols: Vec<Vec<f64>> = r
-                .map(|k| {
-                    let mut unit = vec![0.0; rows];
-                    unit[k] = 1.0;
-                    let mut col = vec![0.0; n];
-                    be.apply_at(&unit, &mut col);
-                    col
-                })
-                .collect();
-            let mut g = vec![0.0; m * m];
+            let m = be.cones().range(b).len();
+            let (mut g, mut reference) = (vec![0.0; m * m], vec![0.0; m * m]);
             be.block_gram(b, &mut g);
+            conic::gram_through_apply_at(&be, b, &mut reference);
             for i in 0..m {
                 for j in 0..m {
-                    let want: f64 = cols[i].iter().zip(&cols[j]).map(|(a, b)| a * b).sum();
+                    let want = reference[i * m + j];
                     let scale = want.abs().max(1.0);
                     assert!(
                         (g[i * m + j] - want).abs() <= 1e-14 * scale,
