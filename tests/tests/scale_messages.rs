@@ -91,3 +91,31 @@ fn library_fields_are_the_json_paths() {
     let doc = r#"{"points": [[0,0],[1,1],[2,0]], "constraint": {"type": "smoothing", "weights": [1, 0, 0]}}"#;
     assert_eq!(refused_field(doc), "constraint.weights");
 }
+
+#[test]
+fn a_solve_lost_after_a_knot_update_names_knot_iterations() {
+    // The robustness sweep's smallest such case (ROBUSTNESS.md §4, 15): 50 points in clusters
+    // 1e-3 apart, smoothing weights over six decades, a wedge of half-angle 0.2 at every point,
+    // the default three knot updates. The first two solves are certified, the third is not
+    // (best residual 1.1e-7): refused naming knot_iterations with the number of updates that
+    // were certified (it was "full-vertex interior point did not converge …", naming nothing).
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/refine-refused-after-knot-update.json");
+    let doc = std::fs::read_to_string(path).unwrap();
+    let (code, out, err) = run_cli(&["refine", "-"], &doc);
+    assert_eq!(code, 2, "{err}");
+    assert!(out.is_empty());
+    let line = err.trim_end();
+    assert!(
+        line.starts_with("error: knot_iterations: stage 0, knot update 3: "),
+        "{line}"
+    );
+    assert!(line.ends_with("use knot_iterations 2 or fewer"), "{line}");
+    // The advice holds: with two updates the same problem is certified, and so with none.
+    let mut v: serde_json::Value = serde_json::from_str(&doc).unwrap();
+    for kit in [2, 0] {
+        v["knot_iterations"] = kit.into();
+        let r = solved(&v.to_string());
+        assert_eq!(r["iterations"]["knot_updates"], kit, "{kit}");
+    }
+}

@@ -427,6 +427,19 @@ fn stage_loop(
                 }
                 _ => e,
             },
+            // The solve before this update was certified: the updated knots are what the
+            // method could not resolve (ROBUSTNESS.md §4, 15).
+            Error::NotConverged {
+                solver,
+                iterations,
+                residual,
+            } if knot_iteration > 0 => Error::NotConvergedAfterUpdate {
+                stage,
+                update: knot_iteration,
+                solver,
+                iterations,
+                residual,
+            },
             e => e,
         })?;
         iterations.solves += 1;

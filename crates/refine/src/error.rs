@@ -176,6 +176,25 @@ pub enum Error {
         /// The constraint index.
         constraint: usize,
     },
+    /// The exact solver could not certify the fixed-knot solve after knot update `update`
+    /// (1-based) of stage `stage` of Algorithm 4.1, the solve on the knots before that update
+    /// having been certified: each update |p_{j+1} − p_j|^e makes the refined spans more unequal
+    /// where the data are clustered or the curve nearly stops, and this one took them past what
+    /// the method resolves to the acceptance level. `residual` is the best certificate reached on
+    /// the updated knots (as [`Error::NotConverged`]).
+    #[error("stage {stage}, knot update {update}: {solver} did not converge in {iterations} iterations (best residual {residual:.2e}); the solve before this update was certified")]
+    NotConvergedAfterUpdate {
+        /// The stage of Algorithm 4.1 (0 = part 1, l ≥ 1 = level l of part 2).
+        stage: usize,
+        /// The knot update (1 = the first) whose solve was not certified.
+        update: usize,
+        /// The solver (the strategy entry that came closest).
+        solver: &'static str,
+        /// Iterations taken.
+        iterations: usize,
+        /// The best residual reached.
+        residual: f64,
+    },
     /// An iterative solver did not reach its tolerance within its iteration limit; `residual` is
     /// the best (relative KKT) residual it reached.
     #[error("{solver} did not converge in {iterations} iterations (best residual {residual:e})")]

@@ -15,7 +15,10 @@ impl Problem {
     /// linear system is numerically singular — reported as [`crate::Error::InvalidParameter`]
     /// naming `knot_iterations` when it turns singular after a knot update, or the smoothing
     /// `weights` when they are too small against the curve's stiffness;
-    /// [`crate::Error::Unsupported`] for combinations a solver does not handle.
+    /// [`crate::Error::NotConverged`] when the exact solver cannot certify a fixed-knot solve,
+    /// [`crate::Error::NotConvergedAfterUpdate`] when that happens after a knot update (the solve
+    /// before it certified); [`crate::Error::Unsupported`] for combinations a solver does not
+    /// handle.
     pub fn solve(&self) -> Result<Refinement, crate::Error> {
         // Solve on data centred at their centroid and translate back: every part of the
         // problem is translation invariant, but the interior-point method measures its

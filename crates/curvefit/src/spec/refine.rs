@@ -448,6 +448,19 @@ fn user_error(e: refine::Error) -> InputError {
             "knot_iterations",
             format!("{e}; the refined curve doubles back on itself: use knot_iterations 0"),
         ),
+        // Certified before the update, not after it: fewer updates solve (stage 0 with
+        // `update` − 1 of them is the same computation up to the certified solve).
+        E::NotConvergedAfterUpdate { stage, update, .. } => {
+            let advice = if stage == 0 {
+                format!("use knot_iterations {} or fewer", update - 1)
+            } else {
+                "use fewer knot updates, or knot_iterations 0".to_string()
+            };
+            InputError::new(
+                "knot_iterations",
+                format!("{e}: each knot update makes the refined spans more unequal where the points cluster or the curve nearly stops; {advice}"),
+            )
+        }
         E::InfeasibleConstraint { field, point } => {
             let f = match field {
                 "boundary" => ["boundary.start", "boundary.end"][point.min(1)].to_string(),
