@@ -451,8 +451,10 @@ fn user_error(e: refine::Error) -> InputError {
         // Certified before the update, not after it: fewer updates solve (stage 0 with
         // `update` − 1 of them is the same computation up to the certified solve).
         E::NotConvergedAfterUpdate { stage, update, .. } => {
-            let advice = if stage == 0 {
+            let advice = if stage == 0 && update > 1 {
                 format!("use knot_iterations {} or fewer", update - 1)
+            } else if stage == 0 {
+                "use knot_iterations 0".to_string()
             } else {
                 "use fewer knot updates, or knot_iterations 0".to_string()
             };
