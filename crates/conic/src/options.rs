@@ -158,6 +158,14 @@ pub struct PolishOptions {
     /// 2.7 s instead of 1.5 s, for the same answer), so the method's own polishes leave it off
     /// and a caller turns it on for a last attempt (refine's `ConicProblem::solve_judged`).
     pub apex: bool,
+    /// Normalize a second-order boundary constraint ½ sᵀJ s/ν by ν = |J s| where it joins the
+    /// active set, fixed thereafter (default true: its Hessian is exact and the steps converge
+    /// quadratically; [`crate::polish`]'s module docs). False: by the current |J s| at every
+    /// step, whose Hessian lacks the derivative of 1/|J s| and whose steps converge linearly —
+    /// the older polish, kept because on direction wedges the two end on different points: of
+    /// a sweep of wedge problems each certified some the other refused (refine's full-vertex
+    /// route polishes this way first and with fixed normals as its last attempt).
+    pub fixed_normals: bool,
 }
 
 impl Default for PolishOptions {
@@ -173,6 +181,7 @@ impl Default for PolishOptions {
             refinement_steps: 6,
             skip_below: 1e-13,
             apex: false,
+            fixed_normals: true,
         }
     }
 }
