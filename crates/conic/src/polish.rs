@@ -73,22 +73,47 @@ struct Con {
     /// The multiplier y.
     y: f64,
     /// A second-order boundary constraint's normalization ν (module docs): |J s| where it
-    /// joined the active set, fixed thereafter (1 for rows).
+    /// joined the active set, fixed thereafter unless the polish renormalizes ([`rescale`];
+    /// 1 for rows).
     scale: f64,
+}
+
+impl Con {
+    /// Row `k` of block `block` as an equality, with multiplier `y`.
+    fn row(block: usize, k: usize, y: f64) -> Self {
+        Con {
+            block,
+            row: Some(k),
+            y,
+            scale: 1.0,
+        }
+    }
+
+    /// The boundary of second-order block `block` joining the set at its slack `sb`, with
+    /// multiplier `y`: ν = |J s| = |s|.
+    fn boundary(block: usize, y: f64, sb: &[f64]) -> Self {
+        Con {
+            block,
+            row: None,
+            y,
+            scale: norm(sb),
+        }
+    }
+}
+
+/// Renormalizes the boundary constraints at slack `s` (ν = |J s| now; without
+/// [`crate::PolishOptions::fixed_normals`], before each step's normals).
+fn rescale(cons: &mut [Con], cones: &crate::Cones, s: &[f64]) {
+    for con in cons.iter_mut().filter(|c| c.row.is_none()) {
+        con.scale = norm(&s[cones.range(con.block)]);
+    }
 }
 
 /// The row-space normal u (into `u`: the block's rows), value c and normalization ν of a
 /// constraint at slack s: e_k, s_k and 1 for a row; J s/ν, ½ sᵀJ s/ν and ν = [`Con::scale`]
-/// for a second-order boundary constraint (a unit normal where the constraint joined the set),
-/// or ν = |J s| at s when the normals are not `fixed` ([`crate::PolishOptions::fixed_normals`]).
+/// for a second-order boundary constraint (a unit normal where ν was last set).
 #[inline]
-fn normal(
-    con: &Con,
-    s: &[f64],
-    range: std::ops::Range<usize>,
-    u: &mut [f64],
-    fixed: bool,
-) -> (f64, f64) {
+fn normal(con: &Con, s: &[f64], range: std::ops::Range<usize>, u: &mut [f64]) -> (f64, f64) {
     match con.row {
         Some(k) => {
             u.fill(0.0);
@@ -100,7 +125,7 @@ fn normal(
             for (j, v) in sb.iter().enumerate() {
                 u[j] = if j == 0 { *v } else { -*v };
             }
-            let nu = if fixed { con.scale } else { norm(u) }.max(f64::MIN_POSITIVE);
+            let nu = con.scale.max(f64::MIN_POSITIVE);
             u.iter_mut().for_each(|v| *v /= nu);
             (0.5 * soc_residual(sb) / nu, nu)
         }
@@ -118,8 +143,8 @@ struct Normals {
 }
 
 impl Normals {
-    /// The normals of `cons` at slack `s` (`fixed`: [`crate::PolishOptions::fixed_normals`]).
-    fn at(&mut self, cons: &[Con], cones: &crate::Cones, s: &[f64], fixed: bool) {
+    /// The normals of `cons` at slack `s`.
+    fn at(&mut self, cons: &[Con], cones: &crate::Cones, s: &[f64]) {
         self.off.clear();
         self.off.push(0);
         self.c.clear();
@@ -130,7 +155,7 @@ impl Normals {
             let r = cones.range(con.block);
             let start = self.off[self.off.len() - 1];
             let end = start + r.len();
-            let (c, nu) = normal(con, s, r, &mut self.u[start..end], fixed);
+            let (c, nu) = normal(con, s, r, &mut self.u[start..end]);
             self.off.push(end);
             self.c.push(c);
             self.nu.push(nu);
@@ -213,12 +238,7 @@ fn active_set<K: KktSystem + ?Sized>(
         match cone.kind() {
             Kind::Zero => {
                 for k in r {
-                    cons.push(Con {
-                        block: bi,
-                        row: Some(k),
-                        y: pt.z[k],
-                        scale: 1.0,
-                    });
+                    cons.push(Con::row(bi, k, pt.z[k]));
                     member[k] = true;
                 }
             }
@@ -226,12 +246,7 @@ fn active_set<K: KktSystem + ?Sized>(
                 let size = norm(s).max(f64::MIN_POSITIVE);
                 for (j, k) in r.enumerate() {
                     if z[j] * length >= s[j] * force || s[j] <= po.active_rtol * size {
-                        cons.push(Con {
-                            block: bi,
-                            row: Some(k),
-                            y: z[j],
-                            scale: 1.0,
-                        });
+                        cons.push(Con::row(bi, k, z[j]));
                         member[k] = true;
                     }
                 }
@@ -262,12 +277,7 @@ fn active_set<K: KktSystem + ?Sized>(
                 if apex || (active && at_apex(s, length)) {
                     push_apex(&mut cons, &mut member, bi, r, |j| z[j]);
                 } else if active {
-                    cons.push(Con {
-                        block: bi,
-                        row: None,
-                        y,
-                        scale: norm(s),
-                    });
+                    cons.push(Con::boundary(bi, y, s));
                     for k in r {
                         member[k] = true;
                     }
@@ -408,12 +418,7 @@ fn push_apex(
     y: impl Fn(usize) -> f64,
 ) {
     for (j, k) in r.enumerate() {
-        cons.push(Con {
-            block: bi,
-            row: Some(k),
-            y: y(j),
-            scale: 1.0,
-        });
+        cons.push(Con::row(bi, k, y(j)));
         member[k] = true;
     }
 }
@@ -481,7 +486,10 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
         // s(x), normals, values, z = Σ y u.
         kkt.apply_a(&x, &mut ax);
         slack(kkt, &ax, &mut s);
-        normals.at(&cons, &cones, &s, po.fixed_normals);
+        if !po.fixed_normals {
+            rescale(&mut cons, &cones, &s);
+        }
+        normals.at(&cons, &cones, &s);
         normals.scatter(&cons, &cones, |ci| cons[ci].y, &mut z);
         // Θ per block: curvature and penalty of an active second-order constraint, the
         // penalties of a block's active rows.
@@ -558,7 +566,10 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
         let mut drop = vec![false; cons.len()];
         let mut add: Vec<Con> = Vec::new();
         let mut to_apex = vec![false; cons.len()];
-        normals.at(&cons, &cones, &s, po.fixed_normals);
+        if !po.fixed_normals {
+            rescale(&mut cons, &cones, &s);
+        }
+        normals.at(&cons, &cones, &s);
         let mut ci = 0;
         while ci < cons.len() {
             let con = cons[ci];
@@ -616,12 +627,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                         if !member[k] && s[k] < 0.0 {
                             inactive_violation = inactive_violation.max(-s[k] / length);
                             if -s[k] > opts.tolerance * length {
-                                add.push(Con {
-                                    block: bi,
-                                    row: Some(k),
-                                    y: 0.0,
-                                    scale: 1.0,
-                                });
+                                add.push(Con::row(bi, k, 0.0));
                             }
                         }
                     }
@@ -631,12 +637,7 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
                         let dist = distance_to_cone(Kind::SecondOrder, &s[r.clone()]) / length;
                         inactive_violation = inactive_violation.max(dist);
                         if dist > opts.tolerance {
-                            add.push(Con {
-                                block: bi,
-                                row: None,
-                                y: 0.0,
-                                scale: norm(&s[r.clone()]),
-                            });
+                            add.push(Con::boundary(bi, 0.0, &s[r.clone()]));
                         }
                     }
                 }
@@ -889,20 +890,15 @@ mod tests {
             ([0.5, 0.1, -0.45], [1.0, 0.0, 0.0]),
         ] {
             // Joined the set at s: ν = |J s| = |s|.
-            let con = Con {
-                block: 0,
-                row: None,
-                y: 1.0,
-                scale: s.iter().map(|v| v * v).sum::<f64>().sqrt(),
-            };
+            let con = Con::boundary(0, 1.0, &s);
             let mut u = [0.0; 3];
-            let (c0, nu) = normal(&con, &s, 0..3, &mut u, true);
+            let (c0, nu) = normal(&con, &s, 0..3, &mut u);
             let slope: f64 = u.iter().zip(&ds).map(|(a, b)| a * b).sum();
             let curvature = (ds[0] * ds[0] - ds[1] * ds[1] - ds[2] * ds[2]) / nu;
             for t in [1e-3, 0.1, 0.5, 1.0] {
                 let st: Vec<f64> = s.iter().zip(&ds).map(|(a, b)| a + t * b).collect();
                 let mut ut = [0.0; 3];
-                let (ct, _) = normal(&con, &st, 0..3, &mut ut, true);
+                let (ct, _) = normal(&con, &st, 0..3, &mut ut);
                 let model = c0 + t * slope + 0.5 * t * t * curvature;
                 assert!(
                     (ct - model).abs() <= 1e-14 * (1.0 + t * t),
@@ -911,7 +907,13 @@ mod tests {
             }
             // Renormalized at each point, c leaves the model at second order.
             let st: Vec<f64> = s.iter().zip(&ds).map(|(a, b)| a + b).collect();
-            let (c1, _) = normal(&con, &st, 0..3, &mut [0.0; 3], false);
+            let mut again = [con];
+            super::rescale(
+                &mut again,
+                &crate::Cones::new(vec![crate::Cone::SecondOrder(3)]).unwrap(),
+                &st,
+            );
+            let (c1, _) = normal(&again[0], &st, 0..3, &mut [0.0; 3]);
             let model = c0 + slope + 0.5 * curvature;
             assert!((c1 - model).abs() > 1e-3, "s = {s:?}: {c1:e} vs {model:e}");
         }

@@ -523,8 +523,6 @@ fn solve_pair(a: &Problem, b: &Problem) -> Result<Option<(Refinement, Refinement
     }
 }
 
-/// A system singular to rounding, as refine reports it: `Energy(Singular)`, or after a knot
-/// update (or for smoothing weights below the stiffness) the setting that caused it.
 /// A refusal of the exact solver for want of a certificate, on the first knots or after a knot
 /// update (the same refusal whichever solve of Algorithm 4.1 it met).
 fn not_converged(e: &refine::Error) -> bool {
@@ -534,6 +532,8 @@ fn not_converged(e: &refine::Error) -> bool {
     )
 }
 
+/// A system singular to rounding, as refine reports it: `Energy(Singular)`, or after a knot
+/// update (or for smoothing weights below the stiffness) the setting that caused it.
 fn singular(e: &refine::Error) -> bool {
     matches!(
         e,
