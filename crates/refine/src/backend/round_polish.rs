@@ -180,12 +180,14 @@ impl ActivePolish<'_, '_> {
                     keep[j] = true;
                 } else {
                     inactive += 1;
-                    // A ball the iterate does not count as active but that its curve nearly
-                    // touches is kept too (the polish decides; see SUBSET_NEAR).
-                    let s = &sol.s[be.rows(v)];
-                    if s.len() > 1 && banded::vector::norm(&s[1..]) >= (1.0 - SUBSET_NEAR) * s[0] {
-                        keep[j] = true;
-                    }
+                    // A point the iterate does not count as active but that nearly leaves its
+                    // set is kept too (the polish decides; see SUBSET_NEAR).
+                    let near = wsets[j].closeness(
+                        &sol.x[v * d..(v + 1) * d],
+                        &qw[j * d..(j + 1) * d],
+                        0.0,
+                    );
+                    keep[j] |= near >= 1.0 - SUBSET_NEAR;
                 }
             }
         }
@@ -338,9 +340,10 @@ type VariableStart = (Vec<f64>, Vec<f64>, Vec<f64>);
 /// one's curve left, at most this many.
 const SUBSET_ATTEMPTS: usize = 3;
 
-/// A ball of W that the interior-point iterate does not count as active (its relative slack
-/// above `PolishOptions::active_rtol`) but that its curve fills to at least 1 − this of the
-/// radius stays in the subset the polish runs on, where the polish decides whether it is
+/// A point of W that the interior-point iterate does not count as active (its relative slack
+/// above `PolishOptions::active_rtol`) but whose closeness ([`PointSet::closeness`], the
+/// judge's measure) at the iterate is at least 1 − this — a ball its curve fills to 0.99 of
+/// the radius — stays in the subset the polish runs on, where the polish decides whether it is
 /// active. Left out, such a ball was the one the polished curve then left (the noisy star of
 /// `cargo xtask bench conic` with radii ×2 and ×4, n = 10⁴: one and two balls at 0.998 and
 /// 0.999 of their radius, with multipliers as large as the active ones' — the iterate's slack
