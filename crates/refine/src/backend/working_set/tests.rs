@@ -349,20 +349,14 @@ proptest! {
 
 /// The rules that decide how W grows — the window of the local-maximum rule, its halving,
 /// the round from which a mostly violated remainder makes W everything — change the path,
-/// not the answer: on a noisy closed star (n = 600, d = 2, a quarter to a half of the balls
+/// not the answer: on a noisy closed star (n = 600, d = 2, a fifth to a half of the balls
 /// active, so rounds add local maxima for a while) every setting reaches the single round
 /// on all balls (energy to 1e-9 relative, certified), and the settings do take different
 /// paths (their iteration counts are not all equal: an option that was ignored would fail).
 #[test]
 fn how_w_grows_changes_the_path_not_the_optimum() {
     let (n, m, d) = (600, 4, 2);
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut uniform = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut uniform = crate::par::uniform_stream(0x9E37_79B9_7F4A_7C15);
     let mut y = Vec::with_capacity(n * d);
     for i in 0..n {
         let a = std::f64::consts::TAU * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
