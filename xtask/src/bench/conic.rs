@@ -156,7 +156,9 @@ fn table_row(
 /// wavy circle with radii of 0.2–0.7 of the spacing (a sparse active set), closed and open,
 /// k = 3; Clarabel on the same program up to n = 10⁴ (10⁵ gives the scaling of ours).
 fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
-    println!("## conic — balls in space, half active and with a sparse active set, ours vs Clarabel");
+    println!(
+        "## conic — balls in space, half active and with a sparse active set, ours vs Clarabel"
+    );
     println!();
     println!("k = 3, knot_iterations = 0; noisy star d = 3 (radii 0.05–0.25 of the local chord), the plane star with radii 0.2–1.0 of the local chord (about half active: the working set's rounds), wavy circle d = 2 (radii 0.2–0.7 of the mean spacing)");
     println!();
