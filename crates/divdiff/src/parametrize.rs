@@ -94,6 +94,7 @@ pub fn span_count(points: &Points, topology: Topology) -> Result<usize, Error> {
 /// - [`Error::OutOfRange`] (`field: "exponent"`) if e is NaN, infinite or negative;
 /// - [`Error::ZeroLengthSpan`] `{ index, next }` for the first span in the range whose points
 ///   coincide.
+#[inline(always)] // (so a caller's wider vector instructions reach the distances' loop)
 pub fn span_powers(
     points: &Points,
     parametrization: Parametrization,
@@ -101,23 +102,29 @@ pub fn span_powers(
     out: &mut [f64],
 ) -> Result<(), Error> {
     let e = checked_exponent(parametrization)?;
-    let n = points.len();
-    // The common exponents without a general power (both correctly rounded, so the same values).
-    let power = |x: f64| match parametrization {
-        Parametrization::Centripetal => x.sqrt(),
-        Parametrization::Chordal => x,
-        _ => x.powf(e),
-    };
-    for (k, o) in out.iter_mut().enumerate() {
-        let i = first + k;
+    let (n, d) = (points.len(), points.dim());
+    // Scaled (Blue's algorithm, `banded::vector`): squares of coordinates at 1e±300 would
+    // overflow to ∞ or underflow to 0 where the distance itself is representable. The spans
+    // from point i to i + 1 in one pass; a closed curve's closing span (n − 1 to 0) apart.
+    let straight = out.len().min((n - 1).saturating_sub(first));
+    if straight > 0 {
+        let rows = &points.coords()[first * d..(first + straight + 1) * d];
+        banded::vector::consecutive_dists(rows, d, &mut out[..straight]);
+    }
+    if let Some(o) = out.get_mut(straight) {
+        *o = banded::vector::dist(points.point(0), points.point(n - 1));
+    }
+    // (A branch-free scan first: the position is wanted only on failure.)
+    if out.iter().fold(false, |b, &x| b | (x <= 0.0)) {
+        let i = first + out.iter().position(|&x| x <= 0.0).expect("found above");
         let next = if i + 1 == n { 0 } else { i + 1 };
-        // Scaled (Blue's algorithm, `banded::vector`): squares of coordinates at 1e±300 would
-        // overflow to ∞ or underflow to 0 where the distance itself is representable.
-        let dist = banded::vector::dist(points.point(next), points.point(i));
-        if dist <= 0.0 {
-            return Err(Error::ZeroLengthSpan { index: i, next });
-        }
-        *o = power(dist);
+        return Err(Error::ZeroLengthSpan { index: i, next });
+    }
+    // The common exponents without a general power (both correctly rounded, so the same values).
+    match parametrization {
+        Parametrization::Centripetal => out.iter_mut().for_each(|x| *x = x.sqrt()),
+        Parametrization::Chordal => {}
+        _ => out.iter_mut().for_each(|x| *x = x.powf(e)),
     }
     Ok(())
 }

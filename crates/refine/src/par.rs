@@ -163,11 +163,33 @@ pub(crate) fn parametrize(
         .map(|(c, out)| (c * CHUNK_VERTICES, out))
         .collect();
     let done = map(chunks, |(first, out)| {
-        divdiff::span_powers(points, parametrization, first, out)
+        vectorized(SpanPowers {
+            points,
+            parametrization,
+            first,
+            out,
+        })
     });
     done.into_iter().collect::<Result<(), _>>()?;
     divdiff::accumulate(&mut t);
     divdiff::Knots::new(topology, t)
+}
+
+/// One chunk of [`parametrize`]: [`divdiff::span_powers`] (inlined always) as [`vectorized`]
+/// runs it — its distances four at a time and its square roots in vectors.
+struct SpanPowers<'a> {
+    points: &'a Points,
+    parametrization: divdiff::Parametrization,
+    first: usize,
+    out: &'a mut [f64],
+}
+
+impl pulp::WithSimd for SpanPowers<'_> {
+    type Output = Result<(), divdiff::Error>;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+        divdiff::span_powers(self.points, self.parametrization, self.first, self.out)
+    }
 }
 
 /// Deterministic numbers in [0, 1) for the unit tests of the chunked passes (an LCG; the
