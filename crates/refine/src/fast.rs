@@ -25,7 +25,7 @@
 use banded::vector::dot;
 use divdiff::{Knots, Points};
 
-use crate::operator::{alpha_row, vertex_row, Stencil};
+use crate::operator::{alpha_row, Stencil};
 use crate::Error;
 
 /// Tridiagonal LU of the span matrix B (sub `a`, diagonal `b`, super `c`, each of length k):
@@ -470,24 +470,32 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
     let t = knots.values();
     let k = stride - 1;
     // The data rows' α, once (the system's assembly reads each twice, pass 2 twice more).
-    let data_rows: Vec<[f64; 3]> = (0..n)
-        .map(|i| vertex_row(t, i * stride, nv, closed))
-        .collect();
-    // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`),
-    // blocks of spans in parallel chunks (`crate::par`), each chunk with its own block buffer.
+    // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`) and
+    // the α-row of its first (data) vertex, blocks of spans in parallel chunks (`crate::par`),
+    // each chunk writing its own slice, with its own block buffer. (An open curve's last data
+    // row is a zero row, as its first.)
     let per_chunk = crate::par::units_per_chunk(stride * LANES) * LANES;
-    let chunks = crate::par::ranges(spans, per_chunk);
-    let summaries = crate::par::map(chunks, |range| {
+    let mut span = vec![[0.0; 7]; spans];
+    let mut data_rows = vec![[0.0; 3]; n];
+    let chunks: Vec<_> = span
+        .chunks_mut(per_chunk)
+        .zip(data_rows[..spans].chunks_mut(per_chunk))
+        .enumerate()
+        .map(|(c, (out, rows))| (c * per_chunk, out, rows))
+        .collect();
+    let failed = crate::par::map(chunks, |(first, out, rows)| {
         crate::par::vectorized(Summaries {
             t,
             stride,
-            range,
+            closed,
+            first,
+            out,
+            rows,
             block: SpanBlock::new(k),
         })
     });
-    let mut span = Vec::with_capacity(spans);
-    for part in summaries {
-        span.extend(part.map_err(singular)?);
+    if let Some(v) = failed.into_iter().flatten().next() {
+        return Err(singular(v));
     }
     let first = usize::from(!closed);
     let (diag, off, krows) = data_row_system(&span, n, closed, |i| data_rows[i]);
@@ -498,7 +506,8 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
         // (Ky)_i in difference form (as `Condensation::apply_k`).
         for (j, kr) in krows.iter().enumerate() {
             let i = first + j;
-            let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, (i + 1) % n);
+            let ip = if i == 0 { n - 1 } else { i - 1 };
+            let inext = if i + 1 == n { 0 } else { i + 1 };
             for c in 0..d {
                 let yb = y[i * d + c];
                 s[j * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
@@ -578,9 +587,10 @@ impl SpanBlock {
     }
 
     /// Factors the `count` (1 ≤ count ≤ LANES) spans whose first vertices are `a0`,
-    /// `a0 + stride`, …: their α-rows on the knots `t` (as [`vertex_row`]: a free vertex's
-    /// neighbours are in its span), LU, g and h; the unused lanes repeat the last span. Err: the
-    /// vertex of the first pivot (in span order) that is not negative and finite.
+    /// `a0 + stride`, …: their α-rows on the knots `t` (as
+    /// [`vertex_row`](crate::operator::vertex_row): a free vertex's neighbours are in its
+    /// span), LU, g and h; the unused lanes repeat the last span. Err: the vertex of the first
+    /// pivot (in span order) that is not negative and finite.
     #[inline(always)]
     fn factor(&mut self, t: &[f64], a0: usize, stride: usize, count: usize) -> Result<(), usize> {
         let k = self.a.len();
@@ -679,34 +689,79 @@ impl SpanBlock {
             c1 * h[k - 1][lane],
         ]
     }
+
+    /// The α-rows of the data vertices a0, a0 + stride, … (the first vertex of each of the
+    /// `rows.len()` spans last [factored](SpanBlock::factor)) into `rows`, as
+    /// [`vertex_row`](crate::operator::vertex_row) computes them: the sub-span before the
+    /// vertex (the closing one before vertex 0 of a closed curve) and the span's first; vertex
+    /// 0 of an open curve has a zero row.
+    #[inline(always)]
+    fn data_rows(&self, t: &[f64], a0: usize, stride: usize, closed: bool, rows: &mut [[f64; 3]]) {
+        let nv = t.len() - 1;
+        let mut hl = [1.0; LANES];
+        for (lane, h) in hl.iter_mut().enumerate().take(rows.len()) {
+            let a = a0 + lane * stride;
+            *h = if a == 0 {
+                t[nv] - t[nv - 1]
+            } else {
+                t[a] - t[a - 1]
+            };
+        }
+        let hr = self.h[0];
+        let (mut x, mut y, mut z) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        for lane in 0..LANES {
+            [x[lane], y[lane], z[lane]] = alpha_row(hl[lane], hr[lane]);
+        }
+        for (lane, r) in rows.iter_mut().enumerate() {
+            *r = [x[lane], y[lane], z[lane]];
+        }
+        if a0 == 0 && !closed {
+            rows[0] = [0.0; 3];
+        }
+    }
 }
 
-/// Pass 1 of [`interpolate`] on one chunk of spans, as [`crate::par::vectorized`] runs it:
-/// the spans' summaries, or the vertex of the first bad pivot.
+/// Pass 1 of [`interpolate`] on one chunk of spans (from span `first`), as
+/// [`crate::par::vectorized`] runs it: the spans' summaries into `out` and their data rows into
+/// `rows`, or the vertex of the first bad pivot.
 struct Summaries<'a> {
     t: &'a [f64],
     stride: usize,
-    range: std::ops::Range<usize>,
+    closed: bool,
+    first: usize,
+    out: &'a mut [[f64; 7]],
+    rows: &'a mut [[f64; 3]],
     block: SpanBlock,
 }
 
 impl pulp::WithSimd for Summaries<'_> {
-    type Output = Result<Vec<[f64; 7]>, usize>;
+    type Output = Option<usize>;
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
         let Summaries {
             t,
             stride,
-            range,
+            closed,
+            first,
+            out,
+            rows,
             mut block,
         } = self;
-        let mut out = Vec::with_capacity(range.len());
-        for i in range.clone().step_by(LANES) {
-            let count = LANES.min(range.end - i);
-            block.factor(t, i * stride, stride, count)?;
-            out.extend((0..count).map(|lane| block.summary(lane)));
+        for (b, (out, rows)) in out
+            .chunks_mut(LANES)
+            .zip(rows.chunks_mut(LANES))
+            .enumerate()
+        {
+            let (i0, count) = (first + b * LANES, out.len());
+            if let Err(v) = block.factor(t, i0 * stride, stride, count) {
+                return Some(v);
+            }
+            for (lane, o) in out.iter_mut().enumerate() {
+                *o = block.summary(lane);
+            }
+            block.data_rows(t, i0 * stride, stride, closed, rows);
         }
-        Ok(out)
+        None
     }
 }
 
@@ -929,11 +984,11 @@ fn data_row_system(
     for (j, i) in (first..last).enumerate() {
         let ar = row(i);
         let prev = if i == 0 { spans - 1 } else { i - 1 };
-        let cur = i % spans;
+        let cur = if i == spans { 0 } else { i };
         diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
         let next = i + 1;
         if next < last || closed {
-            let an = row(next % n);
+            let an = row(if next == n { 0 } else { next });
             off[j] = ar[2] * an[0] * span[cur][1];
         }
         krows[j] = [
