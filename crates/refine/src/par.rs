@@ -50,10 +50,13 @@ pub(crate) fn map<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + S
 /// a·b + c into one rounding unless the code calls `mul_add`.
 ///
 /// Used where it was measured to pay (the noisy star, closed, N = 8·10⁵, minima of 30 solves in
-/// paired runs on two cores): the certificate's sweep (its pass 4.5–5.1 ms → 3.4–3.7 ms) and the
+/// paired runs on two cores): the certificate's sweep (its pass 4.5–5.1 ms → 3.4–3.7 ms), the
 /// closed form's table of data rows (`uniform::data_alphas`, square roots and divisions four
-/// at a time). The units of [`fill_units`] (the closed form's spans, the knot split) were tried
-/// and gained nothing: their loops are a span long.
+/// at a time), and for the knot updates the streaming condensation's span factors
+/// (`fast::SpanBlock`: eight spans side by side; three updates on one thread 273 → 175 ms) and
+/// the distances of the parametrization ([`parametrize`]). The units of [`fill_units`] (the
+/// closed form's spans, the knot split) were tried and gained nothing: their loops are a span
+/// long.
 #[inline(always)]
 pub(crate) fn vectorized<Op: pulp::WithSimd>(op: Op) -> Op::Output {
     pulp::Arch::new().dispatch(op)
