@@ -469,7 +469,6 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
     }
     let t = knots.values();
     let k = stride - 1;
-    // The data rows' α, once (the system's assembly reads each twice, pass 2 twice more).
     // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`) and
     // the α-row of its first (data) vertex, blocks of spans in parallel chunks (`crate::par`),
     // each chunk writing its own slice, with its own block buffer. (An open curve's last data
