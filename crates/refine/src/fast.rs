@@ -45,13 +45,17 @@ fn span_lu(rows: &[[f64; 3]], l: &mut [f64], u: &mut [f64]) -> Result<(), usize>
     }
     // B has α_2 = −α_1 − α_3 < 0 on the diagonal: the pivots stay negative and bounded away from
     // zero by its diagonal dominance; anything else means the knots were not valid.
-    match u[..k]
-        .iter()
-        .position(|&x| x.is_nan() || x >= 0.0 || x.is_infinite())
-    {
+    match u[..k].iter().position(|&x| bad_pivot(x)) {
         Some(j) => Err(j),
         None => Ok(()),
     }
+}
+
+/// Whether a reciprocal pivot of a span's LU is not what B's structure guarantees (negative and
+/// finite): the test of [`span_lu`] and [`SpanBlock::factor`].
+#[inline(always)]
+fn bad_pivot(x: f64) -> bool {
+    x.is_nan() || x >= 0.0 || x.is_infinite()
 }
 
 /// First and last rows of B⁻¹ as vectors g = B⁻ᵀ e_0 and h = B⁻ᵀ e_{k−1}.
@@ -627,10 +631,14 @@ impl SpanBlock {
             (self.l[j], self.u[j]) = (lj, inv);
         }
         // (A branch-free scan first: the position is wanted only on failure.)
-        let bad = |x: f64| x.is_nan() || x >= 0.0 || x.is_infinite();
-        if self.u.iter().flatten().fold(false, |b, &x| b | bad(x)) {
+        if self
+            .u
+            .iter()
+            .flatten()
+            .fold(false, |b, &x| b | bad_pivot(x))
+        {
             for lane in 0..count {
-                if let Some(j) = self.u.iter().position(|r| bad(r[lane])) {
+                if let Some(j) = self.u.iter().position(|r| bad_pivot(r[lane])) {
                     return Err(a0 + lane * stride + 1 + j);
                 }
             }
@@ -696,14 +704,15 @@ impl SpanBlock {
     /// 0 of an open curve has a zero row.
     #[inline(always)]
     fn data_rows(&self, t: &[f64], a0: usize, stride: usize, closed: bool, rows: &mut [[f64; 3]]) {
-        let nv = t.len() - 1;
+        let last = t.len() - 1;
         let mut hl = [1.0; LANES];
         for (lane, h) in hl.iter_mut().enumerate().take(rows.len()) {
             let a = a0 + lane * stride;
-            *h = if a == 0 {
-                t[nv] - t[nv - 1]
-            } else {
-                t[a] - t[a - 1]
+            // (Vertex 0 of an open curve has no span before it: its row is zeroed below.)
+            *h = match a {
+                0 if closed => t[last] - t[last - 1],
+                0 => 1.0,
+                _ => t[a] - t[a - 1],
             };
         }
         let hr = self.h[0];
