@@ -121,6 +121,9 @@ impl<'de, const MAX: usize> Visitor<'de> for RowsVisitor<MAX> {
         let mut coords = Vec::new();
         let mut dim = 0;
         let mut n = 0usize;
+        // A reader that knows the number of rows (a numpy array, a Python list; not JSON text)
+        // gets the whole buffer once the first row gives the dimension: no regrowing copies.
+        let rows = seq.size_hint();
         while let Some(d) = seq.next_element_seed(Row {
             coords: &mut coords,
             expected: (n > 0).then_some(dim),
@@ -128,6 +131,9 @@ impl<'de, const MAX: usize> Visitor<'de> for RowsVisitor<MAX> {
         })? {
             dim = d;
             n += 1;
+            if let (1, Some(rows)) = (n, rows) {
+                coords.reserve_exact(rows.saturating_mul(d).min(MAX).saturating_sub(d));
+            }
         }
         if n == 0 {
             return Ok(Rows::default());
