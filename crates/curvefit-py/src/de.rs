@@ -530,37 +530,36 @@ fn visit_view<'de, T: Elem, V: Visitor<'de>>(
             // A C-contiguous matrix (numpy's default layout): its rows are slices of one
             // buffer, read without a strided view per row (a (10⁵, 2) array's rows that way
             // were 27 ns each, a tenth of a large interpolation's call).
-            if let (Some(flat), cols @ 1..) = (view.to_slice(), view.ncols()) {
-                let mut rows = Rows {
-                    iter: flat.chunks_exact(cols).map(View::Slice),
-                    taken: 0,
-                    ctx,
-                };
-                let value = v.visit_seq(&mut rows)?;
-                no_trailing(ctx, rows.taken, len)?;
-                return Ok(value);
+            match (view.to_slice(), view.ncols()) {
+                (Some(flat), cols @ 1..) => {
+                    visit_rows(flat.chunks_exact(cols).map(View::Slice), len, ctx, v)
+                }
+                _ => visit_rows(view.outer_iter().map(View::One), len, ctx, v),
             }
-            let mut rows = Rows {
-                iter: view.outer_iter().map(View::One),
-                taken: 0,
-                ctx,
-            };
-            let value = v.visit_seq(&mut rows)?;
-            no_trailing(ctx, rows.taken, len)?;
-            Ok(value)
         }
         _ => {
             let len = view.shape()[0];
-            let mut rows = Rows {
-                iter: view.outer_iter().map(View::Dyn),
-                taken: 0,
-                ctx,
-            };
-            let value = v.visit_seq(&mut rows)?;
-            no_trailing(ctx, rows.taken, len)?;
-            Ok(value)
+            visit_rows(view.outer_iter().map(View::Dyn), len, ctx, v)
         }
     }
+}
+
+/// The `len` sub-arrays of an array, each read by [`ViewDe`]; an array with elements left over
+/// after the visitor stops is refused ([`no_trailing`]).
+fn visit_rows<'de, 'v, T: Elem + 'v, V: Visitor<'de>>(
+    iter: impl Iterator<Item = View<'v, T>>,
+    len: usize,
+    ctx: &Ctx<'_>,
+    v: V,
+) -> Result<V::Value, Error> {
+    let mut rows = Rows {
+        iter,
+        taken: 0,
+        ctx,
+    };
+    let value = v.visit_seq(&mut rows)?;
+    no_trailing(ctx, rows.taken, len)?;
+    Ok(value)
 }
 
 fn visit_1d<'de, T: Elem, V: Visitor<'de>>(
@@ -568,16 +567,10 @@ fn visit_1d<'de, T: Elem, V: Visitor<'de>>(
     ctx: &Ctx<'_>,
     v: V,
 ) -> Result<V::Value, Error> {
-    if let Some(slice) = view.to_slice() {
-        return visit_slice(slice, ctx, v);
+    match view.to_slice() {
+        Some(slice) => visit_slice(slice, ctx, v),
+        None => visit_scalars(view.iter(), view.len(), ctx, v),
     }
-    let mut items = Scalars {
-        iter: view.iter(),
-        taken: 0,
-    };
-    let value = v.visit_seq(&mut items)?;
-    no_trailing(ctx, items.taken, view.len())?;
-    Ok(value)
 }
 
 /// The elements of a contiguous one-dimensional array (or row).
@@ -586,12 +579,20 @@ fn visit_slice<'de, T: Elem, V: Visitor<'de>>(
     ctx: &Ctx<'_>,
     v: V,
 ) -> Result<V::Value, Error> {
-    let mut items = Scalars {
-        iter: slice.iter(),
-        taken: 0,
-    };
+    visit_scalars(slice.iter(), slice.len(), ctx, v)
+}
+
+/// The `len` elements of a one-dimensional array, in order; elements left over after the
+/// visitor stops are refused ([`no_trailing`]).
+fn visit_scalars<'de, 'v, T: Elem + 'v, V: Visitor<'de>>(
+    iter: impl Iterator<Item = &'v T>,
+    len: usize,
+    ctx: &Ctx<'_>,
+    v: V,
+) -> Result<V::Value, Error> {
+    let mut items = Scalars { iter, taken: 0 };
     let value = v.visit_seq(&mut items)?;
-    no_trailing(ctx, items.taken, slice.len())?;
+    no_trailing(ctx, items.taken, len)?;
     Ok(value)
 }
 
