@@ -462,6 +462,49 @@ impl Condensation {
 /// [`Error::Energy`] (`Singular`) naming a vertex whose pivot is not of the sign and size the
 /// structure guarantees (impossible for valid knots; reported rather than assumed).
 pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Points, Error> {
+    let (data_rows, s) = data_row_values(knots, q, stride)?;
+    let (d, n) = (q.dim(), q.len());
+    let nv = knots.vertex_count();
+    let closed = knots.is_closed();
+    let spans = if closed { n } else { n - 1 };
+    let t = knots.values();
+    let k = stride - 1;
+    let first = usize::from(!closed);
+
+    // Pass 2: a block of LANES spans (each its data vertex, then its free vertices) per unit of
+    // the output, in parallel chunks. (Pass 1 factored every span with the same arithmetic, so
+    // a pivot cannot fail here; if it did, the span's NaN would be refused as a non-finite
+    // point.)
+    let p = crate::par::points_by_units(
+        d,
+        nv,
+        stride * LANES,
+        || SpanBlock::new(k),
+        |block, unit, x| {
+            crate::par::vectorized(Reconstruct {
+                t,
+                q,
+                s: &s,
+                first,
+                data_rows: &data_rows,
+                stride,
+                spans,
+                unit,
+                block,
+                x,
+            })
+        },
+    );
+    Ok(p?)
+}
+
+/// Pass 1 and the data-row solve of [`interpolate`] (module docs): the α-rows of the data
+/// vertices and the data-row values s (data rows first …, `d` per row).
+fn data_row_values(
+    knots: &Knots,
+    q: &Points,
+    stride: usize,
+) -> Result<(Vec<[f64; 3]>, Vec<f64>), Error> {
     let d = q.dim();
     let n = q.len();
     let nv = knots.vertex_count();
@@ -500,51 +543,41 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
     if let Some(v) = failed.into_iter().flatten().next() {
         return Err(singular(v));
     }
+    // T and K y (K's rows in difference form, as `Condensation::apply_k`), assembled straight
+    // into the band and the right-hand side, rows in parallel chunks: each row is its own
+    // formula ([`data_row`]).
     let first = usize::from(!closed);
-    let (diag, off, krows) = data_row_system(&span, n, closed, |i| data_rows[i]);
-    let size = diag.len();
+    let last = if closed { n } else { n - 1 }; // exclusive
+    let size = last.saturating_sub(first);
     let y = q.coords();
     let mut s = vec![0.0; size * d];
     if size > 0 {
-        // (Ky)_i in difference form (as `Condensation::apply_k`).
-        for (j, kr) in krows.iter().enumerate() {
-            let i = first + j;
-            let ip = if i == 0 { n - 1 } else { i - 1 };
-            let inext = if i + 1 == n { 0 } else { i + 1 };
-            for c in 0..d {
-                let yb = y[i * d + c];
-                s[j * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
+        let (mut diag, mut off) = (vec![0.0; size], vec![[0.0]; size]);
+        let per = crate::par::units_per_chunk(stride);
+        let chunks: Vec<_> = diag
+            .chunks_mut(per)
+            .zip(off.chunks_mut(per))
+            .zip(s.chunks_mut(per * d))
+            .enumerate()
+            .collect();
+        let row = |i: usize| data_rows[i];
+        crate::par::map(chunks, |(chunk, ((diag, off), rhs))| {
+            for (l, (dg, of)) in diag.iter_mut().zip(off.iter_mut()).enumerate() {
+                let i = first + chunk * per + l;
+                let kr;
+                (*dg, of[0], kr) = data_row(&span, n, closed, &row, i);
+                let ip = if i == 0 { n - 1 } else { i - 1 };
+                let inext = if i + 1 == n { 0 } else { i + 1 };
+                for c in 0..d {
+                    let yb = y[i * d + c];
+                    rhs[l * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
+                }
             }
-        }
-        let off = off.iter().map(|&v| [v]).collect();
+        });
         solve_band(diag, off, &mut s, d, closed && size >= 3)
             .map_err(|j| singular((first + j) * stride))?;
     }
-    // Pass 2: a block of LANES spans (each its data vertex, then its free vertices) per unit of
-    // the output, in parallel chunks. (Pass 1 factored every span with the same arithmetic, so
-    // a pivot cannot fail here; if it did, the span's NaN would be refused as a non-finite
-    // point.)
-    let p = crate::par::points_by_units(
-        d,
-        nv,
-        stride * LANES,
-        || SpanBlock::new(k),
-        |block, unit, x| {
-            crate::par::vectorized(Reconstruct {
-                t,
-                q,
-                s: &s,
-                first,
-                data_rows: &data_rows,
-                stride,
-                spans,
-                unit,
-                block,
-                x,
-            })
-        },
-    );
-    Ok(p?)
+    Ok((data_rows, s))
 }
 
 /// How many spans [`SpanBlock`] factors side by side: two vectors of four doubles, so that
@@ -973,8 +1006,8 @@ fn span_summary(rows: &[[f64; 3]], g: &[f64], h: &[f64]) -> [f64; 7] {
 
 /// The data-row system T s = K y from the span summaries and the data rows' α (`row(i)` of data
 /// point i): T's diagonal and off-diagonal (`off[j]` couples rows j and j + 1, cyclic for a
-/// closed curve) and K's rows, one per data row first … last − 1 (n closed, 1 … n − 2 open):
-/// (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
+/// closed curve) and K's rows, one per data row first … last − 1 (n closed, 1 … n − 2 open),
+/// each as [`data_row`] gives it.
 #[allow(clippy::type_complexity)]
 fn data_row_system(
     span: &[[f64; 7]],
@@ -982,30 +1015,53 @@ fn data_row_system(
     closed: bool,
     row: impl Fn(usize) -> [f64; 3],
 ) -> (Vec<f64>, Vec<f64>, Vec<[f64; 3]>) {
-    let spans = span.len();
     let first = usize::from(!closed);
     let last = if closed { n } else { n - 1 }; // exclusive
     let size = last.saturating_sub(first);
-    let mut diag = vec![0.0; size];
-    let mut off = vec![0.0; size];
-    let mut krows = vec![[0.0; 3]; size];
-    for (j, i) in (first..last).enumerate() {
-        let ar = row(i);
-        let prev = if i == 0 { spans - 1 } else { i - 1 };
-        let cur = if i == spans { 0 } else { i };
-        diag[j] = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
-        let next = i + 1;
-        if next < last || closed {
-            let an = row(if next == n { 0 } else { next });
-            off[j] = ar[2] * an[0] * span[cur][1];
-        }
-        krows[j] = [
-            -ar[0] * span[prev][5],
-            ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
-            -ar[2] * span[cur][4],
-        ];
+    let (mut diag, mut off, mut krows) = (
+        Vec::with_capacity(size),
+        Vec::with_capacity(size),
+        Vec::with_capacity(size),
+    );
+    for i in first..last {
+        let (dg, of, kr) = data_row(span, n, closed, &row, i);
+        diag.push(dg);
+        off.push(of);
+        krows.push(kr);
     }
     (diag, off, krows)
+}
+
+/// Data row i of the data-row system: T's diagonal there, its coupling with row i + 1 (0 after
+/// an open curve's last row), and K's row, with
+/// (Ky)_i = α_{v_i,2} y_i − α_{v_i,1} h_{i−1}·c_{i−1} − α_{v_i,3} g_i·c_i.
+#[inline(always)]
+fn data_row(
+    span: &[[f64; 7]],
+    n: usize,
+    closed: bool,
+    row: &impl Fn(usize) -> [f64; 3],
+    i: usize,
+) -> (f64, f64, [f64; 3]) {
+    let spans = span.len();
+    let last = if closed { n } else { n - 1 }; // exclusive
+    let ar = row(i);
+    let prev = if i == 0 { spans - 1 } else { i - 1 };
+    let cur = if i == spans { 0 } else { i };
+    let diag = 1.0 + ar[0] * ar[0] * span[prev][2] + ar[2] * ar[2] * span[cur][0];
+    let next = i + 1;
+    let off = if next < last || closed {
+        let an = row(if next == n { 0 } else { next });
+        ar[2] * an[0] * span[cur][1]
+    } else {
+        0.0
+    };
+    let krow = [
+        -ar[0] * span[prev][5],
+        ar[1] - ar[0] * span[prev][6] - ar[2] * span[cur][3],
+        -ar[2] * span[cur][4],
+    ];
+    (diag, off, krow)
 }
 
 /// The interpolation of [`interpolate`] through [`Condensation`] (the working-set method's
