@@ -98,7 +98,25 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
     // Part 1: the near-interpolatory k-level step.
     let k = problem.k;
     let mut data_vertex: Vec<usize> = (0..q.len()).map(|i| (k + 1) * i).collect();
-    let mut knots = split_knots(&u, k).map_err(|e| split_error(e, problem, k))?;
+    let (knots, first) = if constant.is_none() && closed_form_first(problem) {
+        // The first solve is the closed form (`crate::uniform`), which needs only the data
+        // knots on the split's grid, not the split knots: both at once, so that the serial
+        // steps of each (the grid and the knots' validation, the data-row band solve and the
+        // clearing of the output) overlap with the other's parallel ones. The same results bit
+        // for bit as one after the other (`interpolate_from_data_values`).
+        let v = exact_split_grid(u.values(), k + 1);
+        let closed = u.is_closed();
+        let (knots, first) = crate::par::join(
+            || split_on_grid(&v, u.topology(), k + 1),
+            || crate::uniform::interpolate_from_data_values(&v, closed, q, k + 1),
+        );
+        // (A failed closed form is left to the strategies, which meet it again in order.)
+        let first = first.ok().map(|p| FixedSolution::new(p, None, 1));
+        (knots, first)
+    } else {
+        (split_knots(&u, k), None)
+    };
+    let mut knots = knots.map_err(|e| split_error(e, problem, k))?;
     let (mut p, multipliers, cert) = if let Some(c) = &constant {
         // The constant curve on the split knots; no knot update is possible (zero spans).
         let pts = constant_points(knots.vertex_count(), &c.point);
@@ -125,6 +143,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
             problem,
             k + 1,
             e,
+            first,
             &mut iterations,
         )?
     };
@@ -164,6 +183,7 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
                 problem,
                 lk + 1,
                 e,
+                None,
                 &mut iterations,
             )?
         };
@@ -202,8 +222,13 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
 /// 5·10⁻⁹ out of balance on the certificate's scale, and the solve refused.
 pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
     let m = k + 1;
-    let v = exact_split_grid(u.values(), m);
-    let spans = u.span_count();
+    split_on_grid(&exact_split_grid(u.values(), m), u.topology(), m)
+}
+
+/// The split of [`split_knots`] into `m` sub-spans per span of the data knot values `v`
+/// already on its [`exact_split_grid`].
+fn split_on_grid(v: &[f64], topology: divdiff::Topology, m: usize) -> Result<Knots, Error> {
+    let spans = v.len() - 1;
     let mut t = vec![0.0; m * spans + 1];
     // Span by span in parallel chunks (`crate::par`); the last unit is the last knot alone.
     // (Non-finite values are refused by `Knots::new` below.)
@@ -224,7 +249,7 @@ pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
             }
         },
     );
-    Ok(Knots::new(u.topology(), t)?)
+    Ok(Knots::new(topology, t)?)
 }
 
 /// The knot values rounded to the grid of [`split_knots`] on which the split into `m` equal
@@ -339,8 +364,18 @@ const SINGULAR_AFTER_UPDATE: &str = "a knot update made the refined spans too un
 /// Why a singular smoothing system is refused (`weights`).
 const SINGULAR_SMOOTHING: &str = "the smoothing system H + W is singular to rounding: the weights are too small against the curve's stiffness (about 1/h^3 of its shortest parameter spans h); use larger weights, fewer intermediate points (k), or a parametrization with less unequal spans";
 
-/// Solve on the initial knots, then `knot_iterations` times: update the knots from the refined
-/// vertices (t_{i+1} = t_i + |p_{i+1} − p_i|^e), mapped back onto the data parameters' span
+/// Whether the exact solver's first entry answers stage 0's first solve with the closed form of
+/// [`crate::uniform`]: interpolation with natural ends (the linear entry of
+/// [`crate::strategy`], on the knots of the split).
+fn closed_form_first(problem: &Problem) -> bool {
+    problem.solver == Solver::Exact
+        && problem.constraint == Constraint::Interpolate
+        && !problem.has_derivative_constraints()
+}
+
+/// Solve on the initial knots (or take `first`, the first solve's answer computed beside the
+/// knots), then `knot_iterations` times: update the knots from the refined vertices
+/// (t_{i+1} = t_i + |p_{i+1} − p_i|^e), mapped back onto the data parameters' span
 /// ([`rescale_to`]), and solve again — so the returned points are the solution for the returned
 /// knots.
 #[allow(clippy::too_many_arguments)]
@@ -353,6 +388,7 @@ fn stage_loop(
     problem: &Problem,
     stride: usize,
     param: Parametrization,
+    mut first: Option<FixedSolution>,
     iterations: &mut Iterations,
 ) -> Result<(Points, crate::Multipliers, Certificate), Error> {
     let mut sol: Option<FixedSolution> = None;
@@ -400,7 +436,11 @@ fn stage_loop(
                 .and_then(|s| Some((&s.points, s.multipliers.as_deref()?))),
             options: &problem.options,
         };
-        let s = dispatch(&fp).map_err(|e| match e {
+        let s = match first.take() {
+            Some(s) => Ok(s),
+            None => dispatch(&fp),
+        }
+        .map_err(|e| match e {
             // The same problem solved on the knots before this update: the update made the
             // refined spans too unequal for the floating-point solve (ROBUSTNESS.md §4, 14).
             Error::Energy(energy::Error::Singular { .. }) if knot_iteration > 0 => {

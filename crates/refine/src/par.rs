@@ -41,6 +41,22 @@ pub(crate) fn map<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + S
     items.into_iter().map(f).collect()
 }
 
+/// `a` and `b`, side by side on the pool when there is one (`rayon::join`: each may split its
+/// own chunks further), one after the other on wasm32.
+pub(crate) fn join<A: Send, B: Send>(
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        rayon::join(a, b)
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        (a(), b())
+    }
+}
+
 /// Runs `op` compiled for the widest vector instructions this processor has, chosen at run time
 /// (pulp's dispatch: AVX2 on an x86-64 that has it, the target's baseline otherwise), so that
 /// a pass's straight loops over the vertices run four doubles at a time instead of SSE2's two.

@@ -52,9 +52,21 @@ pub(crate) fn interpolate_from_data_knots(
     q: &Points,
     m: usize,
 ) -> Result<Points, Error> {
-    let t = u.values();
-    let h: Vec<f64> = t.windows(2).map(|w| (w[1] - w[0]) / m as f64).collect();
-    from_spans(&h, u.is_closed(), q, m)
+    interpolate_from_data_values(u.values(), u.is_closed(), q, m)
+}
+
+/// [`interpolate`] on the split of the data knot values `u` (one more than the spans; the
+/// refined knots are not built). On the values the split starts from (the exact grid of
+/// [`crate::algorithm::split_knots`]) the sub-span lengths are those [`interpolate`] reads off
+/// the split knots, bit for bit: every split knot u_i + j·step is exact there.
+pub(crate) fn interpolate_from_data_values(
+    u: &[f64],
+    closed: bool,
+    q: &Points,
+    m: usize,
+) -> Result<Points, Error> {
+    let h: Vec<f64> = u.windows(2).map(|w| (w[1] - w[0]) / m as f64).collect();
+    from_spans(&h, closed, q, m)
 }
 
 /// The closed forms, given the sub-span length h_i of every data span.
