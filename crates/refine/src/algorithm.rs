@@ -106,7 +106,9 @@ pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
         // for bit as one after the other (`interpolate_from_data_values`).
         let v = exact_split_grid(u.values(), k + 1);
         let closed = u.is_closed();
+        let vertices = Problem::refined_len(u.topology(), q.len(), k);
         let (knots, first) = crate::par::join(
+            vertices,
             || split_on_grid(&v, u.topology(), k + 1),
             || crate::uniform::interpolate_from_data_values(&v, closed, q, k + 1),
         );

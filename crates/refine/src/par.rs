@@ -41,20 +41,21 @@ pub(crate) fn map<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + S
     items.into_iter().map(f).collect()
 }
 
-/// `a` and `b`, side by side on the pool when there is one (`rayon::join`: each may split its
-/// own chunks further), one after the other on wasm32.
+/// `a` and `b` over `vertices` refined vertices: side by side on the pool (`rayon::join`: each
+/// may split its own chunks further) when they span more than one chunk — the size from which
+/// `Problem::solve` runs on the pool — else (and on wasm32) one after the other, so that a small
+/// solve makes no round trip to the pool for microseconds of work.
 pub(crate) fn join<A: Send, B: Send>(
+    vertices: usize,
     a: impl FnOnce() -> A + Send,
     b: impl FnOnce() -> B + Send,
 ) -> (A, B) {
     #[cfg(not(target_arch = "wasm32"))]
-    {
-        rayon::join(a, b)
+    if vertices > CHUNK_VERTICES {
+        return rayon::join(a, b);
     }
-    #[cfg(target_arch = "wasm32")]
-    {
-        (a(), b())
-    }
+    let _ = vertices;
+    (a(), b())
 }
 
 /// Runs `op` compiled for the widest vector instructions this processor has, chosen at run time
