@@ -255,8 +255,7 @@ impl Condensation {
                 .zip(&self.krows)
             {
                 for e in 0..D {
-                    let yb = yw[D + e];
-                    o[e] = kr[0] * (yw[e] - yb) + kr[2] * (yw[2 * D + e] - yb);
+                    o[e] = k_row(*kr, yw[e], yw[D + e], yw[2 * D + e]);
                 }
             }
             return;
@@ -269,7 +268,7 @@ impl Condensation {
         let row = |j: usize, a: [f64; D], b: [f64; D], c: [f64; D], out: &mut [f64]| {
             let kr = self.krows[j];
             for e in 0..D {
-                out[j * D + e] = kr[0] * (a[e] - b[e]) + kr[2] * (c[e] - b[e]);
+                out[j * D + e] = k_row(kr, a[e], b[e], c[e]);
             }
         };
         row(0, yc(size - 1), yc(0), yc(1), out);
@@ -286,8 +285,7 @@ impl Condensation {
         for (j, kr) in self.krows.iter().enumerate() {
             let (a, b, c) = (self.col(j, 0), self.col(j, 1), self.col(j, 2));
             for e in 0..d {
-                let yb = y[b * d + e];
-                out[j * d + e] = kr[0] * (y[a * d + e] - yb) + kr[2] * (y[c * d + e] - yb);
+                out[j * d + e] = k_row(*kr, y[a * d + e], y[b * d + e], y[c * d + e]);
             }
         }
     }
@@ -553,25 +551,15 @@ fn data_row_values(
     let mut s = vec![0.0; size * d];
     if size > 0 {
         let (mut diag, mut off) = (vec![0.0; size], vec![[0.0]; size]);
-        let per = crate::par::units_per_chunk(stride);
-        let chunks: Vec<_> = diag
-            .chunks_mut(per)
-            .zip(off.chunks_mut(per))
-            .zip(s.chunks_mut(per * d))
-            .enumerate()
-            .collect();
         let row = |i: usize| data_rows[i];
-        crate::par::map(chunks, |(chunk, ((diag, off), rhs))| {
-            for (l, (dg, of)) in diag.iter_mut().zip(off.iter_mut()).enumerate() {
-                let i = first + chunk * per + l;
-                let kr;
-                (*dg, of[0], kr) = data_row(&span, n, closed, &row, i);
-                let ip = if i == 0 { n - 1 } else { i - 1 };
-                let inext = if i + 1 == n { 0 } else { i + 1 };
-                for c in 0..d {
-                    let yb = y[i * d + c];
-                    rhs[l * d + c] = kr[0] * (y[ip * d + c] - yb) + kr[2] * (y[inext * d + c] - yb);
-                }
+        crate::par::band_rows(&mut diag, &mut off, &mut s, d, stride, |j, dg, of, r| {
+            let i = first + j;
+            let kr;
+            (*dg, *of, kr) = data_row(&span, n, closed, &row, i);
+            let ip = if i == 0 { n - 1 } else { i - 1 };
+            let inext = if i + 1 == n { 0 } else { i + 1 };
+            for (c, rc) in r.iter_mut().enumerate() {
+                *rc = k_row(kr, y[ip * d + c], y[i * d + c], y[inext * d + c]);
             }
         });
         solve_band(diag, off, &mut s, d, closed && size >= 3)
@@ -1030,6 +1018,13 @@ fn data_row_system(
         krows.push(kr);
     }
     (diag, off, krows)
+}
+
+/// One coordinate of (Ky)_j from K's row `kr` and the data at its three columns, in difference
+/// form (α₂ = −α₁ − α₃: exact under translation of the data).
+#[inline(always)]
+fn k_row(kr: [f64; 3], prev: f64, at: f64, next: f64) -> f64 {
+    kr[0] * (prev - at) + kr[2] * (next - at)
 }
 
 /// Data row i of the data-row system: T's diagonal there, its coupling with row i + 1 (0 after

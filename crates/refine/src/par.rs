@@ -103,6 +103,38 @@ pub(crate) fn ranges(len: usize, per_chunk: usize) -> Vec<Range<usize>> {
         .collect()
 }
 
+/// The rows of a band system with one off-diagonal — its diagonal, off-diagonal and right-hand
+/// side of `d` columns (row-major) — each written by `row(j, diagonal, off-diagonal, rhs row)`
+/// for its index j, in parallel chunks of rows standing for `vertices_per_row` vertices each
+/// ([`units_per_chunk`]). Each row is its own formula, so every row is the same bit for bit on
+/// any number of threads.
+pub(crate) fn band_rows(
+    diag: &mut [f64],
+    off: &mut [[f64; 1]],
+    rhs: &mut [f64],
+    d: usize,
+    vertices_per_row: usize,
+    row: impl Fn(usize, &mut f64, &mut f64, &mut [f64]) + Sync + Send,
+) {
+    let per = units_per_chunk(vertices_per_row);
+    let chunks: Vec<_> = diag
+        .chunks_mut(per)
+        .zip(off.chunks_mut(per))
+        .zip(rhs.chunks_mut(per * d))
+        .enumerate()
+        .collect();
+    map(chunks, |(chunk, ((diag, off), rhs))| {
+        for (l, ((dg, of), r)) in diag
+            .iter_mut()
+            .zip(off.iter_mut())
+            .zip(rhs.chunks_exact_mut(d))
+            .enumerate()
+        {
+            row(chunk * per + l, dg, &mut of[0], r);
+        }
+    });
+}
+
 /// Units per chunk for units of `vertices_per_unit` vertices each.
 pub(crate) fn units_per_chunk(vertices_per_unit: usize) -> usize {
     (CHUNK_VERTICES / vertices_per_unit.max(1)).max(1)

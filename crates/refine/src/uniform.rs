@@ -95,31 +95,22 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
         let mut off = vec![[0.0]; size];
         let rhs = &mut s[first * d..last * d];
         // Rows in parallel chunks (`crate::par`): each row is its own formula.
-        let per = crate::par::units_per_chunk(m);
-        let chunks: Vec<_> = diag
-            .chunks_mut(per)
-            .zip(off.chunks_mut(per))
-            .zip(rhs.chunks_mut(per * d))
-            .enumerate()
-            .collect();
-        crate::par::map(chunks, |(chunk, ((diag, off), rhs))| {
-            for (l, (dg, of)) in diag.iter_mut().zip(off.iter_mut()).enumerate() {
-                let i = first + chunk * per + l;
-                let (a1, a3) = (a1s[i], a3s[i]);
-                let prev = if i == 0 { spans - 1 } else { i - 1 };
-                let (h3p, h3c) = (h[prev].powi(3), h[i].powi(3)); // (i < spans)
-                *dg = 1.0 + (a1 * a1 * h3p + a3 * a3 * h3c) * gg_unit;
-                if i + 1 < last || closed {
-                    *of = [a3 * a1s[yn(i + 1)] * gh_unit * h3c];
-                }
-                let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, yn(i + 1));
-                for c in 0..d {
-                    let (yp, yi, ynx) = (y[ip * d + c], y[i * d + c], y[inext * d + c]);
-                    // α₂ y_i − α₁ (h·c)_{i−1} − α₃ (g·c)_i with (h·c)_{i−1} = −(y_{i−1} + k y_i)/m
-                    // and (g·c)_i = −(k y_i + y_{i+1})/m; by α₂ = −α₁ − α₃ this is a difference
-                    // form, exact under translation of the data.
-                    rhs[l * d + c] = (a1 * (yp - yi) + a3 * (ynx - yi)) / mf;
-                }
+        crate::par::band_rows(&mut diag, &mut off, rhs, d, m, |j, dg, of, r| {
+            let i = first + j;
+            let (a1, a3) = (a1s[i], a3s[i]);
+            let prev = if i == 0 { spans - 1 } else { i - 1 };
+            let (h3p, h3c) = (h[prev].powi(3), h[i].powi(3)); // (i < spans)
+            *dg = 1.0 + (a1 * a1 * h3p + a3 * a3 * h3c) * gg_unit;
+            if i + 1 < last || closed {
+                *of = a3 * a1s[yn(i + 1)] * gh_unit * h3c;
+            }
+            let (ip, inext) = (if i == 0 { n - 1 } else { i - 1 }, yn(i + 1));
+            for (c, rc) in r.iter_mut().enumerate() {
+                let (yp, yi, ynx) = (y[ip * d + c], y[i * d + c], y[inext * d + c]);
+                // α₂ y_i − α₁ (h·c)_{i−1} − α₃ (g·c)_i with (h·c)_{i−1} = −(y_{i−1} + k y_i)/m
+                // and (g·c)_i = −(k y_i + y_{i+1})/m; by α₂ = −α₁ − α₃ this is a difference
+                // form, exact under translation of the data.
+                *rc = (a1 * (yp - yi) + a3 * (ynx - yi)) / mf;
             }
         });
         crate::fast::solve_band(diag, off, rhs, d, closed && size >= 3).map_err(|j| {
