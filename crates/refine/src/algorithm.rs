@@ -370,9 +370,7 @@ const SINGULAR_SMOOTHING: &str = "the smoothing system H + W is singular to roun
 /// [`crate::uniform`]: interpolation with natural ends (the linear entry of
 /// [`crate::strategy`], on the knots of the split).
 fn closed_form_first(problem: &Problem) -> bool {
-    problem.solver == Solver::Exact
-        && problem.constraint == Constraint::Interpolate
-        && !problem.has_derivative_constraints()
+    problem.solver == Solver::Exact && problem.interpolates_with_natural_ends()
 }
 
 /// Solve on the initial knots (or take `first`, the first solve's answer computed beside the

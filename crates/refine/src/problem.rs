@@ -308,6 +308,12 @@ impl Problem {
         self.kinds().iter().any(|k| k.on_derivatives())
     }
 
+    /// Interpolation with natural ends (no tangent, no end condition): the linear problem (3.3)
+    /// that the closed form and the span condensation solve directly.
+    pub(crate) fn interpolates_with_natural_ends(&self) -> bool {
+        self.constraint == Constraint::Interpolate && !self.has_derivative_constraints()
+    }
+
     /// The number of refined vertices after one `k`-level split of `n` data points (3.1):
     /// (k + 1)n closed, (k + 1)(n − 1) + 1 open; `usize::MAX` where that overflows.
     pub fn refined_len(topology: Topology, n: usize, k: usize) -> usize {

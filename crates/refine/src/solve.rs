@@ -1,7 +1,6 @@
 //! Solving a [`Problem`]: Algorithm 4.1 on centred data, the closed-form interpolatory
 //! refinement, and the stage-0 solve the free-knot optimizer calls.
 
-use crate::constraint::Constraint;
 use crate::problem::{Problem, Solver};
 use crate::stage::FixedProblem;
 use crate::{algorithm, strategy, uniform, Refinement};
@@ -39,7 +38,7 @@ impl Problem {
     fn solve_validated(&self) -> Result<Refinement, crate::Error> {
         // Interpolation with natural ends is a direct solve (closed form or span condensation,
         // `linear`), with no convergence test to protect: solved where the data are.
-        if self.constraint == Constraint::Interpolate && !self.has_derivative_constraints() {
+        if self.interpolates_with_natural_ends() {
             return self.accept(algorithm::run(self)?);
         }
         let (n, d) = (self.points.len(), self.points.dim());
@@ -96,7 +95,7 @@ impl Problem {
     /// ```
     pub fn refine_points(&self) -> Result<divdiff::Points, crate::Error> {
         self.validate()?;
-        if self.constraint != Constraint::Interpolate || self.has_derivative_constraints() {
+        if !self.interpolates_with_natural_ends() {
             return Err(crate::Error::Unsupported {
                 field: "constraint",
                 reason: "refine_points is interpolation with natural ends; use solve",
