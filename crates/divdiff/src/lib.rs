@@ -59,4 +59,4 @@ pub use differences::{
 pub use error::Error;
 pub use knots::{Knots, Topology};
 pub use parametrize::{accumulate, parametrize, span_count, span_powers, Parametrization};
-pub use points::Points;
+pub use points::{all_finite, Points};

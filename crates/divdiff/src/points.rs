@@ -176,7 +176,7 @@ impl Points {
 /// search does not): a value is ±∞ or NaN exactly when its exponent bits are all set, and the
 /// flags are OR-ed (no floating-point dependency chain).
 #[inline]
-pub(crate) fn all_finite(x: &[f64]) -> bool {
+pub fn all_finite(x: &[f64]) -> bool {
     const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
     x.iter().fold(0u64, |bad, v| {
         bad | u64::from(v.to_bits() & EXPONENT == EXPONENT)

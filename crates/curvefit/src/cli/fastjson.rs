@@ -17,7 +17,7 @@
 //! returns `None` and the caller parses the whole document as before, so every error message
 //! (field, index, wording) is serde_json's, unchanged.
 
-use serde::de::DeserializeOwned;
+use crate::spec::arrays::{Array, Kind, LargeArrays, Parsed};
 
 /// Array texts at least this long (bytes from the array's start to the end of the document)
 /// are parsed on every core.
@@ -25,53 +25,6 @@ pub const PARALLEL_BYTES: usize = 1 << 20;
 
 /// Most threads used for one array.
 const MAX_THREADS: usize = 8;
-
-/// What one large array holds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    /// Rows of one length d ≥ 1, `[[x, y], …]` (a [`crate::spec::Rows`]); at most `max`
-    /// coordinates.
-    Rows {
-        /// Most coordinates (the field's limit).
-        max: usize,
-    },
-    /// Numbers, `[a, b, …]`; at most `max` of them.
-    Numbers {
-        /// Most numbers (the field's limit).
-        max: usize,
-    },
-}
-
-/// One large array of a problem: where it is (object keys from the top of the document) and
-/// what it holds.
-#[derive(Clone, Copy, Debug)]
-pub struct Array {
-    /// The keys leading to it, e.g. `["constraint", "radii"]`.
-    pub path: &'static [&'static str],
-    /// Its shape and limit.
-    pub kind: Kind,
-}
-
-/// An array read by the fast path.
-#[derive(Debug, PartialEq)]
-pub enum Parsed {
-    /// Rows, flat (row-major), and their length.
-    Rows(divdiff::Points),
-    /// Numbers.
-    Numbers(Vec<f64>),
-}
-
-/// A problem whose large arrays [`read`] may parse itself.
-pub trait LargeArrays: DeserializeOwned {
-    /// The problem's large arrays (none by default).
-    const ARRAYS: &'static [Array] = &[];
-    /// Puts `value`, the array [`Self::ARRAYS`]`[i]`, into a problem that serde_json read with
-    /// that array empty (`[]`); `false` when the problem has no place for it (then the document
-    /// is parsed whole by serde_json).
-    fn put(&mut self, _i: usize, _value: Parsed) -> bool {
-        false
-    }
-}
 
 /// The problem in `bytes` (a JSON object), its large arrays parsed by the fast path; `None`
 /// when the document has none of them, or anything about it is unusual (see the module docs):

@@ -90,7 +90,7 @@ pub fn read_json<P: serde::de::DeserializeOwned>(
 ///
 /// # Errors
 /// As [`read_json`].
-pub fn read_problem<P: super::fastjson::LargeArrays>(
+pub fn read_problem<P: crate::spec::arrays::LargeArrays>(
     reader: impl Read,
     what: &str,
 ) -> Result<P, InputError> {
@@ -104,7 +104,7 @@ pub fn read_problem<P: super::fastjson::LargeArrays>(
 ///
 /// # Errors
 /// As [`read_json`], and a file that cannot be opened.
-pub fn read_problem_file<P: super::fastjson::LargeArrays>(
+pub fn read_problem_file<P: crate::spec::arrays::LargeArrays>(
     path: &Path,
     field: &str,
 ) -> Result<P, InputError> {

@@ -31,7 +31,7 @@ use clap::{Args, Parser, Subcommand};
 /// One subcommand: a JSON problem in, a JSON solution (and optionally a picture) out.
 pub trait Command {
     /// The JSON problem (`#[serde(deny_unknown_fields)]`, documented defaults).
-    type Problem: fastjson::LargeArrays;
+    type Problem: crate::spec::arrays::LargeArrays;
     /// The JSON result.
     type Solution: serde::Serialize;
     /// Validates and solves; errors name the field path and index.

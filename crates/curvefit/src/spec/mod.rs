@@ -26,6 +26,7 @@
 //! assert_eq!(bad.unwrap_err().field, "points[1][1]");
 //! ```
 
+pub mod arrays;
 pub mod messages;
 pub mod natural;
 pub(crate) mod points;
