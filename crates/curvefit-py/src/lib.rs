@@ -5,7 +5,8 @@
 //! [`curvefit::spec`], in process. A problem given as keyword arguments is read by the same serde
 //! types as `curvefit SUBCOMMAND file.json` — same names, defaults, validation and messages —
 //! through [`de::PyDe`], a `serde::Deserializer` over Python objects (numpy arrays are read in
-//! place: the only copy is the one into the problem's own vectors). The solve runs with the GIL
+//! place: the only copy is the one into the problem's own vectors; a large array given as a
+//! C-contiguous float64 array is copied as one slice, [`bulk`]). The solve runs with the GIL
 //! released ([`Python::detach`]) and with panics caught; the result comes back as a dict of numpy
 //! arrays and scalars whose keys are the JSON result's fields ([`out`]), which the Python layer
 //! wraps in its result classes.
@@ -35,11 +36,13 @@
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+mod bulk;
 mod de;
 mod out;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
+use curvefit::spec::arrays::LargeArrays;
 use curvefit::spec::{self, InputError};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -85,7 +88,7 @@ fn check_subcommand(name: &str) -> PyResult<()> {
 }
 
 /// Reads one problem of type `P` from a Python mapping, naming the field of any error.
-fn parse<'py, P: serde::de::DeserializeOwned>(
+fn parse<'py, P: LargeArrays>(
     obj: &Bound<'py, PyAny>,
     ctx: &de::Ctx<'py>,
 ) -> Result<P, InputError> {
@@ -100,6 +103,15 @@ fn parse<'py, P: serde::de::DeserializeOwned>(
     // quarter of a 10^5-point interpolation called from Python. A failure is read again with the
     // path tracked (the same reader over the same objects — sequences and mappings, which
     // reading does not consume — so the same error).
+    // The large arrays in bulk (`bulk`), when they are all they seem.
+    if let Some(bulk::Taken { rest, arrays }) = bulk::take::<P>(obj) {
+        ctx.trailing.set(None);
+        if let Ok(mut p) = P::deserialize(de::PyDe::new(&rest, ctx)) {
+            if arrays.into_iter().all(|(i, value)| p.put(i, value)) {
+                return Ok(p);
+            }
+        }
+    }
     ctx.trailing.set(None);
     if let Ok(p) = P::deserialize(de::PyDe::new(obj, ctx)) {
         return Ok(p);
