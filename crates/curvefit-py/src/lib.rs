@@ -176,15 +176,18 @@ fn guard<T>(f: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure> {
     }
 }
 
-/// Solves without touching Python (callable with the GIL released).
-fn solve_problem(p: &Problem) -> Result<Solution, Failure> {
+/// Solves without touching Python (callable with the GIL released). The problem is consumed: a
+/// refinement's arrays move into the solve, no copy.
+fn solve_problem(p: Problem) -> Result<Solution, Failure> {
     guard(|| {
         Ok(match p {
-            Problem::Refine(p) => Solution::Refine(spec::refine(p).map_err(Failure::Input)?),
-            Problem::Strip(p) => Solution::Strip(spec::strip(p).map_err(Failure::Input)?),
-            Problem::Scheme(p) => Solution::Scheme(spec::scheme(p).map_err(Failure::Input)?),
-            Problem::Surface(p) => Solution::Surface(spec::surface(p).map_err(Failure::Input)?),
-            Problem::Natural(p) => Solution::Natural(spec::natural(p).map_err(Failure::Input)?),
+            Problem::Refine(p) => {
+                Solution::Refine(spec::refine::solve_owned(p).map_err(Failure::Input)?)
+            }
+            Problem::Strip(p) => Solution::Strip(spec::strip(&p).map_err(Failure::Input)?),
+            Problem::Scheme(p) => Solution::Scheme(spec::scheme(&p).map_err(Failure::Input)?),
+            Problem::Surface(p) => Solution::Surface(spec::surface(&p).map_err(Failure::Input)?),
+            Problem::Natural(p) => Solution::Natural(spec::natural(&p).map_err(Failure::Input)?),
         })
     })
 }
@@ -237,7 +240,7 @@ fn solve<'py>(
         Ok(p) => p,
         Err(f) => return Err(PyErr::from_value(exception(py, f)?)),
     };
-    match py.detach(|| solve_problem(&parsed)) {
+    match py.detach(|| solve_problem(parsed)) {
         Ok(s) => to_python(py, s),
         Err(f) => Err(PyErr::from_value(exception(py, f)?)),
     }
@@ -278,12 +281,8 @@ fn solve_many<'py>(
     let solved: Vec<Result<Solution, Failure>> = py.detach(|| {
         let run = || {
             parsed
-                .par_iter()
-                .map(|p| match p {
-                    Ok(p) => solve_problem(p),
-                    Err(Failure::Input(e)) => Err(Failure::Input(e.clone())),
-                    Err(Failure::Panic(m)) => Err(Failure::Panic(m.clone())),
-                })
+                .into_par_iter()
+                .map(|p| p.and_then(solve_problem))
                 .collect()
         };
         match &pool {

@@ -247,12 +247,48 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
 /// # Errors
 /// An [`InputError`] for points the library rejects.
 pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
-    use divdiff::{DerivativeRule, Parametrization, Topology};
-    let points = p.points.0.clone();
-    let hs = |h: &HalfSpaceSpec| refine::HalfSpace {
+    library(p.points.0.clone(), constraint(p.constraint.clone()), p)
+}
+
+/// [`to_library`] for a problem that is not needed afterwards: its points and the constraint's
+/// arrays move into the library problem instead of being copied.
+///
+/// # Errors
+/// As [`to_library`].
+pub fn into_library(mut p: RefineProblem) -> Result<refine::Problem, InputError> {
+    let points = std::mem::take(&mut p.points.0);
+    let c = std::mem::replace(&mut p.constraint, ConstraintSpec::Interpolate);
+    library(points, constraint(c), &p)
+}
+
+/// The library's constraint for the JSON's.
+fn constraint(c: ConstraintSpec) -> refine::Constraint {
+    match c {
+        ConstraintSpec::Interpolate => refine::Constraint::Interpolate,
+        ConstraintSpec::Balls { radii } => refine::Constraint::Balls(radii),
+        ConstraintSpec::Smoothing { weights } => refine::Constraint::Smoothing(weights),
+        ConstraintSpec::Halfspaces { sets } => refine::Constraint::HalfSpaces(
+            sets.into_iter()
+                .map(|set| set.iter().map(half_space).collect())
+                .collect(),
+        ),
+    }
+}
+
+fn half_space(h: &HalfSpaceSpec) -> refine::HalfSpace {
+    refine::HalfSpace {
         normal: h.normal.clone(),
         offset: h.offset,
-    };
+    }
+}
+
+/// The library problem of `points` and `constraint` with every other field of `p`.
+fn library(
+    points: divdiff::Points,
+    constraint: refine::Constraint,
+    p: &RefineProblem,
+) -> Result<refine::Problem, InputError> {
+    use divdiff::{DerivativeRule, Parametrization, Topology};
     let mut prob = refine::Problem::new(points)
         .with_topology(if p.closed {
             Topology::Closed
@@ -268,16 +304,7 @@ pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
         .with_k(p.k)
         .with_knot_iterations(p.knot_iterations)
         .with_levels(p.levels, p.level_k)
-        .with_constraint(match &p.constraint {
-            ConstraintSpec::Interpolate => refine::Constraint::Interpolate,
-            ConstraintSpec::Balls { radii } => refine::Constraint::Balls(radii.clone()),
-            ConstraintSpec::Smoothing { weights } => refine::Constraint::Smoothing(weights.clone()),
-            ConstraintSpec::Halfspaces { sets } => refine::Constraint::HalfSpaces(
-                sets.iter()
-                    .map(|set| set.iter().map(hs).collect())
-                    .collect(),
-            ),
-        })
+        .with_constraint(constraint)
         .with_derivative(match p.derivative {
             DerivativeSpec::Average => DerivativeRule::Average,
             DerivativeSpec::Bessel => DerivativeRule::Bessel,
@@ -322,7 +349,7 @@ pub fn to_library(p: &RefineProblem) -> Result<refine::Problem, InputError> {
                             refine::Tangent::Tension { radius: *radius }
                         }
                         TangentSpec::Halfspaces { halfspaces } => {
-                            refine::Tangent::HalfSpaces(halfspaces.iter().map(hs).collect())
+                            refine::Tangent::HalfSpaces(halfspaces.iter().map(half_space).collect())
                         }
                     })
                 })
@@ -371,6 +398,17 @@ pub fn solve_observed(
     let mut prob = to_library(problem)?;
     prob.options.progress = progress;
     let r = prob.solve().map_err(user_error)?;
+    Ok(to_result(r))
+}
+
+/// [`solve`] for a problem that is not needed afterwards: its arrays move into the solve
+/// instead of being copied (the Python package's calls).
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_owned(problem: RefineProblem) -> Result<RefineResult, InputError> {
+    validate(&problem)?;
+    let r = into_library(problem)?.solve().map_err(user_error)?;
     Ok(to_result(r))
 }
 
@@ -488,6 +526,28 @@ mod tests {
 
     fn problem(json: &str) -> RefineProblem {
         super::super::from_json(json).unwrap()
+    }
+
+    /// A problem solved by value (its arrays moved) and by reference (copied) gives the same
+    /// result and the same errors, for every kind of constraint.
+    #[test]
+    fn solving_a_moved_problem_equals_solving_a_borrowed_one() {
+        let texts = [
+            r#"{"points": [[0,0],[1,0.2],[2,1],[1,2],[0,1.5]], "closed": true, "k": 3}"#,
+            r#"{"points": [[0,0],[1,0.2],[2,1],[1,2],[0,1.5]], "k": 2, "constraint": {"type": "balls", "radii": [0.1, 0.3, 0, 0.2, 0.05]}}"#,
+            r#"{"points": [[0,0],[1,0.2],[2,1],[1,2],[0,1.5]], "k": 2, "constraint": {"type": "smoothing", "weights": [1, 10, 100, 5, 2]}}"#,
+            r#"{"points": [[0,0],[1,0.2],[2,1]], "k": 2, "constraint": {"type": "halfspaces", "sets": [[], [{"normal": [0, 1], "offset": 0.1}], []]}}"#,
+            r#"{"points": [[0,0],[1,0.2],[2,1],[1,2]], "k": 2, "constraint": {"type": "balls", "radii": [0.1, -1, 0, 0.2]}}"#,
+        ];
+        for text in texts {
+            let p = problem(text);
+            let json = |r: Result<RefineResult, InputError>| match r {
+                Ok(r) => serde_json::to_string(&r).unwrap(),
+                Err(e) => format!("{e}"),
+            };
+            let borrowed = json(solve(&p));
+            assert_eq!(json(solve_owned(p)), borrowed, "{text}");
+        }
     }
 
     #[test]
