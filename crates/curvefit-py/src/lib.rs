@@ -177,14 +177,16 @@ fn guard<T>(f: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure> {
 }
 
 /// Solves without touching Python (callable with the GIL released). The problem is consumed: a
-/// refinement's arrays move into the solve, no copy.
+/// refinement's and a strip's arrays move into the solve, no copy.
 fn solve_problem(p: Problem) -> Result<Solution, Failure> {
     guard(|| {
         Ok(match p {
             Problem::Refine(p) => {
                 Solution::Refine(spec::refine::solve_owned(p).map_err(Failure::Input)?)
             }
-            Problem::Strip(p) => Solution::Strip(spec::strip(&p).map_err(Failure::Input)?),
+            Problem::Strip(p) => {
+                Solution::Strip(spec::strip::solve_owned(p).map_err(Failure::Input)?)
+            }
             Problem::Scheme(p) => Solution::Scheme(spec::scheme(&p).map_err(Failure::Input)?),
             Problem::Surface(p) => Solution::Surface(spec::surface(&p).map_err(Failure::Input)?),
             Problem::Natural(p) => Solution::Natural(spec::natural(&p).map_err(Failure::Input)?),

@@ -115,14 +115,13 @@ fn kind_name(k: strip::KnotKind) -> String {
 /// Maps the library's typed error to a field path (the library names the user's field and index
 /// in every input error) and a message in the user's words (numbers as written, see
 /// [`num`]; the field is not repeated: [`InputError`] prints it).
-fn input_error(p: &Problem, e: &strip::Error) -> InputError {
+fn input_error(t: &[f64], e: &strip::Error) -> InputError {
     use strip::Error as E;
     use strip::Infeasibility as I;
     let at = |field: &str, index: usize| format!("{field}[{index}]");
     // where a data point is (the data-point errors name y[i])
     let site = |index: usize| {
-        p.t.0
-            .get(index)
+        t.get(index)
             .map_or(String::new(), |t| format!(" at t = {}", num(*t)))
     };
     match e {
@@ -226,20 +225,36 @@ fn input_error(p: &Problem, e: &strip::Error) -> InputError {
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
 pub fn solve(p: &Problem) -> Result<Solution, InputError> {
-    if p.t.len() > MAX_POINTS {
+    solve_data(p.t.0.clone(), p.y.0.clone(), p)
+}
+
+/// [`solve`] for a problem that is not needed afterwards: its data `t` and `y` move into the
+/// solve instead of being copied (the Python package's calls).
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_owned(mut p: Problem) -> Result<Solution, InputError> {
+    let (t, y) = (std::mem::take(&mut p.t.0), std::mem::take(&mut p.y.0));
+    solve_data(t, y, &p)
+}
+
+/// The strip of data `t`, `y` (the problem's, moved or copied) with `p`'s bounds and ends.
+fn solve_data(t: Vec<f64>, y: Vec<f64>, p: &Problem) -> Result<Solution, InputError> {
+    if t.len() > MAX_POINTS {
         return Err(InputError::new(
             "t",
-            format!("{} data points exceed the limit of {MAX_POINTS}", p.t.len()),
+            format!("{} data points exceed the limit of {MAX_POINTS}", t.len()),
         ));
     }
     let problem = strip::Problem {
-        t: p.t.0.clone(),
-        y: p.y.0.clone(),
+        t,
+        y,
         lower: bound(&p.lower),
         upper: bound(&p.upper),
         end_slopes: p.end_slopes.unwrap_or([None, None]),
     };
-    let s = strip::solve(&problem, &strip::Options::default()).map_err(|e| input_error(p, &e))?;
+    let s = strip::solve(&problem, &strip::Options::default())
+        .map_err(|e| input_error(&problem.t, &e))?;
     Ok(Solution {
         breaks: s.breaks,
         coefficients: s.coefficients,
@@ -280,6 +295,25 @@ mod tests {
         assert!(s.extra_knots.iter().all(|k| k.kind.ends_with("lower")));
         assert!((s.norm * s.norm - s.energy).abs() <= 1e-12 * s.energy);
         assert_eq!(s.breaks.len(), s.coefficients.len() + 1);
+    }
+
+    /// A problem solved by value (its data moved) gives the result and the errors of the same
+    /// problem solved by reference.
+    #[test]
+    fn solving_a_moved_problem_equals_solving_a_borrowed_one() {
+        for text in [
+            r#"{"t": [0, 1, 2, 3, 4], "y": [0, 1, 0, 0, 1], "lower": {"pieces": [[-0.05,0,0,0],[-0.05,0,0,0],[-0.05,0,0,0],[-0.05,0,0,0]]}}"#,
+            r#"{"t": [0, 1, 2], "y": [0, 2, 0], "upper": {"pieces": [[1,0,0,0],[1,0,0,0]]}}"#,
+            r#"{"t": [0, 1, 1], "y": [0, 1, 0]}"#,
+        ] {
+            let json = |r: Result<Solution, InputError>| match r {
+                Ok(s) => serde_json::to_string(&s).unwrap(),
+                Err(e) => format!("{e}"),
+            };
+            let p = parse(text);
+            let borrowed = json(solve(&p));
+            assert_eq!(json(solve_owned(p)), borrowed, "{text}");
+        }
     }
 
     #[test]
