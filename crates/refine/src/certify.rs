@@ -219,6 +219,26 @@ fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
     }
 }
 
+/// max(m, max_i f(i)) over i in 0 .. n, a NaN passed over as [`raise`] does, in four independent
+/// lanes (i mod 4), so that the compares do not wait for each other. The maximum does not
+/// round, so it is the one a running fold gives.
+#[inline(always)]
+fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
+    let mut lanes = [*m; 4];
+    let whole = n - n % 4;
+    for i in (0..whole).step_by(4) {
+        for (l, lane) in lanes.iter_mut().enumerate() {
+            raise(lane, f(i + l));
+        }
+    }
+    for i in whole..n {
+        raise(&mut lanes[0], f(i));
+    }
+    for l in lanes {
+        raise(m, l);
+    }
+}
+
 /// Where a sweep writes Hp: every vertex's, or (given the data vertices) the data vertices' and
 /// their points.
 type HpOut<'a> = (&'a mut [f64], (&'a mut [f64], &'a mut [f64]));
@@ -516,15 +536,10 @@ pub(crate) fn certify(
         && data_vertex.windows(2).all(|w| w[0] < w[1])
         && data_vertex.last().is_none_or(|&v| v < nv);
     let mut pass = pass(knots, p, &centroid, compact.then_some(data_vertex));
-    let q_extent = (0..d)
-        .map(|c| {
-            let m = centroid[c];
-            qc[c..]
-                .iter()
-                .step_by(d)
-                .fold(0.0f64, |a, x| a.max((x - m).abs()))
-        })
-        .fold(0.0, f64::max);
+    let mut q_extent = 0.0f64;
+    for (c, &m) in centroid.iter().enumerate() {
+        raise_over(&mut q_extent, n, |i| (qc[i * d + c] - m).abs());
+    }
     let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);
     if !compact {
         pass.hp_data = data_vertex
@@ -559,11 +574,8 @@ pub(crate) fn certify(
     }
     // The force scale F (module docs): the largest |Hp|, no smaller than the rounding level R
     // over ROUNDING_COUNTS_AS.
-    let hp_max = if compact {
-        hp_data.iter().fold(pass.free_stat, |a, x| a.max(x.abs()))
-    } else {
-        pass.hp.iter().fold(0.0f64, |a, x| a.max(x.abs()))
-    };
+    let mut hp_max = if compact { pass.free_stat } else { 0.0 };
+    raise_abs(&mut hp_max, if compact { hp_data } else { &pass.hp }, 0.0);
     let rounding =
         ROUNDING_MULTIPLE * f64::EPSILON * (pass.h_norm + terms.stiffness) * pass.magnitude;
     let force = hp_max
@@ -571,16 +583,19 @@ pub(crate) fn certify(
         .max(f64::MIN_POSITIVE);
     // Stationarity at every vertex: Hp + derivative forces + data forces at the data vertices.
     let stat = if compact {
-        hp_data
-            .chunks_exact(d)
-            .zip(terms.force_data.chunks_exact(d))
-            .zip(&terms.rounding_data)
-            .fold(pass.free_stat, |a, ((h, f), r)| {
-                // what one rounding of a stiffly weighted vertex exerts is not a residual
-                h.iter()
-                    .zip(f)
-                    .fold(a, |a, (h, f)| a.max(((h + f).abs() - r).max(0.0)))
-            })
+        let mut stat = pass.free_stat;
+        let (h, f, r) = (hp_data, &terms.force_data, &terms.rounding_data);
+        let rows = (h.len() / d).min(f.len() / d).min(r.len());
+        // (what one rounding of a stiffly weighted vertex exerts is not a residual)
+        raise_over(&mut stat, rows, |i| {
+            let (h, f) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
+            let mut m = 0.0;
+            for (h, f) in h.iter().zip(f) {
+                raise(&mut m, ((h + f).abs() - r[i]).max(0.0));
+            }
+            m
+        });
+        stat
     } else {
         // Summed into Hp's own buffer (Hp is not needed after this).
         let mut r = std::mem::take(&mut pass.hp);
