@@ -26,24 +26,20 @@ pub struct Taken<'py> {
 /// The problem `obj` with its bulk-readable large arrays taken out; `None` when it has none.
 pub fn take<'py, P: LargeArrays>(obj: &Bound<'py, PyAny>) -> Option<Taken<'py>> {
     let top = obj.cast::<PyDict>().ok()?;
-    let mut rest: Option<Bound<'py, PyDict>> = None;
-    let mut taken = Vec::new();
+    let mut arrays = Vec::new();
     for (i, array) in P::ARRAYS.iter().enumerate() {
-        let Some(parsed) = lookup(top, array.path).and_then(|v| read(&v, array.kind)) else {
-            continue;
-        };
-        let copy = match &rest {
-            Some(r) => r.clone(),
-            None => top.copy().ok()?,
-        };
-        emptied(&copy, array.path).ok()?;
-        rest = Some(copy);
-        taken.push((i, parsed));
+        if let Some(parsed) = lookup(top, array.path).and_then(|v| read(&v, array.kind)) {
+            arrays.push((i, parsed));
+        }
     }
-    rest.map(|rest| Taken {
-        rest,
-        arrays: taken,
-    })
+    if arrays.is_empty() {
+        return None;
+    }
+    let rest = top.copy().ok()?;
+    for &(i, _) in &arrays {
+        emptied(&rest, P::ARRAYS[i].path).ok()?;
+    }
+    Some(Taken { rest, arrays })
 }
 
 /// The value at `path` (keys of nested dicts).

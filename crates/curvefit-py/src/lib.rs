@@ -99,19 +99,18 @@ fn parse<'py, P: LargeArrays>(
             InputError::new("problem", "must be a mapping of the problem's fields")
         }));
     }
+    // The large arrays in bulk (`bulk`) when they are all they seem, the rest as given.
+    if let Some(bulk::Taken { rest, arrays }) = bulk::take::<P>(obj) {
+        ctx.trailing.set(None);
+        let read = P::deserialize(de::PyDe::new(&rest, ctx)).ok();
+        if let Some(p) = read.and_then(|p| p.with_arrays(arrays)) {
+            return Ok(p);
+        }
+    }
     // Untracked first: the field path is wanted only for an error, and tracking it was a
     // quarter of a 10^5-point interpolation called from Python. A failure is read again with the
     // path tracked (the same reader over the same objects — sequences and mappings, which
     // reading does not consume — so the same error).
-    // The large arrays in bulk (`bulk`), when they are all they seem.
-    if let Some(bulk::Taken { rest, arrays }) = bulk::take::<P>(obj) {
-        ctx.trailing.set(None);
-        if let Ok(mut p) = P::deserialize(de::PyDe::new(&rest, ctx)) {
-            if arrays.into_iter().all(|(i, value)| p.put(i, value)) {
-                return Ok(p);
-            }
-        }
-    }
     ctx.trailing.set(None);
     if let Ok(p) = P::deserialize(de::PyDe::new(obj, ctx)) {
         return Ok(p);

@@ -50,13 +50,9 @@ pub fn read<P: LargeArrays>(bytes: &[u8]) -> Option<P> {
         at = f.2;
     }
     rest.extend_from_slice(&bytes[at..]);
-    let mut problem: P = serde_json::from_slice(&rest).ok()?;
-    for (i, _, _, value) in found {
-        if !problem.put(i, value) {
-            return None;
-        }
-    }
-    Some(problem)
+    serde_json::from_slice::<P>(&rest)
+        .ok()?
+        .with_arrays(found.into_iter().map(|(i, _, _, value)| (i, value)))
 }
 
 /// A cursor over the document.

@@ -60,6 +60,15 @@ pub trait LargeArrays: DeserializeOwned {
     fn put(&mut self, _i: usize, _value: Parsed) -> bool {
         false
     }
+
+    /// This problem, read with the arrays `taken` (each with its index in [`Self::ARRAYS`])
+    /// empty, with them put in; `None` when one of them has no place in it.
+    fn with_arrays(mut self, taken: impl IntoIterator<Item = (usize, Parsed)>) -> Option<Self> {
+        taken
+            .into_iter()
+            .all(|(i, value)| self.put(i, value))
+            .then_some(self)
+    }
 }
 
 /// A problem's `points`.

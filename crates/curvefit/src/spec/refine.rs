@@ -397,8 +397,7 @@ pub fn solve_observed(
     validate(problem)?;
     let mut prob = to_library(problem)?;
     prob.options.progress = progress;
-    let r = prob.solve().map_err(user_error)?;
-    Ok(to_result(r))
+    run(prob)
 }
 
 /// [`solve`] for a problem that is not needed afterwards: its arrays move into the solve
@@ -408,8 +407,12 @@ pub fn solve_observed(
 /// As [`solve`].
 pub fn solve_owned(problem: RefineProblem) -> Result<RefineResult, InputError> {
     validate(&problem)?;
-    let r = into_library(problem)?.solve().map_err(user_error)?;
-    Ok(to_result(r))
+    run(into_library(problem)?)
+}
+
+/// Solves a validated problem's library form and words the result (or the error) as the JSON's.
+fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
+    prob.solve().map(to_result).map_err(user_error)
 }
 
 /// A library field and index as the JSON's path: `tangents.direction` at 1 is
