@@ -140,8 +140,11 @@ pub enum Error {
         /// What is not supported.
         reason: &'static str,
     },
-    /// An iterative method stopped at its iteration limit without the accuracy asked for;
-    /// `residual` is the best iterate's relative optimality gap estimate.
+    /// An iterative method stopped without the accuracy asked for. `residual` is the best
+    /// iterate's relative optimality gap estimate (Newton on Φ, BFGS), or for the dual
+    /// active-set exchange the excursion outside the strip it left, relative to the value
+    /// scale (it stopped with no candidate it could add: the excursion lies within 1e-12 of the
+    /// range from a knot, or its sweep or step limit).
     #[error("{solver} did not converge in {iterations} iterations (residual {residual:e})")]
     NotConverged {
         /// Which method.
@@ -150,6 +153,22 @@ pub enum Error {
         iterations: usize,
         /// The residual reached.
         residual: f64,
+    },
+    /// The method converged (the curve leaves the strip by no more than its tolerance), but its
+    /// first-order optimality gap stays above what an answer must meet (1e-9, `required`):
+    /// the contacts' f''' jumps are so large, against the energy, that the rounding of the
+    /// excursion alone is worth more than 1e-9 of it. Hair-thin strips and data whose slopes
+    /// are steep against the strip's width end here; the answer is refused, with its gap.
+    #[error("{solver} converged after {iterations} sweeps, but its optimality gap {gap:e} stays above the {required:e} an answer must meet")]
+    Uncertified {
+        /// Which method.
+        solver: &'static str,
+        /// Sweeps performed.
+        iterations: usize,
+        /// The relative optimality gap estimate of the converged curve.
+        gap: f64,
+        /// The largest gap an answer is returned with.
+        required: f64,
     },
     /// The returned pieces leave the strip by more than the documented tolerance
     /// ([`crate::RESULT_FEASIBILITY_TOL`] times the value scale plus the rounding allowance

@@ -33,9 +33,11 @@
 //!   (checked exactly between every pair of breakpoints), data outside the bounds, or data on a
 //!   kink no smooth curve can pass are refused with [`Error::Infeasible`] naming the field and
 //!   index. When Newton on Φ stops at its iteration limit, the exchange solves the problem, so a
-//!   feasible problem always ends in an answer; an answer whose gap estimate exceeds 1e-9 (seen
-//!   only on hair-thin strips, 1e-12 of the data) is refused with [`Error::NotConverged`] and its
-//!   gap.
+//!   feasible problem always ends in an answer or a typed refusal: an answer whose gap estimate
+//!   exceeds 1e-9 (hair-thin strips, and data whose slopes are steep against the strip's width:
+//!   10 % of the random hard strips in ROBUSTNESS.md §4 item 17) is refused with
+//!   [`Error::Uncertified`] and its gap, and the exchange stopped with the curve still outside
+//!   the strip with [`Error::NotConverged`] and the excursion left.
 //! * **Remark 4.2**: data on a bound are moved inside by ε ([`Options::boundary_margin`] of the
 //!   strip width; reported in [`Solution::shifted_data`]); the solution converges as ε → 0.
 //!
@@ -112,6 +114,11 @@ mod types;
 mod validate;
 
 pub use error::{Error, Infeasibility};
+
+/// The name [`Error::NotConverged`] and [`Error::Uncertified`] give the dual active-set exchange
+/// (the exact solver for polyline bounds, and the fallback of Newton on Φ), whose
+/// `NotConverged::residual` is the excursion left outside the strip, not a gap.
+pub const EXCHANGE: &str = "dual active-set exchange";
 pub use solve::solve;
 pub use types::{
     Bound, ExtraKnot, KnotKind, Method, Options, Problem, Pruning, Shape, Side, Solution,

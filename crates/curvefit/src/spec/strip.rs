@@ -205,6 +205,25 @@ fn input_error(t: &[f64], e: &strip::Error) -> InputError {
                 num(*tolerance)
             ),
         ),
+        E::Uncertified { gap, required, .. } => InputError::new(
+            "",
+            format!(
+                "no certified answer: the best curve keeps to the strip within its tolerance, but its optimality gap is {} (an answer must be within {}); the strip is too narrow against the data's slopes for double precision: widen the bounds where the curve must turn sharply",
+                num(*gap),
+                num(*required)
+            ),
+        ),
+        E::NotConverged {
+            solver,
+            iterations,
+            residual,
+        } if *solver == strip::EXCHANGE => InputError::new(
+            "",
+            format!(
+                "{solver} stopped after {iterations} sweeps with the curve still outside the strip by {} of the value scale (beside a knot where the data are too steep to place another contact in double precision, or at its sweep limit): widen the bounds where the curve must turn sharply",
+                num(*residual)
+            ),
+        ),
         E::NotConverged {
             solver,
             iterations,
