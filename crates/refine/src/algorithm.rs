@@ -320,6 +320,13 @@ fn stage_report(k: usize, vertices: usize, cert: &Certificate) -> Stage {
     }
 }
 
+/// Whether every vertex equals the first, coordinate by coordinate.
+fn is_constant(p: &Points) -> bool {
+    let c = p.coords();
+    let first = &c[..p.dim()];
+    c.chunks_exact(p.dim()).all(|x| x == first)
+}
+
 fn constant_points(n: usize, c: &[f64]) -> Points {
     let mut coords = Vec::with_capacity(n * c.len());
     for _ in 0..n {
@@ -402,6 +409,12 @@ fn stage_loop(
             },
         );
         if let Some(FixedSolution { points, .. }) = &sol {
+            // A constant curve (E = 0; constraint sets with a common point, which tangents kept
+            // `degenerate` from answering directly) is optimal on any knots, and its spans
+            // |p_{j+1} − p_j|^e all vanish: there is nothing to update.
+            if is_constant(points) {
+                break;
+            }
             let updated =
                 crate::par::parametrize(points, knots.topology(), param).map_err(|err| match err {
                     divdiff::Error::ZeroLengthSpan { index, next } => {

@@ -354,6 +354,40 @@ fn balls_with_a_common_point_give_a_constant_curve() {
     }
 }
 
+/// The same balls with a tension tangent at one point: a derivative constraint rules out the
+/// constant-curve shortcut (`degenerate`), so the solver itself finds the constant curve, and
+/// the knot updates (three by default) would parametrize a curve whose vertices all coincide.
+/// It used to be refused ("refined vertices 0 and 1 coincide … use knot_iterations 0"; found
+/// by the sweep of ROBUSTNESS.md §4 item 17); the constant curve is optimal on any knots, so
+/// the updates stop and the certified curve is returned.
+#[test]
+fn a_constant_optimum_with_tangents_skips_the_knot_updates() {
+    let q = pts(&[&[0.0, 0.0], &[1.0, 0.0], &[1.0, 1.0], &[0.0, 1.0]]);
+    for topo in [Topology::Closed, Topology::Open] {
+        let mut tangents = vec![None; 4];
+        tangents[1] = Some(refine::Tangent::Tension { radius: 0.5 });
+        let r = Problem::new(q.clone())
+            .with_topology(topo)
+            .with_constraint(Constraint::Balls(vec![0.75; 4]))
+            .with_tangents(tangents)
+            .solve()
+            .unwrap();
+        assert!(r.energy.abs() < 1e-20, "{topo:?}: E {:e}", r.energy);
+        assert!(r.kkt_residual <= KKT_TOL, "{topo:?}: {:e}", r.kkt_residual);
+        let p0 = r.points.point(0).to_vec();
+        // (An open curve has more optima with E = 0, the straight ones; the solver's need not
+        // be constant, and its knots are then updated as usual.)
+        if r.points.iter().all(|p| p == &p0[..]) {
+            assert_eq!(r.iterations.knot_updates, 0, "{topo:?}");
+        }
+        for (i, qi) in q.iter().enumerate() {
+            let p = r.points.point(r.data_vertex[i]);
+            let g = (0..2).map(|c| (p[c] - qi[c]).powi(2)).sum::<f64>().sqrt();
+            assert!(g <= 0.75 * (1.0 + 1e-12), "{topo:?}: ball {i} at {g}");
+        }
+    }
+}
+
 /// The paper's iteration on balls: (H + W)p = W q̃ holds for its weights, and as the iteration
 /// count grows its energy approaches the exact optimum computed by Clarabel.
 #[test]
