@@ -320,13 +320,6 @@ fn stage_report(k: usize, vertices: usize, cert: &Certificate) -> Stage {
     }
 }
 
-/// Whether every vertex equals the first, coordinate by coordinate.
-fn is_constant(p: &Points) -> bool {
-    let c = p.coords();
-    let first = &c[..p.dim()];
-    c.chunks_exact(p.dim()).all(|x| x == first)
-}
-
 fn constant_points(n: usize, c: &[f64]) -> Points {
     let mut coords = Vec::with_capacity(n * c.len());
     for _ in 0..n {
@@ -409,10 +402,9 @@ fn stage_loop(
             },
         );
         if let Some(FixedSolution { points, .. }) = &sol {
-            // A constant curve (E = 0; constraint sets with a common point, which tangents kept
-            // `degenerate` from answering directly) is optimal on any knots, and its spans
-            // |p_{j+1} − p_j|^e all vanish: there is nothing to update.
-            if is_constant(points) {
+            // A constant curve is optimal on any knots, and its spans |p_{j+1} − p_j|^e all
+            // vanish: there is nothing to update (`degenerate::is_constant`).
+            if degenerate::is_constant(points) {
                 break;
             }
             let updated =

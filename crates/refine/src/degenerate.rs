@@ -9,6 +9,13 @@
 //! ([`crate::constraint::Kind::common_point`]); a kind without sets (interpolation, smoothing,
 //! derivative constraints) rules the shortcut out. The point is found by alternating projections
 //! ([`crate::options::CommonPointOptions`]).
+//!
+//! With derivative constraints the shortcut is not taken, but the solver may still find the
+//! constant curve (the sets have a common point and every derivative set admits Df = 0); the
+//! knot updates of Algorithm 4.1 then stop at it ([`is_constant`]), since it is optimal on any
+//! knots and has no spans to parametrize.
+
+use divdiff::Points;
 
 use crate::constraint::{dist, CommonPoint};
 use crate::problem::Problem;
@@ -67,4 +74,11 @@ pub(crate) fn common_point(problem: &Problem) -> Option<Common> {
         last = v;
     }
     None
+}
+
+/// Whether every vertex of `p` equals the first, coordinate by coordinate: the constant curve.
+pub(crate) fn is_constant(p: &Points) -> bool {
+    let c = p.coords();
+    let first = &c[..p.dim()];
+    c.chunks_exact(p.dim()).all(|x| x == first)
 }

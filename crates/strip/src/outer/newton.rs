@@ -26,8 +26,8 @@ const STALL_ITERATIONS: usize = 10;
 /// jumps across candidate regions), and the iteration stops, not converged, for the exchange
 /// to solve the problem (`crate::strategy`). Measured on 5000 alternating values with
 /// cubic-piece bounds 10⁻⁷ from them (ROBUSTNESS.md §4 item 17): 154 iterations and 33.7 s
-/// with the decrement at 35–92 % of Φ throughout while Φ fell by 2·10⁻⁴ of itself in all; healthy runs
-/// take 5–20 iterations, each gaining a large part of the decrement.
+/// with the decrement at 35–92 % of Φ throughout while Φ fell by 2·10⁻⁴ of itself in all;
+/// healthy runs take 5–20 iterations, each gaining a large part of the decrement.
 const STALL_PROGRESS: f64 = 1e-3;
 
 /// Projected Newton on the banded Hessian. Returns (x, iterations, (cells, x, gradient)).
@@ -52,7 +52,8 @@ pub(crate) fn newton(
     let mut it = 0;
     let mut polished = 0;
     let mut newton_decrement = 0.0;
-    // Φ at the start of each iteration, for the stall test
+    // Φ at the start of each iteration with an undamped Newton direction (where the decrement
+    // is measured), for the stall test
     let mut history: Vec<f64> = Vec::new();
     let mut stalled = false;
     while it < opts.max_iterations {
