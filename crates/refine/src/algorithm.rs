@@ -485,6 +485,20 @@ fn stage_loop(
                 iterations,
                 residual,
             },
+            // The same constraints were met on the knots before this update: what failed is
+            // the method on the updated knots, and the guess at an infeasible constraint
+            // (`ConicProblem::diagnose`) would send the user after the wrong cause.
+            Error::NoFeasiblePointFound {
+                violation,
+                iterations,
+                ..
+            } if knot_iteration > 0 => Error::NotConvergedAfterUpdate {
+                stage,
+                update: knot_iteration,
+                solver: "full-vertex interior point",
+                iterations,
+                residual: violation,
+            },
             e => e,
         })?;
         iterations.solves += 1;

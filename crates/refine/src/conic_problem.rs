@@ -77,7 +77,7 @@ pub struct ConicOptions {
     pub conic: conic::Options,
     /// A result whose certificate is at most this is returned even when the method stopped
     /// short of its tolerance (default 1e-9); above it the solve fails (diagnosed as
-    /// [`Error::Infeasible`] or [`Error::NotConverged`]).
+    /// [`Error::Infeasible`], [`Error::NoFeasiblePoint`] or [`Error::NotConverged`]).
     pub accept: f64,
     /// Optional starting curve (e.g. the previous solution in Algorithm 4.1's alternation).
     pub warm_start: Option<Points>,
@@ -383,8 +383,9 @@ impl ConicProblem {
     ///
     /// # Errors
     /// [`Error::Infeasible`] naming a constraint that cannot be met (an empty polytope, a
-    /// constraint contradicting fixed vertices, or the constraint with the largest violation
-    /// when the interior-point method finds no feasible point), [`Error::NotConverged`],
+    /// constraint contradicting fixed vertices), [`Error::NoFeasiblePoint`] naming the
+    /// constraint with the largest violation when the interior-point method finds no feasible
+    /// point (not a proof), [`Error::NotConverged`],
     /// [`Error::Energy`] when the Newton matrix is singular (the data do not determine the
     /// curve, e.g. an open curve with less than two constrained vertices),
     /// [`Error::WrongDimension`] for a warm start of the wrong shape.
@@ -509,19 +510,32 @@ impl ConicProblem {
         Ok(self.report(&be, &sol, ConicOptions::default().active_rtol))
     }
 
-    /// Why a solution that is not certified may be no solution at all: an empty polytope, or
-    /// (with a large primal residual) the most violated constraint, as [`Error::Infeasible`].
+    /// Why a solution that is not certified may be no solution at all: an empty polytope
+    /// ([`Error::Infeasible`], proved), or, with a large primal residual, the most violated
+    /// constraint ([`Error::NoFeasiblePoint`]: a guess, which was wrong on feasible problems,
+    /// ROBUSTNESS.md §4, 18).
     pub(crate) fn diagnose(&self, sol: &ConicSolution) -> Option<Error> {
+        let guess = |constraint| Error::NoFeasiblePoint {
+            constraint,
+            violation: sol.kkt.primal,
+            iterations: sol.iterations,
+        };
         for (c, con) in self.constraints.iter().enumerate() {
             if let ConvexSet::HalfSpaces(hs) = &con.set {
-                if polytope_is_empty(hs, self.dim) {
+                if opposed_pair(hs) {
                     return Some(Error::Infeasible { constraint: c });
+                }
+                // (The method not converging on the projection problem is no proof: it failed
+                // on a non-empty polytope of width 1e-7 at 1e6 from the origin, item 18, where
+                // the solve's own iterate met every constraint.)
+                if sol.kkt.primal > 1e-6 && polytope_is_empty(hs, self.dim) {
+                    return Some(guess(c));
                 }
             }
         }
         if sol.kkt.primal > 1e-6 {
             if let Some(c) = self.worst_constraint(sol.points.coords()) {
-                return Some(Error::Infeasible { constraint: c });
+                return Some(guess(c));
             }
         }
         None
@@ -640,6 +654,26 @@ impl ConicProblem {
 
 /// Is {x : n_i·x ≤ o_i} empty? Decided by the method itself on min ½|x|² s.t. the half-spaces
 /// (a dense problem of one point): it converges iff the polytope is nonempty.
+/// A proof that the half-spaces have no common point: two of them with opposite normals,
+/// a·x ≤ b and −λa·x ≤ c (λ > 0), whose offsets leave no room, b + c/λ < 0 (Farkas with two
+/// rows; complete in R¹, where two half-lines are all an empty set needs by Helly's theorem).
+/// Opposite to rounding (the cross terms within 1e-15 of |a||a'|), and short of room by more
+/// than 1e-12 of the offsets.
+fn opposed_pair(hs: &[(Vec<f64>, f64)]) -> bool {
+    hs.iter().enumerate().any(|(i, (a, b))| {
+        hs[i + 1..].iter().any(|(a2, b2)| {
+            let (na, na2) = (norm(a), norm(a2));
+            if na == 0.0 || na2 == 0.0 || dot(a, a2) >= 0.0 {
+                return false;
+            }
+            let parallel = (0..a.len())
+                .all(|j| (0..j).all(|k| (a[j] * a2[k] - a[k] * a2[j]).abs() <= 1e-15 * na * na2));
+            let (u, v) = (b / na, b2 / na2);
+            parallel && u + v < -1e-12 * (u.abs() + v.abs())
+        })
+    })
+}
+
 fn polytope_is_empty(hs: &[(Vec<f64>, f64)], d: usize) -> bool {
     let m = hs.len();
     let mut p = vec![0.0; d * d];
@@ -739,5 +773,35 @@ impl From<conic::Error> for Error {
             },
             e => Error::Conic(e),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::opposed_pair;
+
+    fn hs(rows: &[([f64; 2], f64)]) -> Vec<(Vec<f64>, f64)> {
+        rows.iter().map(|(a, b)| (a.to_vec(), *b)).collect()
+    }
+
+    #[test]
+    fn only_opposed_half_spaces_without_room_are_a_proof() {
+        // x ≤ 0 and x ≥ 1 (scaled normals): empty.
+        assert!(opposed_pair(&hs(&[([2.0, 0.0], 0.0), ([-0.5, 0.0], -0.5)])));
+        // 0 ≤ x ≤ 1: not empty; touching (x = 0 only): not empty.
+        assert!(!opposed_pair(&hs(&[([1.0, 0.0], 1.0), ([-1.0, 0.0], 0.0)])));
+        assert!(!opposed_pair(&hs(&[([1.0, 0.0], 0.0), ([-1.0, 0.0], 0.0)])));
+        // Nearly opposite normals meet far away: not a proof.
+        assert!(!opposed_pair(&hs(&[
+            ([1.0, 0.0], 0.0),
+            ([-1.0, 1e-9], -1.0)
+        ])));
+        // Three half-planes with no common point (x ≤ 0, y ≤ 0, x + y ≥ 1): empty, but no two
+        // of them show it, so this is not claimed.
+        assert!(!opposed_pair(&hs(&[
+            ([1.0, 0.0], 0.0),
+            ([0.0, 1.0], 0.0),
+            ([-1.0, -1.0], -1.0)
+        ])));
     }
 }

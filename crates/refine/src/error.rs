@@ -134,6 +134,23 @@ pub enum Error {
         /// The data point (or end).
         point: usize,
     },
+    /// The exact solver found no point that meets every constraint, but nothing proves that
+    /// there is none: its interior-point method stopped uncertified with the primal residual
+    /// `violation` (relative) and `field`[`point`] the constraint it violated most (named as in
+    /// [`Error::InfeasibleConstraint`]). [`Error::InfeasibleConstraint`] is kept for what is
+    /// proved (an empty half-space set, a constraint contradicting fixed vertices): this guess
+    /// was wrong on feasible problems (ROBUSTNESS.md §4, 18).
+    #[error("no feasible point found in {iterations} iterations: {field}[{point}] is the most violated constraint where the solver stopped (relative violation {violation:.2e}); this is not a proof that the constraints contradict each other")]
+    NoFeasiblePointFound {
+        /// The field.
+        field: &'static str,
+        /// The data point (or end).
+        point: usize,
+        /// The relative primal residual where the method stopped.
+        violation: f64,
+        /// Iterations taken.
+        iterations: usize,
+    },
     /// The requested combination is not supported (names the field and what is missing).
     #[error("{field}: {reason}")]
     Unsupported {
@@ -168,13 +185,24 @@ pub enum Error {
         /// What is wrong.
         reason: &'static str,
     },
-    /// The constraints cannot be met: an empty polytope, a constraint contradicting fixed
-    /// vertices, or (when the interior-point method finds no feasible point) the most violated
-    /// constraint.
+    /// The constraints cannot be met, proved: an empty polytope, or a constraint contradicting
+    /// fixed vertices.
     #[error("constraint {constraint} cannot be satisfied")]
     Infeasible {
         /// The constraint index.
         constraint: usize,
+    },
+    /// The interior-point method found no feasible point (it stopped uncertified with the
+    /// relative primal residual `violation`); `constraint` is the most violated there. Not a
+    /// proof of infeasibility: the method has no infeasibility certificate.
+    #[error("no feasible point found in {iterations} iterations: constraint {constraint} is the most violated (relative violation {violation:.2e}); not a proof of infeasibility")]
+    NoFeasiblePoint {
+        /// The constraint index.
+        constraint: usize,
+        /// The relative primal residual where the method stopped.
+        violation: f64,
+        /// Iterations taken.
+        iterations: usize,
     },
     /// The exact solver could not certify the fixed-knot solve after knot update `update`
     /// (1-based) of stage `stage` of Algorithm 4.1, the solve on the knots before that update

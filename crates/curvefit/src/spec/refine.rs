@@ -504,14 +504,19 @@ fn user_error(e: refine::Error) -> InputError {
                 format!("{e}: each knot update makes the refined spans more unequal where the points cluster or the curve nearly stops; {advice}"),
             )
         }
-        E::InfeasibleConstraint { field, point } => {
-            let f = match field {
-                "boundary" => ["boundary.start", "boundary.end"][point.min(1)].to_string(),
-                "tangents" => format!("tangents[{point}]"),
-                f => format!("constraint.{f}[{point}]"),
-            };
-            InputError::new(f, "cannot be satisfied together with the other constraints")
-        }
+        E::InfeasibleConstraint { field, point } => InputError::new(
+            constraint_field(field, point),
+            "cannot be satisfied together with the other constraints",
+        ),
+        E::NoFeasiblePointFound {
+            field,
+            point,
+            violation,
+            iterations,
+        } => InputError::new(
+            constraint_field(field, point),
+            format!("the exact solver found no point meeting every constraint in {iterations} iterations, and this one was the most violated where it stopped (relative violation {violation:.2e}); this is not a proof that the constraints contradict each other: check this constraint against its neighbours' (a tangent set against an end condition at the same point, say), or loosen it"),
+        ),
         E::Unsupported { field, reason } => InputError::new(whole(field), reason),
         // The linear algebra failed on valid input: the data's scale (or the spread of the
         // spans) is beyond what the floating-point solve resolves.
@@ -520,6 +525,16 @@ fn user_error(e: refine::Error) -> InputError {
             format!("{e}: the points (or their parameter spans) are too badly scaled for a floating-point solve; rescale the points or use fewer intermediate points (k)"),
         ),
         e => InputError::new("", e),
+    }
+}
+
+/// The problem's field of a constraint named by the library (`"sets"`, `"radii"`, `"tangents"`,
+/// `"boundary"`, …) at data point `point` (for `"boundary"`: 0 = start, 1 = end).
+fn constraint_field(field: &str, point: usize) -> String {
+    match field {
+        "boundary" => ["boundary.start", "boundary.end"][point.min(1)].to_string(),
+        "tangents" => format!("tangents[{point}]"),
+        f => format!("constraint.{f}[{point}]"),
     }
 }
 

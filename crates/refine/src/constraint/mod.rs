@@ -174,8 +174,8 @@ impl Rows {
         Ok(())
     }
 
-    /// The user's view of a conic-model error: an infeasible constraint named by its field and
-    /// index.
+    /// The user's view of a conic-model error: an infeasible constraint (or the most violated
+    /// one, when no feasible point was found) named by its field and index.
     pub(crate) fn user_error(&self, e: Error) -> Error {
         match e {
             Error::Infeasible { constraint } => match self.origin.get(constraint) {
@@ -184,6 +184,19 @@ impl Rows {
                     point: o.index,
                 },
                 None => Error::Infeasible { constraint },
+            },
+            Error::NoFeasiblePoint {
+                constraint,
+                violation,
+                iterations,
+            } => match self.origin.get(constraint) {
+                Some(o) => Error::NoFeasiblePointFound {
+                    field: o.field,
+                    point: o.index,
+                    violation,
+                    iterations,
+                },
+                None => e,
             },
             e => e,
         }
