@@ -652,8 +652,6 @@ impl ConicProblem {
     }
 }
 
-/// Is {x : n_i·x ≤ o_i} empty? Decided by the method itself on min ½|x|² s.t. the half-spaces
-/// (a dense problem of one point): it converges iff the polytope is nonempty.
 /// A proof that the half-spaces have no common point: two of them with opposite normals,
 /// a·x ≤ b and −λa·x ≤ c (λ > 0), whose offsets leave no room, b + c/λ < 0 (Farkas with two
 /// rows; complete in R¹, where two half-lines are all an empty set needs by Helly's theorem).
@@ -674,6 +672,10 @@ fn opposed_pair(hs: &[(Vec<f64>, f64)]) -> bool {
     })
 }
 
+/// Is {x : n_i·x ≤ o_i} empty? Guessed by the method itself on min ½|x|² s.t. the half-spaces
+/// (a dense problem of one point): in exact arithmetic it converges iff the polytope is
+/// nonempty, but it also fails on thin polytopes far from the origin, so its failing is no
+/// proof ([`ConicProblem::diagnose`] reports it as [`Error::NoFeasiblePoint`]).
 fn polytope_is_empty(hs: &[(Vec<f64>, f64)], d: usize) -> bool {
     let m = hs.len();
     let mut p = vec![0.0; d * d];

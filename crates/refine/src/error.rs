@@ -124,9 +124,11 @@ pub enum Error {
         /// The second vertex of the span.
         next: usize,
     },
-    /// A data point's constraint cannot be met (an empty half-space set, or a derivative
-    /// constraint that contradicts the others); `field` is `"sets"`, `"tangents"` or
-    /// `"boundary"` and `point` the data point (for `"boundary"`: 0 = start, 1 = end).
+    /// A data point's constraint cannot be met, proved: an empty half-space set (two opposed
+    /// half-spaces without room, or an empty polygon of the paper's slots), or a constraint
+    /// contradicting fixed vertices; `field` is `"sets"`, `"tangents"` or `"boundary"` and
+    /// `point` the data point (for `"boundary"`: 0 = start, 1 = end). What is not proved is
+    /// [`Error::NoFeasiblePointFound`].
     #[error("{field}[{point}] cannot be satisfied")]
     InfeasibleConstraint {
         /// The field.
