@@ -16,6 +16,20 @@ fn refused_field(doc: &str) -> String {
     rest.split(": ").next().unwrap_or("").to_string()
 }
 
+/// A fixture of `tests/fixtures` and the one line its refusal prints (exit code 2, nothing on
+/// standard output).
+fn refused_fixture(name: &str) -> (String, String) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(name);
+    let doc = std::fs::read_to_string(path).unwrap();
+    let (code, out, err) = run_cli(&["refine", "-"], &doc);
+    assert_eq!(code, 2, "{err}");
+    assert!(out.is_empty());
+    let line = err.trim_end().to_string();
+    (doc, line)
+}
+
 fn solved(doc: &str) -> serde_json::Value {
     let (code, out, err) = run_cli(&["refine", "-"], doc);
     assert_eq!(code, 0, "{doc}: {err}");
@@ -99,13 +113,7 @@ fn a_solve_lost_after_a_knot_update_names_knot_iterations() {
     // the default three knot updates. The first two solves are certified, the third is not
     // (best residual 1.1e-7): refused naming knot_iterations with the number of updates that
     // were certified (it was "full-vertex interior point did not converge …", naming nothing).
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures/refine-refused-after-knot-update.json");
-    let doc = std::fs::read_to_string(path).unwrap();
-    let (code, out, err) = run_cli(&["refine", "-"], &doc);
-    assert_eq!(code, 2, "{err}");
-    assert!(out.is_empty());
-    let line = err.trim_end();
+    let (doc, line) = refused_fixture("refine-refused-after-knot-update.json");
     assert!(
         line.starts_with("error: knot_iterations: stage 0, knot update 3: "),
         "{line}"
@@ -128,13 +136,7 @@ fn a_constraint_is_not_called_infeasible_on_a_guess() {
     // After the first knot update the method stopped uncertified and the most violated
     // constraint was reported as "constraint.radii[1]: cannot be satisfied together with the
     // other constraints". It is refused naming the update instead, and the advice holds.
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures/refine-heuristic-infeasible.json");
-    let doc = std::fs::read_to_string(path).unwrap();
-    let (code, out, err) = run_cli(&["refine", "-"], &doc);
-    assert_eq!(code, 2, "{err}");
-    assert!(out.is_empty());
-    let line = err.trim_end();
+    let (doc, line) = refused_fixture("refine-heuristic-infeasible.json");
     assert!(!line.contains("cannot be satisfied"), "{line}");
     assert!(
         line.starts_with("error: knot_iterations: stage 0, knot update 1: "),

@@ -13,7 +13,7 @@ finite, an exact answer has kkt_residual <= 1e-9, and its data vertices keep to 
 (interpolated, inside their balls, inside their half-spaces) to 1e-7 of the data's extent.
 ROBUSTNESS.md section 4, item 18, reports a run.
 """
-import json, subprocess, sys, os, time, math
+import json, subprocess, sys, os, time
 import numpy as np
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 BIN = os.environ.get("BIN", os.path.join(ROOT, "target", "release", "curvefit"))

@@ -15,7 +15,7 @@ properties of the seeds rather than against our own numbers.
   point count 2^K L + 1, and from 8 levels on the last level's energy within 1e-3 of the exact
   limit energy (Warren-Weimer Theorem 6.4), up to rounding of the data's scale.
 """
-import json, subprocess, sys, os, time
+import json, subprocess, sys, os
 import numpy as np
 from fractions import Fraction
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")

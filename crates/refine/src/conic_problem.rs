@@ -515,6 +515,8 @@ impl ConicProblem {
     /// constraint ([`Error::NoFeasiblePoint`]: a guess, which was wrong on feasible problems,
     /// ROBUSTNESS.md §4, 18).
     pub(crate) fn diagnose(&self, sol: &ConicSolution) -> Option<Error> {
+        // The iterate leaves a constraint: only then is there a violation to guess from.
+        let outside = sol.kkt.primal > 1e-6;
         let guess = |constraint| Error::NoFeasiblePoint {
             constraint,
             violation: sol.kkt.primal,
@@ -528,12 +530,12 @@ impl ConicProblem {
                 // (The method not converging on the projection problem is no proof: it failed
                 // on a non-empty polytope of width 1e-7 at 1e6 from the origin, item 18, where
                 // the solve's own iterate met every constraint.)
-                if sol.kkt.primal > 1e-6 && polytope_is_empty(hs, self.dim) {
+                if outside && polytope_is_empty(hs, self.dim) {
                     return Some(guess(c));
                 }
             }
         }
-        if sol.kkt.primal > 1e-6 {
+        if outside {
             if let Some(c) = self.worst_constraint(sol.points.coords()) {
                 return Some(guess(c));
             }
@@ -659,8 +661,9 @@ impl ConicProblem {
 /// than 1e-12 of the offsets.
 fn opposed_pair(hs: &[(Vec<f64>, f64)]) -> bool {
     hs.iter().enumerate().any(|(i, (a, b))| {
+        let na = norm(a);
         hs[i + 1..].iter().any(|(a2, b2)| {
-            let (na, na2) = (norm(a), norm(a2));
+            let na2 = norm(a2);
             if na == 0.0 || na2 == 0.0 || dot(a, a2) >= 0.0 {
                 return false;
             }
