@@ -26,8 +26,10 @@
 //! G̃_j = u_jᵀA_b and the Lagrangian L = f − Σ y_j c_j, whose Hessian is
 //! H_L = P − Σ_SOC (y_j/ν_j) A_bᵀJA_b, each step solves
 //!
-//!   [H_L  G̃ᵀ] [dx]   [−(Px + q + Aᵀz)]
-//!   [G̃    0 ] [dy] = [ c(x)           ]
+//! ```text
+//! [H_L  G̃ᵀ] [dx]   [−(Px + q + Aᵀz)]
+//! [G̃    0 ] [dy] = [ c(x)           ]
+//! ```
 //!
 //! by factoring H_L + G̃ᵀΔ⁻¹G̃ (Θ_b = −(y/ν)J + u uᵀ/δ on an active cone, e_k e_kᵀ/δ on an
 //! active row: the *stiff penalty* that holds the normals; δ = [`crate::PolishOptions::penalty`]

@@ -4,11 +4,11 @@
 //! this folder: `pip install ./crates/curvefit-py`) calls the command line's JSON contract,
 //! [`curvefit::spec`], in process. A problem given as keyword arguments is read by the same serde
 //! types as `curvefit SUBCOMMAND file.json` — same names, defaults, validation and messages —
-//! through [`de::PyDe`], a `serde::Deserializer` over Python objects (numpy arrays are read in
+//! through `de::PyDe`, a `serde::Deserializer` over Python objects (numpy arrays are read in
 //! place: the only copy is the one into the problem's own vectors; a large array given as a
-//! C-contiguous float64 array is copied as one slice, [`bulk`]). The solve runs with the GIL
+//! C-contiguous float64 array is copied as one slice, `bulk`). The solve runs with the GIL
 //! released ([`Python::detach`]) and with panics caught; the result comes back as a dict of numpy
-//! arrays and scalars whose keys are the JSON result's fields ([`out`]), which the Python layer
+//! arrays and scalars whose keys are the JSON result's fields (`out`), which the Python layer
 //! wraps in its result classes.
 //!
 //! | function | does |

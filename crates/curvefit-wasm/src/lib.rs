@@ -7,7 +7,7 @@
 //! The page speaks the command line's JSON and nothing else: [`solve`] takes a subcommand name
 //! and the problem as JSON text — exactly the file `curvefit SUBCOMMAND FILE` reads — parses it
 //! with [`curvefit::spec::from_json`] and solves it with the same entry point the binary calls
-//! ([`curvefit::spec::refine`], …). What the page shows, downloads or puts in its URL therefore
+//! ([`curvefit::spec::refine()`], …). What the page shows, downloads or puts in its URL therefore
 //! runs unchanged through the binary and the Python package.
 //!
 //! The reply is JSON text, one of

@@ -31,7 +31,7 @@ pub const DEFAULT_SAMPLES_PER_PIECE: usize = 16;
 pub enum ExportFormat {
     /// Samples `u,x,y[,z]` ([`csv`]).
     Csv,
-    /// An SVG `<path>` of cubic Béziers, d = 2 ([`svg`]).
+    /// An SVG `<path>` of cubic Béziers, d = 2 ([`svg()`]).
     Svg,
     /// A DXF SPLINE entity ([`dxf`]).
     Dxf,
@@ -60,7 +60,7 @@ impl ExportFormat {
 /// The curve in `format` (`samples` is [`csv`]'s count; `None` for its default).
 ///
 /// # Errors
-/// Those of [`svg`] and [`csv`].
+/// Those of [`svg()`] and [`csv()`].
 pub fn export(
     spline: &CubicSpline,
     format: ExportFormat,

@@ -138,7 +138,7 @@ pub enum Error {
     },
     /// The exact solver found no point that meets every constraint, but nothing proves that
     /// there is none: its interior-point method stopped uncertified with the primal residual
-    /// `violation` (relative) and `field`[`point`] the constraint it violated most (named as in
+    /// `violation` (relative) and `field[point]` the constraint it violated most (named as in
     /// [`Error::InfeasibleConstraint`]). [`Error::InfeasibleConstraint`] is kept for what is
     /// proved (an empty half-space set, a constraint contradicting fixed vertices): this guess
     /// was wrong on feasible problems (ROBUSTNESS.md §4, 18).

@@ -3,7 +3,7 @@
 
 pub use crate::backend::working_set::WorkingSetOptions;
 
-/// The largest relative KKT residual (of the independent certificate, [`crate::certify`]) with
+/// The largest relative KKT residual (of the independent certificate, module `certify`) with
 /// which [`crate::Solver::Exact`] returns a result: above it the solve refuses with
 /// [`crate::Error::NotConverged`] naming the best certificate reached. The default of
 /// [`SolveOptions::accept_kkt`].
@@ -14,7 +14,7 @@ pub const EXACT_ACCEPT_KKT: f64 = 1e-9;
 pub struct SolveOptions {
     /// The cone solver (interior-point method and polish) of the exact strategies
     /// ([`conic::Options`]; its defaults are the method's). The strict entries of the strategy
-    /// list ([`crate::strategy`]) tighten its tolerance to [`SolveOptions::strict_tolerance`].
+    /// list (module `strategy`) tighten its tolerance to [`SolveOptions::strict_tolerance`].
     pub conic: conic::Options,
     /// The tolerance of the strict retries (default 1e-13: an active set read off at the default
     /// 1e-10 is sometimes not settled enough for the polish; at 1e-13 the interior-point method
@@ -88,7 +88,7 @@ impl Default for PaperOptions {
     }
 }
 
-/// The common-point test ([`crate::degenerate`]): alternating projections onto the data
+/// The common-point test (module `degenerate`): alternating projections onto the data
 /// constraint sets.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CommonPointOptions {

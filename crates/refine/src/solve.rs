@@ -82,7 +82,7 @@ impl Problem {
     ///
     /// # Errors
     /// Any validation error of [`Problem::validate`]; [`crate::Error::Unsupported`] unless the
-    /// constraint is [`Constraint::Interpolate`] with no tangents and natural ends.
+    /// constraint is [`crate::Constraint::Interpolate`] with no tangents and natural ends.
     ///
     /// ```
     /// use divdiff::Points;
@@ -110,8 +110,8 @@ impl Problem {
 
     /// The conic program of the first fixed-knot solve — stage 0 on the k-level split of the
     /// data knots, before any knot update — as the constraint kinds state it: what the exact
-    /// solver's full-vertex entries solve ([`crate::strategy`]), for inspection and for
-    /// solving with another method (e.g. [`ConicProblem::solve_clarabel`]). The data are not
+    /// solver's full-vertex entries solve (module `strategy`), for inspection and for
+    /// solving with another method (e.g. `ConicProblem::solve_clarabel`, feature `clarabel`). The data are not
     /// centred ([`Problem::solve`] centres them first).
     ///
     /// # Errors

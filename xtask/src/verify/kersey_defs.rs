@@ -102,7 +102,7 @@ impl Curve {
         self.closed || (0..self.n() as isize - 1).contains(&i)
     }
 
-    /// Δ_{i,k} f = Σ_j p_{i+j} / π'(t_{i+j}) (explicit formula 25.1.4 of [1]).
+    /// Δ_{i,k} f = Σ_j p_{i+j} / π'(t_{i+j}) (explicit formula 25.1.4 of \[1\]).
     pub fn dd(&self, i: isize, k: usize) -> Vec<f64> {
         let mut out = vec![0.0; self.dim()];
         for j in 0..=k as isize {

@@ -24,7 +24,7 @@
 //! | §2.1, H symmetric PSD, dim ker H = 1 | | `kersey/2.1/H-positive-semidefinite`, `kersey/2.1+3.6/kernel-dimension` (dense eigenvalues) |
 //! | §2.2, jmp_{t_i}(D³f) | the discrete third-derivative jump | `kersey/2.2/jump-two-forms` (`divdiff::jumps` vs both printed forms) |
 //! | Theorem 2.1 | E = Σ p_i·jmp_i | `kersey/thm2.1/energy-equals-p-dot-jmp` |
-//! | proof of Thm 2.1 | explicit divided differences (25.1.4 of [1]) | `kersey/2.2/divided-difference-recurrence-vs-explicit` |
+//! | proof of Thm 2.1 | explicit divided differences (25.1.4 of \[1\]) | `kersey/2.2/divided-difference-recurrence-vs-explicit` |
 //! | Corollary 2.2 | jmp = ½Hp | `kersey/cor2.2/jmp-equals-half-Hp` |
 //! | Lemma 2.3 | ∂E/∂p_i = (Hp)_i | `kersey/lemma2.3/point-gradient-equals-Hp` (finite differences of the definitional E) |
 //! | Lemma 2.4 | ∂E/∂t_i, printed | `kersey/lemma2.4/printed-formula` (expected failure, 0.56–0.65 relative), `kersey/lemma2.4/corrected-gradient`, `kersey/lemma2.4/translation-and-scaling-identities` |
@@ -60,7 +60,7 @@
 //! | Algorithm 4.1 (iii) | the multiplier iteration | `kersey/alg4.1/paper-iteration-vs-clarabel` (expected failure: measured gap after 10, 50, 200 updates), `kersey/alg4.1/paper-iteration-converges` (200 updates reach the optimum) |
 //! | Algorithm 4.1 (iv)–(v) | knot updates t_{i+1} = t_i + |Δp|^e, e = ½ (0 uniform, 1 chordal), mapped onto the data parameter span | `kersey/alg4.1/knot-update-step-iv`, `kersey/alg4.1/parametrizations` |
 //! | Algorithm 4.1, part 2 | further interpolatory levels | `kersey/alg4.1/levels-interpolate-and-certify` |
-//! | §4, chordal updates do not converge to smooth curves [9] | | not checked: a statement about limits of repeated refinement under chordal updates, quoted from [9] |
+//! | §4, chordal updates do not converge to smooth curves \[9\] | | not checked: a statement about limits of repeated refinement under chordal updates, quoted from \[9\] |
 //! | Fig. 4.1 | slots for polygonal constraints, w_ij := w_ij |p − z_ij|/ε_ij | `kersey/fig4.1/slot-iteration-vs-clarabel` (expected failure: measured gap at the default 50 updates), `kersey/fig4.1/slot-iteration-converges` (200 updates reach the optimum, so the slots intersect to K_i) |
 //! | Fig. 1.1 | uniform vs non-uniform | not numeric (data not printed); redrawn by `cargo xtask figures` |
 //!

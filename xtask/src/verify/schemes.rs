@@ -25,7 +25,7 @@
 //! | Lemma 4.2 | tensor products have the continuity of the curve scheme | `khan/lemma4.2/tensor-smoothness-{4,6}-point-{binary,ternary}` |
 //! | §1 | higher arity: lower support | `khan/sec1/support-shrinks-with-arity` |
 //! | §1 | higher arity: higher approximation order | `khan/sec1/approximation-order-grows-with-arity` (expected failure: 2m+1 for every n) |
-//! | smoothness (issue 16 §2) | the seed states no continuity per (m, n); it cites [12] (Dubuc–Deslauriers) and [13] (Lian) | `khan/smoothness/binary-4-point-DD-holder-2`, `…-6-point-DD-holder-2.830` (published values), `khan/smoothness/finite-difference-holder-estimates` (family, n = 2..4) |
+//! | smoothness (issue 16 §2) | the seed states no continuity per (m, n); it cites \[12\] (Dubuc–Deslauriers) and \[13\] (Lian) | `khan/smoothness/binary-4-point-DD-holder-2`, `…-6-point-DD-holder-2.830` (published values), `khan/smoothness/finite-difference-holder-estimates` (family, n = 2..4) |
 //! | Figures 1–2 | labelling of old and new points | not numeric: the labelling is (2.1)/(4.1), checked above |
 //! | Figures 3–4 | pictures of refined curves and a surface | not numeric: redrawn by `cargo xtask figures` (schemes); the initial polygons are not printed |
 //!

@@ -14,7 +14,7 @@ use crate::spec::InputError;
 #[command(next_help_heading = "Export (refine)")]
 pub struct ExportArgs {
     /// Write the limit curve (the cubic spline the refinement tends to, docs/limit.md) here:
-    /// .csv samples u,x,y[,z]; .svg an SVG path of exact cubic Béziers (plane curves); .dxf a DXF
+    /// .csv samples u,x,y\[,z\]; .svg an SVG path of exact cubic Béziers (plane curves); .dxf a DXF
     /// SPLINE of degree 3; .json degree, knots, control points, Bézier pieces.
     #[arg(long = "export", value_name = "FILE")]
     pub export_file: Option<PathBuf>,

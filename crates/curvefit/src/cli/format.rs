@@ -92,7 +92,7 @@ pub fn bytes_piece<'a>(bytes: &'a [u8]) -> Piece<'a> {
 const AHEAD: usize = 2;
 
 /// Writes `pieces` in order, making them on every core while the calling thread writes: piece
-/// k is made by thread k mod T, each thread at most [`AHEAD`] pieces ahead of the writer, into
+/// k is made by thread k mod T, each thread at most `AHEAD` pieces ahead of the writer, into
 /// buffers the writer hands back once written. Formatting floats (~30 ns a number, shortest
 /// round trip) is the cost of a large text output; with the writes overlapped, a text output
 /// takes about (formatting + copying into the file) / cores, and its memory is a few pieces per

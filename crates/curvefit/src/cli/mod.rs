@@ -15,7 +15,7 @@ pub mod progress;
 
 pub use self::commands::{natural, refine, strip, surface};
 /// The JSON types of `refine` (kept at this path for existing callers; the home is
-/// [`crate::spec::refine`]).
+/// [`crate::spec::refine`](mod@crate::spec::refine)).
 pub use crate::spec::refine as refine_types;
 pub use crate::spec::InputError;
 pub use input::MAX_INPUT_BYTES;

@@ -4,7 +4,7 @@
 //!
 //! | entry point | problem | result | library call |
 //! |---|---|---|---|
-//! | [`refine()`] | [`RefineProblem`] | [`RefineResult`] | [`refine::Problem::solve`] |
+//! | [`refine()`] | [`RefineProblem`] | [`RefineResult`] | [`::refine::Problem::solve`] |
 //! | [`strip()`] | [`StripProblem`] | [`StripResult`] | [`strip::solve`](::strip::solve) |
 //! | [`scheme()`] | [`SchemeProblem`] | [`SchemeResult`] | [`subdivision::NaryScheme`] |
 //! | [`surface()`] | [`SurfaceProblem`] | [`SurfaceResult`] | [`subdivision::NaryScheme::subdivide_grid`] |
@@ -92,7 +92,7 @@ impl Display for InputError {
 
 impl std::error::Error for InputError {}
 
-/// `refine`: Kersey's variational refinement ([`refine::solve`](self::refine::solve)).
+/// `refine`: Kersey's variational refinement ([`refine::solve`]).
 ///
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
@@ -100,7 +100,7 @@ pub fn refine(problem: &RefineProblem) -> Result<RefineResult, InputError> {
     self::refine::solve(problem)
 }
 
-/// `strip`: best interpolation in a strip ([`strip::solve`](self::strip::solve)).
+/// `strip`: best interpolation in a strip ([`strip::solve`]).
 ///
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
@@ -108,7 +108,7 @@ pub fn strip(problem: &StripProblem) -> Result<StripResult, InputError> {
     self::strip::solve(problem)
 }
 
-/// `scheme`: the (2m+2)-point n-ary rules ([`scheme::solve`](self::scheme::solve)).
+/// `scheme`: the (2m+2)-point n-ary rules ([`scheme::solve`]).
 ///
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
@@ -116,7 +116,7 @@ pub fn scheme(problem: &SchemeProblem) -> Result<SchemeResult, InputError> {
     self::scheme::solve(problem)
 }
 
-/// `surface`: the tensor-product scheme on a quad grid ([`surface::solve`](self::surface::solve)).
+/// `surface`: the tensor-product scheme on a quad grid ([`surface::solve`]).
 ///
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
@@ -124,7 +124,7 @@ pub fn surface(problem: &SurfaceProblem) -> Result<SurfaceResult, InputError> {
     self::surface::solve(problem)
 }
 
-/// `natural`: Warren–Weimer's natural cubic subdivision ([`natural::solve`](self::natural::solve)).
+/// `natural`: Warren–Weimer's natural cubic subdivision ([`natural::solve`]).
 ///
 /// # Errors
 /// An [`InputError`] naming the user's field and index.

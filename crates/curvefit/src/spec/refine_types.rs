@@ -96,7 +96,7 @@ pub enum ConstraintSpec {
     /// p_{i_k} = q_i.
     #[default]
     Interpolate,
-    /// |p_{i_k} − q_i| ≤ radii[i] (0 interpolates that point).
+    /// |p_{i_k} − q_i| ≤ radii\[i\] (0 interpolates that point).
     Balls {
         /// One radius ≥ 0 per point.
         radii: Vec<f64>,
@@ -106,7 +106,7 @@ pub enum ConstraintSpec {
         /// One weight ≥ 0 per point.
         weights: Vec<f64>,
     },
-    /// p_{i_k} in the polytope sets[i] (normal · x ≤ offset for each half-space).
+    /// p_{i_k} in the polytope sets\[i\] (normal · x ≤ offset for each half-space).
     Halfspaces {
         /// One set of half-spaces per point.
         sets: Vec<Vec<HalfSpaceSpec>>,

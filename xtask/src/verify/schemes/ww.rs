@@ -389,7 +389,7 @@ fn basis_c2_natural() -> anyhow::Result<Outcome> {
     .against(Oracle::ClosedForm))
 }
 
-/// §6.2.4: "the functions p_k[x] uniformly converge to a piecewise cubic function p_∞[x] ∈ C²":
+/// §6.2.4: "the functions p_k\[x\] uniformly converge to a piecewise cubic function p_∞\[x\] ∈ C²":
 /// away from the ends S is stationary, so its smoothness is that of the mask read off an
 /// interior column of the library's S (the refinement of one unit value), analysed by
 /// `subdivision::smoothness`: the cubic B-spline, Hölder exponent 3 exactly, C² and not C³.

@@ -1,5 +1,5 @@
-//! `curvefit natural`: the subcommand (the JSON contract is [`crate::spec::natural`]) and its
-//! picture.
+//! `curvefit natural`: the subcommand (the JSON contract is
+//! [`spec::natural`](mod@crate::spec::natural)) and its picture.
 
 use super::super::format::Table;
 use crate::plot::{palette, Figure, Marker, Style};

@@ -1,5 +1,5 @@
-//! `curvefit refine`: the subcommand (the JSON contract is [`crate::spec::refine`]) and its
-//! picture.
+//! `curvefit refine`: the subcommand (the JSON contract is
+//! [`spec::refine`](mod@crate::spec::refine)) and its picture.
 
 use super::super::format::{bytes_piece, json_array_pieces, write_pieces, Table};
 use crate::spec::refine::*;

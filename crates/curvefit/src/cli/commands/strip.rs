@@ -1,4 +1,5 @@
-//! `curvefit strip`: the subcommand (the JSON contract is [`crate::spec::strip`]) and its picture.
+//! `curvefit strip`: the subcommand (the JSON contract is [`spec::strip`](mod@crate::spec::strip))
+//! and its picture.
 
 use super::super::format::Table;
 use crate::plot::{palette, Figure, Marker, Style};

@@ -1,5 +1,5 @@
-//! `curvefit surface`: the subcommand (the JSON contract is [`crate::spec::surface`]), its OBJ
-//! mesh and its picture.
+//! `curvefit surface`: the subcommand (the JSON contract is
+//! [`spec::surface`](mod@crate::spec::surface)), its OBJ mesh and its picture.
 
 use super::super::format::Table;
 use crate::plot::{palette, Figure, Style};
