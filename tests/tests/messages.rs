@@ -136,6 +136,15 @@ fn messages_say_what_the_field_must_be() {
             r#"{"rows": 2, "cols": 2, "points": [[0, 0], [1, 0], [0, 1], [1, 1]], "scheme": 4}"#.to_string(),
             r#"error: scheme: must be an object like {"points": 4, "arity": 2}, not 4"#,
         ),
+        (
+            // A triangle given with inward normals: every two half-planes meet, the three do
+            // not (proved exactly before any solve).
+            "refine",
+            format!(
+                r#"{{{P}, "constraint": {{"type": "halfspaces", "sets": [[], [{{"normal": [0, 1], "offset": 0}}, {{"normal": [1, 0], "offset": 0}}, {{"normal": [-1, -1], "offset": -1}}], []]}}}}"#
+            ),
+            "error: constraint.sets[1]: is empty: its half-spaces 0, 1, 2 have no common point",
+        ),
     ];
     for (sub, doc, want) in cases {
         let got = message(sub, doc);

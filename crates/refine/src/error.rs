@@ -124,10 +124,24 @@ pub enum Error {
         /// The second vertex of the span.
         next: usize,
     },
-    /// A data point's constraint cannot be met, proved: an empty half-space set (two opposed
-    /// half-spaces without room, or an empty polygon of the paper's slots), or a constraint
-    /// contradicting fixed vertices; `field` is `"sets"`, `"tangents"` or `"boundary"` and
-    /// `point` the data point (for `"boundary"`: 0 = start, 1 = end). What is not proved is
+    /// A half-space set has no common point, proved before any solve: the half-spaces
+    /// `half_spaces` (indices within the set, at most d + 1) have Farkas multipliers y ≥ 0 with
+    /// Σ y_j n_j = 0 and Σ y_j c_j < 0, checked in exact integer arithmetic
+    /// (`constraint/farkas.rs`). `field` is `"sets"` or `"tangents.halfspaces"`, `point` the
+    /// data point.
+    #[error("{field}[{point}] is empty: its half-spaces {half_spaces:?} have no common point")]
+    EmptySet {
+        /// The field.
+        field: &'static str,
+        /// The data point the set belongs to.
+        point: usize,
+        /// The half-spaces (indices within the set) that have no common point.
+        half_spaces: Vec<usize>,
+    },
+    /// A data point's constraint cannot be met, proved: an empty polygon of the paper's slots,
+    /// an empty half-space set found after a solve (the same proof as [`Error::EmptySet`]), or a
+    /// constraint contradicting fixed vertices; `field` is `"sets"`, `"tangents"` or
+    /// `"boundary"` and `point` the data point (for `"boundary"`: 0 = start, 1 = end). What is not proved is
     /// [`Error::NoFeasiblePointFound`].
     #[error("{field}[{point}] cannot be satisfied")]
     InfeasibleConstraint {

@@ -539,7 +539,8 @@ fn halfspaces_tangents_and_clamped_ends() {
     );
     assert!(r.multipliers.iter().flatten().all(|&w| w >= 0.0));
 
-    // An empty set at point 2 (x ≤ 0 and x ≥ 1) is a typed error naming the point.
+    // An empty set at point 2 (x ≤ 0 and x ≥ 1) is a typed error naming the point and the two
+    // half-spaces that prove it, before any solve.
     let mut bad = sets;
     bad[2] = vec![
         HalfSpace {
@@ -558,10 +559,11 @@ fn halfspaces_tangents_and_clamped_ends() {
     assert!(
         matches!(
             err,
-            Error::InfeasibleConstraint {
+            Error::EmptySet {
                 field: "sets",
-                point: 2
-            }
+                point: 2,
+                ref half_spaces
+            } if half_spaces == &[0, 1]
         ),
         "{err:?}"
     );

@@ -120,8 +120,5 @@ fn slot_iteration_is_planar_and_reports_empty_polygons() {
         .with_constraint(Constraint::HalfSpaces(vec![empty, vec![], vec![]]))
         .with_solver(Solver::Paper)
         .solve();
-    assert!(
-        matches!(e, Err(Error::InfeasibleConstraint { point: 0, .. })),
-        "{e:?}"
-    );
+    assert!(matches!(e, Err(Error::EmptySet { point: 0, .. })), "{e:?}");
 }

@@ -480,6 +480,22 @@ fn user_error(e: refine::Error) -> InputError {
             };
             InputError::new(f, reason)
         }
+        E::EmptySet {
+            field,
+            point,
+            half_spaces,
+        } => {
+            let f = if field.starts_with("tangents") {
+                format!("tangents[{point}].halfspaces")
+            } else {
+                format!("constraint.sets[{point}]")
+            };
+            let list: Vec<String> = half_spaces.iter().map(usize::to_string).collect();
+            InputError::new(
+                f,
+                format!("is empty: its half-spaces {} have no common point (an exact Farkas certificate: positive multiples of their normals sum to zero while the same multiples of their offsets sum below zero); each normal points out of the set: check their orientation", list.join(", ")),
+            )
+        }
         E::InvalidKnots { index, reason } => InputError::new(format!("knots[{index}]"), reason),
         E::TooFewWeights { needed, got } => InputError::new(
             "constraint.weights",

@@ -26,8 +26,10 @@ pub(crate) struct HalfSpaces<'a>(pub &'a [Vec<HalfSpace>]);
 impl Kind for HalfSpaces<'_> {
     fn validate(&self, problem: &Problem) -> Result<(), Error> {
         super::check_len("sets", self.0.len(), problem.points.len())?;
+        let mut budget = super::farkas::PROBLEM_CANDIDATES;
         for (i, set) in self.0.iter().enumerate() {
-            super::check_halfspaces("sets", i, set, problem.points.dim())?;
+            let q = problem.points.point(i);
+            super::check_halfspaces("sets", i, set, problem.points.dim(), Some(q), &mut budget)?;
         }
         Ok(())
     }

@@ -29,6 +29,7 @@
 
 pub(crate) mod balls;
 pub(crate) mod ends;
+pub(crate) mod farkas;
 pub(crate) mod halfspaces;
 pub(crate) mod interpolate;
 pub(crate) mod smoothing;
@@ -458,11 +459,16 @@ pub(crate) fn check_dim(
     Ok(())
 }
 
+/// Checks each half-space of one set (dimension, finite, a usable normal), then that the set is
+/// not provably empty ([`farkas`]; the witness search starts at `start`, the data point where
+/// the set must hold it; `budget` is the problem's search budget).
 pub(crate) fn check_halfspaces(
     field: &'static str,
     point: usize,
     set: &[HalfSpace],
     d: usize,
+    start: Option<&[f64]>,
+    budget: &mut usize,
 ) -> Result<(), Error> {
     for (j, h) in set.iter().enumerate() {
         let bad = |reason| Error::InvalidHalfSpace {
@@ -489,7 +495,15 @@ pub(crate) fn check_halfspaces(
             ));
         }
     }
-    Ok(())
+    let rows: Vec<(&[f64], f64)> = set.iter().map(|h| (&h.normal[..], h.offset)).collect();
+    match farkas::search(&rows, d, start, budget) {
+        Some(half_spaces) => Err(Error::EmptySet {
+            field,
+            point,
+            half_spaces,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The Euclidean distance |a − b| (scaled: no overflow or underflow of the squares).

@@ -57,6 +57,7 @@ impl Kind for Tangents<'_> {
     fn validate(&self, problem: &Problem) -> Result<(), Error> {
         let d = problem.points.dim();
         super::check_len("tangents", self.0.len(), problem.points.len())?;
+        let mut budget = super::farkas::PROBLEM_CANDIDATES;
         for (i, tan) in self.0.iter().enumerate() {
             match tan {
                 None => {}
@@ -91,7 +92,7 @@ impl Kind for Tangents<'_> {
                     super::check_nonneg_one("tangents.radius", i, *radius)?;
                 }
                 Some(Tangent::HalfSpaces(h)) => {
-                    super::check_halfspaces("tangents.halfspaces", i, h, d)?;
+                    super::check_halfspaces("tangents.halfspaces", i, h, d, None, &mut budget)?;
                 }
             }
         }
