@@ -769,7 +769,7 @@ mod tests {
                             0 => {
                                 // On the cone's boundary: a = J(du) = 0.
                                 let rd = du[1..].iter().map(|x| x * x).sum::<f64>().sqrt();
-                                du[0] = if kind % 2 == 0 { rd } else { -rd };
+                                du[0] = if kind.is_multiple_of(2) { rd } else { -rd };
                             }
                             1 => du.fill(0.0),
                             2 => du[0] = -du[0].abs() * 10.0,
@@ -787,7 +787,7 @@ mod tests {
                             }
                             _ => {}
                         }
-                        if case == 17 && kind % 5 == 0 {
+                        if case == 17 && kind.is_multiple_of(5) {
                             du[1] = f64::NAN;
                         }
                         (u, du)

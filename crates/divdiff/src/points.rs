@@ -22,7 +22,7 @@ impl Points {
                 reason: "dimension must be at least 1",
             });
         }
-        if coords.len() % dim != 0 {
+        if !coords.len().is_multiple_of(dim) {
             return Err(Error::LengthMismatch {
                 field: "coords",
                 expected: coords.len().div_ceil(dim) * dim,

@@ -110,7 +110,7 @@ impl NaryScheme {
                 got: points,
             });
         }
-        if points % 2 != 0 {
+        if !points.is_multiple_of(2) {
             return Err(Error::InvalidValue {
                 field: "points",
                 index: 0,

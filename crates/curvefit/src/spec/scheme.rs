@@ -64,7 +64,7 @@ pub fn validate_rows(field: &str, rows: &Rows, min: usize) -> Result<Points, Inp
 
 /// Builds the scheme P = `points`, N = `arity`, naming the field on error.
 pub fn scheme_from_flags(points: usize, arity: usize) -> Result<NaryScheme, InputError> {
-    if points < 2 || points % 2 != 0 {
+    if points < 2 || !points.is_multiple_of(2) {
         return Err(InputError::new(
             "points",
             format!("must be even and at least 2 (P = 2m + 2), got {points}"),
