@@ -225,7 +225,8 @@ fn fill<const D: usize>(
     let mu: [f64; D] = mu.try_into().expect("D coordinates");
     let nu: [f64; D] = nu.try_into().expect("D coordinates");
     out[..D].copy_from_slice(&ya);
-    for (o, wl) in out[D..].chunks_exact_mut(D).zip(w) {
+    // (Arrays of D, not `chunks_exact_mut`, which re-splits the slice at every step.)
+    for (o, wl) in out[D..].as_chunks_mut::<D>().0.iter_mut().zip(w) {
         for c in 0..D {
             o[c] = ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]);
         }
