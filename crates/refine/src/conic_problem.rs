@@ -522,11 +522,14 @@ impl ConicProblem {
             violation: sol.kkt.primal,
             iterations: sol.iterations,
         };
+        // One search budget for the whole problem, as in validation.
+        let mut budget = crate::constraint::farkas::PROBLEM_CANDIDATES;
         for (c, con) in self.constraints.iter().enumerate() {
             if let ConvexSet::HalfSpaces(hs) = &con.set {
-                let rows: Vec<(&[f64], f64)> = hs.iter().map(|(n, o)| (&n[..], *o)).collect();
-                let mut budget = crate::constraint::farkas::PROBLEM_CANDIDATES;
-                if crate::constraint::farkas::search(&rows, self.dim, None, &mut budget).is_some() {
+                let row = |j: usize| (&hs[j].0[..], hs[j].1);
+                if crate::constraint::farkas::search(hs.len(), row, self.dim, None, &mut budget)
+                    .is_some()
+                {
                     return Some(Error::Infeasible { constraint: c });
                 }
                 // (The method not converging on the projection problem is no proof: it failed

@@ -141,8 +141,8 @@ pub enum Error {
     /// A data point's constraint cannot be met, proved: an empty polygon of the paper's slots,
     /// an empty half-space set found after a solve (the same proof as [`Error::EmptySet`]), or a
     /// constraint contradicting fixed vertices; `field` is `"sets"`, `"tangents"` or
-    /// `"boundary"` and `point` the data point (for `"boundary"`: 0 = start, 1 = end). What is not proved is
-    /// [`Error::NoFeasiblePointFound`].
+    /// `"boundary"` and `point` the data point (for `"boundary"`: 0 = start, 1 = end). What is
+    /// not proved is [`Error::NoFeasiblePointFound`].
     #[error("{field}[{point}] cannot be satisfied")]
     InfeasibleConstraint {
         /// The field.

@@ -428,6 +428,15 @@ fn path(field: &str, index: usize) -> String {
     }
 }
 
+/// A half-space set's JSON path: `tangents[i].halfspaces` or `constraint.sets[i]`.
+fn set_path(field: &str, point: usize) -> String {
+    if field.starts_with("tangents") {
+        format!("tangents[{point}].halfspaces")
+    } else {
+        format!("constraint.sets[{point}]")
+    }
+}
+
 /// The user's view of a library error: the JSON field and index it concerns (module docs of
 /// `refine::Error` for the variants), and what is wrong in words.
 fn user_error(e: refine::Error) -> InputError {
@@ -472,27 +481,15 @@ fn user_error(e: refine::Error) -> InputError {
             point,
             index,
             reason,
-        } => {
-            let f = if field.starts_with("tangents") {
-                format!("tangents[{point}].halfspaces[{index}]")
-            } else {
-                format!("constraint.sets[{point}][{index}]")
-            };
-            InputError::new(f, reason)
-        }
+        } => InputError::new(format!("{}[{index}]", set_path(field, point)), reason),
         E::EmptySet {
             field,
             point,
             half_spaces,
         } => {
-            let f = if field.starts_with("tangents") {
-                format!("tangents[{point}].halfspaces")
-            } else {
-                format!("constraint.sets[{point}]")
-            };
             let list: Vec<String> = half_spaces.iter().map(usize::to_string).collect();
             InputError::new(
-                f,
+                set_path(field, point),
                 format!("is empty: its half-spaces {} have no common point (an exact Farkas certificate: positive multiples of their normals sum to zero while the same multiples of their offsets sum below zero); each normal points out of the set: check their orientation", list.join(", ")),
             )
         }

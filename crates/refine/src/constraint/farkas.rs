@@ -25,6 +25,7 @@
 //!
 //! Complete for sets within the limits, in exact arithmetic on the given doubles.
 
+use banded::vector::{axpy, dot, norm};
 use num_bigint::BigInt;
 use num_traits::{Num, Signed, Zero};
 
@@ -45,20 +46,20 @@ const WITNESS_ROUNDS: usize = 32;
 /// skipped; the exact check decides.
 const SCREEN: f64 = 1e-6;
 
-/// The indices (increasing) of at most d + 1 of the half-spaces `hs` = (normal, offset) that
-/// have no common point, proved by Farkas' lemma in exact arithmetic (module docs); `None` when
+/// The indices (increasing) of at most d + 1 of the `m` half-spaces `row(j)` = (normal, offset)
+/// that have no common point, proved by Farkas' lemma in exact arithmetic (module docs); `None` when
 /// no proof is found (the set may be nonempty, or beyond the search's limits). `start` is where
 /// the witness search starts (the origin if `None`); `budget` the candidates the problem has
 /// left ([`PROBLEM_CANDIDATES`] at first), reduced by this set's. The normals are finite,
 /// non-zero and of dimension `d`; the offsets finite.
-pub(crate) fn search(
-    hs: &[(&[f64], f64)],
+pub(crate) fn search<'a>(
+    m: usize,
+    row: impl Fn(usize) -> (&'a [f64], f64),
     d: usize,
     start: Option<&[f64]>,
     budget: &mut usize,
 ) -> Option<Vec<usize>> {
-    let m = hs.len();
-    if m < 2 || d == 0 || d > MAX_DIM || has_witness(hs, d, start) {
+    if m < 2 || d == 0 || d > MAX_DIM || has_witness(m, &row, d, start) {
         return None;
     }
     let top = m.min(d + 1);
@@ -70,14 +71,19 @@ pub(crate) fn search(
     }
     *budget -= candidates;
     // Unit normals and offsets for the screen (no overflow in the cofactors).
-    let unit: Vec<(Vec<f64>, f64)> = hs
-        .iter()
-        .map(|(n, c)| {
-            let l = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let unit: Vec<(Vec<f64>, f64)> = (0..m)
+        .map(|j| {
+            let (n, c) = row(j);
+            let l = norm(n);
             (n.iter().map(|x| x / l).collect(), c / l)
         })
         .collect();
-    let exact: Vec<Vec<BigInt>> = hs.iter().map(|(n, c)| integer_row(n, *c)).collect();
+    let exact: Vec<Vec<BigInt>> = (0..m)
+        .map(|j| {
+            let (n, c) = row(j);
+            integer_row(n, c)
+        })
+        .collect();
     for s in 2..=top {
         for subset in combinations(m, s) {
             for coords in combinations(d, s - 1) {
@@ -109,29 +115,38 @@ fn block<T: Num + Clone>(
 
 /// Whether a few rounds of projections from `start` reach a point of every half-space
 /// (floating-point test: a witness only ends the search, it claims nothing).
-fn has_witness(hs: &[(&[f64], f64)], d: usize, start: Option<&[f64]>) -> bool {
-    let mut x = start.map_or_else(|| vec![0.0; d], <[f64]>::to_vec);
-    let inside = |x: &[f64]| hs.iter().all(|(n, c)| dot(n, x) <= *c);
+/// (d ≤ [`MAX_DIM`]: the point lives on the stack, no allocation per set on the validation path.)
+fn has_witness<'a>(
+    m: usize,
+    row: &impl Fn(usize) -> (&'a [f64], f64),
+    d: usize,
+    start: Option<&[f64]>,
+) -> bool {
+    let mut buf = [0.0; MAX_DIM];
+    let x = &mut buf[..d];
+    if let Some(s) = start {
+        x.copy_from_slice(s);
+    }
+    let inside = |x: &[f64]| {
+        (0..m).all(|j| {
+            let (n, c) = row(j);
+            dot(n, x) <= c
+        })
+    };
     for _ in 0..WITNESS_ROUNDS {
-        if inside(&x) {
+        if inside(x) {
             return true;
         }
-        for (n, c) in hs {
-            let g = dot(n, &x) - c;
+        for j in 0..m {
+            let (n, c) = row(j);
+            let g = dot(n, x) - c;
             if g > 0.0 {
                 // Slightly past the boundary, so that a point of a thin set lands inside it.
-                let step = g * (1.0 + 1e-9) / dot(n, n);
-                for (xk, nk) in x.iter_mut().zip(n.iter()) {
-                    *xk -= step * nk;
-                }
+                axpy(-g * (1.0 + 1e-9) / dot(n, n), n, x);
             }
         }
     }
-    inside(&x)
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    inside(x)
 }
 
 /// Whether the floating-point cofactors `y` may be a Farkas vector: nonzero, of one sign (up
@@ -276,7 +291,8 @@ mod tests {
 
     fn run(rows: &[(&[f64], f64)]) -> Option<Vec<usize>> {
         search(
-            rows,
+            rows.len(),
+            |j| rows[j],
             rows[0].0.len(),
             None,
             &mut super::PROBLEM_CANDIDATES.clone(),

@@ -495,8 +495,8 @@ pub(crate) fn check_halfspaces(
             ));
         }
     }
-    let rows: Vec<(&[f64], f64)> = set.iter().map(|h| (&h.normal[..], h.offset)).collect();
-    match farkas::search(&rows, d, start, budget) {
+    let row = |j: usize| (&set[j].normal[..], set[j].offset);
+    match farkas::search(set.len(), row, d, start, budget) {
         Some(half_spaces) => Err(Error::EmptySet {
             field,
             point,
