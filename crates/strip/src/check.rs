@@ -10,9 +10,10 @@
 use crate::piece::{cubic_argmin, shift};
 use crate::types::{Bound, Problem, Side, Solution};
 
-/// Calls `visit(segment, a, excursion, at)` for every sub-interval \[a, b\] of the piecewise
+/// Calls `visit(segment, a, excursion, at, start)` for every sub-interval \[a, b\] of the piecewise
 /// cubic (`breaks`, `coeffs`) and the bound `b` of `side`, where `excursion` is the largest
-/// amount by which f leaves the bound there (NaN propagates), `at` where, and `segment` the
+/// amount by which f leaves the bound there (NaN propagates), `at` where, `start` the amount at
+/// a (negative inside), and `segment` the
 /// polyline segment (or the data interval, for cubic pieces) holding \[a, b\]. Where f is clearly
 /// inside (its distance to the bound at the ends exceeds its largest possible bend,
 /// |d''|·(b − a)²/8), a negative upper bound of the excursion is reported instead of the exact
@@ -23,7 +24,7 @@ pub(crate) fn excursions(
     side: Side,
     breaks: &[f64],
     coeffs: &[[f64; 4]],
-    visit: &mut dyn FnMut(usize, f64, f64, f64),
+    visit: &mut dyn FnMut(usize, f64, f64, f64, f64),
 ) {
     let cuts: &[[f64; 2]] = match b {
         Bound::None => return,
@@ -89,10 +90,10 @@ pub(crate) fn excursions(
             let bend = (2.0 * d[2].abs() + 6.0 * d[3].abs() * l) * l * l / 8.0;
             let lower = d[0].min(dl) - bend;
             if lower > 0.0 {
-                visit(seg, a, -lower, a);
+                visit(seg, a, -lower, a, -d[0]);
             } else {
                 let (min, u) = cubic_argmin(&d, l);
-                visit(seg, a, -min, a + u);
+                visit(seg, a, -min, a + u, -d[0]);
             }
             if end >= x1 {
                 break;
@@ -113,7 +114,7 @@ pub(crate) fn worst_violation(p: &Problem, s: &Solution) -> Option<(f64, usize, 
             side,
             &s.breaks,
             &s.coefficients,
-            &mut |_, a, by, _| {
+            &mut |_, a, by, _, _| {
                 if worst.is_none_or(|(m, _, _)| by > m || by.is_nan()) {
                     worst = Some((by, a, side));
                 }

@@ -28,7 +28,8 @@
 //! **Exchange.** An O(M) sweep ([`crate::check::excursions`]) finds, on every sub-interval
 //! between consecutive knots and bound breakpoints, where f leaves the strip most (the real roots
 //! of the derivative of the cubic minus the bound). In every run of consecutive violated
-//! sub-intervals the worst point is a candidate (one per run: adding every violated point
+//! sub-intervals with f outside at their common ends (one dip of f through the bound) the worst
+//! point is a candidate (one per run: adding every violated point
 //! activates nearly every vertex of a narrow channel at once, far from the answer); candidates
 //! still violated when their turn comes are added. Points at vertices fix contacts at kinks of
 //! the polyline; points inside segments converge to the tangent contacts (the added point lands
@@ -381,11 +382,19 @@ fn sweep(
             side,
             &curve.breaks[range.start..=range.end],
             &curve.coeffs[range.clone()],
-            &mut |_, _, by, at| {
+            &mut |_, _, by, at, start| {
                 if by > worst || by.is_nan() {
                     worst = by;
                 }
                 if by > tol || by.is_nan() {
+                    // a run goes on into this sub-interval only if f is outside at their common
+                    // end: separate dips are separate candidates (else a zigzag's dips, one per
+                    // data interval, were one run, and the sweeps added them one at a time)
+                    if start <= tol {
+                        if let Some((w, at)) = run.take() {
+                            out.push((at, side, w));
+                        }
+                    }
                     if run.is_none_or(|(w, _)| by > w) {
                         run = Some((by, at));
                     }
@@ -516,6 +525,10 @@ pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
         }
     }
     st.resolve();
+    eprintln!(
+        "DEBUG sweeps {sweeps} steps {} converged {converged}",
+        st.steps
+    );
     let active = st.active();
     Exchanged {
         gap: gap_of(&st.cur, &active, violation),

@@ -254,3 +254,36 @@ fn infeasible_channels_are_refused_with_the_place() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A zigzag y = ±1 at t = 0, 1, …, n − 1 with the lower bound 0.05 below the data (a polyline
+/// through (t_i, y_i − 0.05)): the natural spline dips through the bound in every data interval,
+/// and the dips are apart — at every site f is 0.05 inside. The sweeps once took the violated
+/// sub-intervals of the whole curve as one run and added one contact per sweep (n + 21 sweeps:
+/// refused at n = 400 with the sweep limit of 400); each dip is now its own candidate. A second
+/// case closes it in a two-sided channel 0.05 wide about the zigzag's polyline.
+#[test]
+fn a_zigzag_dipping_through_the_bound_in_every_interval() {
+    for (n, upper) in [(1000, false), (3000, true)] {
+        let t: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let y: Vec<f64> = (0..n)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let line =
+            |off: f64| Bound::Polyline(t.iter().zip(&y).map(|(&t, &y)| [t, y + off]).collect());
+        let p = Problem {
+            t: t.clone(),
+            y: y.clone(),
+            lower: line(-0.05),
+            upper: if upper { line(0.05) } else { Bound::None },
+            end_slopes: [None, None],
+        };
+        let s = solve(&p, &Options::default()).unwrap_or_else(|e| panic!("n = {n}: {e}"));
+        check(&p, &s, false).unwrap();
+        assert!(
+            s.extra_knots.len() >= n - 2,
+            "n = {n}: {} contacts",
+            s.extra_knots.len()
+        );
+        assert!(s.rounds < 100, "n = {n}: {} sweeps", s.rounds);
+    }
+}
