@@ -77,6 +77,21 @@ impl Points {
         Points::new(dim, coords)
     }
 
+    /// Points of `D` coordinates from their rows, moved without a copy. Unlike [`Points::new`]
+    /// the coordinates are not scanned for NaN or infinities: this is for computed points whose
+    /// finiteness their producer checked while writing them (as with [`Points::zeros`] and
+    /// [`Points::coords_mut`]); input goes through [`Points::new`].
+    ///
+    /// # Panics
+    /// If `D == 0`.
+    pub fn from_array_rows<const D: usize>(rows: Vec<[f64; D]>) -> Self {
+        assert!(D > 0, "points need at least one coordinate");
+        Points {
+            dim: D,
+            coords: rows.into_flattened(),
+        }
+    }
+
     /// `n` points at the origin of R^dim.
     pub fn zeros(n: usize, dim: usize) -> Self {
         Points {

@@ -231,26 +231,19 @@ pub(crate) fn split_knots(u: &Knots, k: usize) -> Result<Knots, Error> {
 /// already on its [`exact_split_grid`].
 fn split_on_grid(v: &[f64], topology: divdiff::Topology, m: usize) -> Result<Knots, Error> {
     let spans = v.len() - 1;
-    let mut t = vec![0.0; m * spans + 1];
-    // Span by span in parallel chunks (`crate::par`); the last unit is the last knot alone.
-    // (Non-finite values are refused by `Knots::new` below.)
-    crate::par::fill_units(
-        &mut t,
-        m,
-        m,
-        || (),
-        |(), i, out| {
-            if i == spans {
-                out[0] = v[spans];
-                return;
-            }
-            let (a, b) = (v[i], v[i + 1]);
-            let step = (b - a) / m as f64;
-            for (j, x) in out.iter_mut().enumerate() {
-                *x = a + j as f64 * step;
-            }
+    // Span by span, collected in parallel chunks (`crate::par`); the last unit is the last
+    // knot alone. (Non-finite values are refused by `Knots::new` below.)
+    let t = crate::par::collect_units(crate::par::Units {
+        len: m * spans + 1,
+        per_unit: m,
+        head: |i: usize| match v.get(i + 1) {
+            Some(&b) => (v[i], (b - v[i]) / m as f64),
+            None => (v[spans], 0.0),
         },
-    );
+        value: |&(a, step): &(f64, f64), j: usize| a + j as f64 * step,
+        bad: |_: &f64| false,
+    })
+    .expect("no value is marked bad");
     Ok(Knots::new(topology, t)?)
 }
 

@@ -71,9 +71,9 @@ pub(crate) fn join<A: Send, B: Send>(
 /// closed form's table of data rows (`uniform::data_alphas`, square roots and divisions four
 /// at a time), and for the knot updates the streaming condensation's span factors
 /// (`fast::SpanBlock`: eight spans side by side; three updates on one thread 273 → 175 ms) and
-/// the distances of the parametrization ([`parametrize`]). The units of [`fill_units`] (the
-/// closed form's spans, the knot split) were tried and gained nothing: their loops are a span
-/// long.
+/// the distances of the parametrization ([`parametrize`]). The closed form's spans and the knot
+/// split (then units of [`fill_units`], now of [`collect_units`]) were tried and gained nothing:
+/// their loops are a span long.
 #[inline(always)]
 pub(crate) fn vectorized<Op: pulp::WithSimd>(op: Op) -> Op::Output {
     pulp::Arch::new().dispatch(op)
@@ -170,8 +170,275 @@ pub(crate) fn fill_units<S>(
     bad.into_iter().flatten().next()
 }
 
+/// What [`collect_units`] collects: `len` values in units of `per_unit` positions (the last
+/// unit may be shorter), unit `u`'s value at position `j` being `value(&head(u), j)` — the head
+/// (a span's end points, its step) computed once per unit.
+pub(crate) struct Units<H, V, B> {
+    /// The number of values.
+    pub len: usize,
+    /// Positions per unit (at least 1).
+    pub per_unit: usize,
+    /// What a unit's values share.
+    pub head: H,
+    /// A value from its unit's head and its position in the unit.
+    pub value: V,
+    /// Whether a value is to be refused (a non-finite coordinate): found while it is written.
+    pub bad: B,
+}
+
+/// The values of `units`, in order, collected in parallel chunks of about [`CHUNK_VERTICES`]
+/// values straight into the result's memory: rayon writes the vector's spare capacity, so there
+/// is no zeroing pass before the values are written. (Zeroing the points and the knots of a
+/// certified 10⁵-point interpolation before writing them was 8 % of its time on memory the
+/// allocator reuses, solve after solve.) Each value is its own formula, so the result is the
+/// same bit for bit on any number of threads. Returns the position of the first value `bad`
+/// marks, if any.
+pub(crate) fn collect_units<Hd, T: Send>(
+    units: Units<
+        impl Fn(usize) -> Hd + Sync + Send,
+        impl Fn(&Hd, usize) -> T + Sync + Send,
+        impl Fn(&T) -> bool + Sync + Send,
+    >,
+) -> Result<Vec<T>, usize> {
+    let per_unit = units.per_unit.max(1);
+    let flag = std::sync::atomic::AtomicBool::new(false);
+    let mut out = Vec::new();
+    #[cfg(not(target_arch = "wasm32"))]
+    if units.len > CHUNK_VERTICES {
+        use rayon::iter::IndexedParallelIterator;
+        unit_iter::UnitPar {
+            gen: &units,
+            range: 0..units.len,
+            per_unit,
+            flag: &flag,
+        }
+        .collect_into_vec(&mut out);
+    }
+    if out.len() != units.len {
+        out.reserve_exact(units.len);
+        out.extend(unit_iter::UnitIter::new(
+            &units,
+            0..units.len,
+            per_unit,
+            &flag,
+        ));
+    }
+    if flag.into_inner() {
+        return Err(out.iter().position(&units.bad).expect("a value marked bad"));
+    }
+    Ok(out)
+}
+
+/// The iterator and, off wasm32, the parallel iterator of [`collect_units`] (rayon's plumbing:
+/// a producer splits a range of positions, its iterator walks them unit by unit).
+mod unit_iter {
+    use std::ops::Range;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    use super::Units;
+
+    /// The values at positions `pos .. end`, the head of the current unit kept.
+    pub(super) struct UnitIter<'a, H, V, B, Hd> {
+        gen: &'a Units<H, V, B>,
+        pos: usize,
+        end: usize,
+        per_unit: usize,
+        unit: usize,
+        j: usize,
+        head: Option<Hd>,
+        bad: bool,
+        flag: &'a AtomicBool,
+    }
+
+    impl<'a, H, V, B, Hd, T> UnitIter<'a, H, V, B, Hd>
+    where
+        H: Fn(usize) -> Hd,
+        V: Fn(&Hd, usize) -> T,
+        B: Fn(&T) -> bool,
+    {
+        pub(super) fn new(
+            gen: &'a Units<H, V, B>,
+            range: Range<usize>,
+            per_unit: usize,
+            flag: &'a AtomicBool,
+        ) -> Self {
+            let (unit, j) = (range.start / per_unit, range.start % per_unit);
+            UnitIter {
+                gen,
+                pos: range.start,
+                end: range.end,
+                per_unit,
+                unit,
+                j,
+                head: (range.start < range.end).then(|| (gen.head)(unit)),
+                bad: false,
+                flag,
+            }
+        }
+    }
+
+    impl<H, V, B, Hd, T> Iterator for UnitIter<'_, H, V, B, Hd>
+    where
+        H: Fn(usize) -> Hd,
+        V: Fn(&Hd, usize) -> T,
+        B: Fn(&T) -> bool,
+    {
+        type Item = T;
+
+        #[inline]
+        fn next(&mut self) -> Option<T> {
+            if self.pos >= self.end {
+                return None;
+            }
+            if self.j == self.per_unit {
+                self.unit += 1;
+                self.j = 0;
+                self.head = Some((self.gen.head)(self.unit));
+            }
+            let v = (self.gen.value)(self.head.as_ref()?, self.j);
+            self.bad |= (self.gen.bad)(&v);
+            self.j += 1;
+            self.pos += 1;
+            Some(v)
+        }
+
+        fn size_hint(&self) -> (usize, Option<usize>) {
+            let left = self.end.saturating_sub(self.pos);
+            (left, Some(left))
+        }
+    }
+
+    impl<H, V, B, Hd, T> DoubleEndedIterator for UnitIter<'_, H, V, B, Hd>
+    where
+        H: Fn(usize) -> Hd,
+        V: Fn(&Hd, usize) -> T,
+        B: Fn(&T) -> bool,
+    {
+        /// (Rayon's collect walks forwards; this is the trait's other end, each value with its
+        /// own head.)
+        fn next_back(&mut self) -> Option<T> {
+            if self.pos >= self.end {
+                return None;
+            }
+            self.end -= 1;
+            let head = (self.gen.head)(self.end / self.per_unit);
+            let v = (self.gen.value)(&head, self.end % self.per_unit);
+            self.bad |= (self.gen.bad)(&v);
+            Some(v)
+        }
+    }
+
+    impl<H, V, B, Hd, T> ExactSizeIterator for UnitIter<'_, H, V, B, Hd>
+    where
+        H: Fn(usize) -> Hd,
+        V: Fn(&Hd, usize) -> T,
+        B: Fn(&T) -> bool,
+    {
+    }
+
+    impl<H, V, B, Hd> Drop for UnitIter<'_, H, V, B, Hd> {
+        fn drop(&mut self) {
+            if self.bad {
+                self.flag.store(true, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// The positions `range` of [`collect_units`] as rayon's indexed parallel iterator; it is
+    /// also its own producer, split at any position.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub(super) struct UnitPar<'a, H, V, B> {
+        pub gen: &'a Units<H, V, B>,
+        pub range: Range<usize>,
+        pub per_unit: usize,
+        pub flag: &'a AtomicBool,
+    }
+
+    #[cfg(not(target_arch = "wasm32"))]
+    mod parallel {
+        use rayon::iter::plumbing::{
+            bridge, Consumer, Producer, ProducerCallback, UnindexedConsumer,
+        };
+        use rayon::iter::{IndexedParallelIterator, ParallelIterator};
+
+        use super::{UnitIter, UnitPar};
+
+        impl<'a, H, V, B, Hd, T> Producer for UnitPar<'a, H, V, B>
+        where
+            H: Fn(usize) -> Hd + Sync + Send,
+            V: Fn(&Hd, usize) -> T + Sync + Send,
+            B: Fn(&T) -> bool + Sync + Send,
+            T: Send,
+        {
+            type Item = T;
+            type IntoIter = UnitIter<'a, H, V, B, Hd>;
+
+            fn into_iter(self) -> Self::IntoIter {
+                UnitIter::new(self.gen, self.range, self.per_unit, self.flag)
+            }
+
+            fn min_len(&self) -> usize {
+                super::super::CHUNK_VERTICES
+            }
+
+            fn split_at(self, index: usize) -> (Self, Self) {
+                let mid = self.range.start + index;
+                (
+                    UnitPar {
+                        range: self.range.start..mid,
+                        ..self
+                    },
+                    UnitPar {
+                        range: mid..self.range.end,
+                        ..self
+                    },
+                )
+            }
+        }
+
+        impl<H, V, B, Hd, T> ParallelIterator for UnitPar<'_, H, V, B>
+        where
+            H: Fn(usize) -> Hd + Sync + Send,
+            V: Fn(&Hd, usize) -> T + Sync + Send,
+            B: Fn(&T) -> bool + Sync + Send,
+            T: Send,
+        {
+            type Item = T;
+
+            fn drive_unindexed<C: UnindexedConsumer<T>>(self, consumer: C) -> C::Result {
+                bridge(self, consumer)
+            }
+
+            fn opt_len(&self) -> Option<usize> {
+                Some(self.range.len())
+            }
+        }
+
+        impl<H, V, B, Hd, T> IndexedParallelIterator for UnitPar<'_, H, V, B>
+        where
+            H: Fn(usize) -> Hd + Sync + Send,
+            V: Fn(&Hd, usize) -> T + Sync + Send,
+            B: Fn(&T) -> bool + Sync + Send,
+            T: Send,
+        {
+            fn len(&self) -> usize {
+                self.range.len()
+            }
+
+            fn drive<C: Consumer<T>>(self, consumer: C) -> C::Result {
+                bridge(self, consumer)
+            }
+
+            fn with_producer<CB: ProducerCallback<T>>(self, callback: CB) -> CB::Output {
+                callback.callback(self)
+            }
+        }
+    }
+}
+
 /// Points of `dim` coordinates written in units of `per_unit` points by [`fill_units`], in
-/// place into the result (zeroed pages from the allocator, written once).
+/// place into the result (zeroed by the allocator first; [`collect_units`] spares that where
+/// a value can be computed alone).
 ///
 /// # Errors
 /// [`divdiff::Error::NonFinite`] naming the first point with a non-finite coordinate.
@@ -260,6 +527,39 @@ pub(crate) fn uniform_stream(seed: u64) -> impl FnMut() -> f64 {
 #[cfg(test)]
 mod tests {
     use divdiff::{Parametrization, Points, Topology};
+
+    /// `collect_units` gives the values of the plain loop over units and positions, in order, on
+    /// the serial path (one chunk) and the parallel one (units that straddle the chunks, a
+    /// shorter last unit); of the values marked bad it reports the first one's position.
+    #[test]
+    fn collected_units_are_the_plain_loops() {
+        let big = 3 * super::CHUNK_VERTICES + 5;
+        for (len, per_unit) in [(1, 1), (100, 7), (big, 7), (big, 1), (big, 40_000)] {
+            // Value j of unit u: its position, and a rounded function of the unit's head.
+            let units = |bad: Vec<usize>| super::Units {
+                len,
+                per_unit,
+                head: move |u: usize| ((u * per_unit) as f64, (u as f64 + 0.5).sqrt()),
+                value: |&(start, root): &(f64, f64), j: usize| {
+                    [start + j as f64, root / (j as f64 + 3.0)]
+                },
+                bad: move |v: &[f64; 2]| bad.contains(&(v[0] as usize)),
+            };
+            let plain: Vec<[f64; 2]> = (0..len)
+                .map(|v| {
+                    let (u, j) = (v / per_unit, v % per_unit);
+                    [v as f64, (u as f64 + 0.5).sqrt() / (j as f64 + 3.0)]
+                })
+                .collect();
+            let got = super::collect_units(units(vec![])).unwrap();
+            let bits =
+                |x: &[[f64; 2]]| -> Vec<u64> { x.iter().flatten().map(|x| x.to_bits()).collect() };
+            assert_eq!(bits(&got), bits(&plain), "len {len}, {per_unit} per unit");
+            let marked = vec![len - 1, len / 2, len / 3 + 1];
+            let first = *marked.iter().min().unwrap();
+            assert_eq!(super::collect_units(units(marked)), Err(first));
+        }
+    }
 
     /// The chunked parametrization is divdiff's, bit for bit, open and closed, for the exponents
     /// with and without a general power; a coincident pair in a later chunk is the error of the

@@ -133,11 +133,10 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
         .collect();
     let total = m * spans + usize::from(!closed);
     // One span (its data vertex and free vertices) per unit; an open curve's last data point
-    // is the last unit. Spans in parallel chunks (`crate::par`).
-    let span = |(mu, nu, dy): &mut (Vec<f64>, Vec<f64>, Vec<f64>), i: usize, buf: &mut [f64]| {
+    // is the last unit, alone.
+    let span = |i: usize, mu: &mut [f64], nu: &mut [f64], dy: &mut [f64]| -> usize {
         if i == spans {
-            buf.copy_from_slice(q.point(n - 1));
-            return;
+            return n - 1;
         }
         let r = yn(i + 1);
         let h3 = h[i].powi(3);
@@ -148,21 +147,73 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
             nu[c] = b1 * s[r * d + c] * h3;
             dy[c] = yb[c] - ya[c];
         }
-        match d {
-            2 => fill::<2>(buf, ya, dy, mu, nu, &w),
-            3 => fill::<3>(buf, ya, dy, mu, nu, &w),
-            _ => {
-                buf[..d].copy_from_slice(ya);
-                for (o, wl) in buf[d..].chunks_exact_mut(d).zip(&w) {
-                    for c in 0..d {
-                        o[c] = ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]);
-                    }
-                }
-            }
-        }
+        i
     };
-    let scratch = || (vec![0.0; d], vec![0.0; d], vec![0.0; d]);
-    Ok(crate::par::points_by_units(d, total, m, scratch, span)?)
+    match d {
+        1 => vertices::<1>(total, m, q, &w, span),
+        2 => vertices::<2>(total, m, q, &w, span),
+        3 => vertices::<3>(total, m, q, &w, span),
+        _ => {
+            // Spans in parallel chunks (`crate::par`), written into zeroed points.
+            let fill =
+                |(mu, nu, dy): &mut (Vec<f64>, Vec<f64>, Vec<f64>), i: usize, buf: &mut [f64]| {
+                    let ya = q.point(span(i, mu, nu, dy));
+                    buf[..d].copy_from_slice(ya);
+                    for (o, wl) in buf[d..].chunks_exact_mut(d).zip(&w) {
+                        for c in 0..d {
+                            o[c] = ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]);
+                        }
+                    }
+                };
+            let scratch = || (vec![0.0; d], vec![0.0; d], vec![0.0; d]);
+            Ok(crate::par::points_by_units(d, total, m, scratch, fill)?)
+        }
+    }
+}
+
+/// The `total` vertices of the closed form for fixed dimension D, span by span (module docs):
+/// a span's data vertex y_i, then its free vertices y_i + (y_{i+1} − y_i) l/m − (μ W_g(l) +
+/// ν W_h(l)) with h_i³ in μ and ν; `span(i, μ, ν, y_{i+1} − y_i)` writes those of span i and
+/// returns the data point it starts at (the last unit of an open curve: its last data point,
+/// alone). Collected straight into the result ([`crate::par::collect_units`]), each vertex
+/// checked for finiteness as it is written.
+///
+/// # Errors
+/// [`divdiff::Error::NonFinite`] naming the first vertex with a non-finite coordinate.
+fn vertices<const D: usize>(
+    total: usize,
+    m: usize,
+    q: &Points,
+    w: &[[f64; 3]],
+    span: impl Fn(usize, &mut [f64], &mut [f64], &mut [f64]) -> usize + Sync + Send,
+) -> Result<Points, Error> {
+    let head = |i: usize| {
+        let (mut mu, mut nu, mut dy) = ([0.0; D], [0.0; D], [0.0; D]);
+        let at = span(i, &mut mu, &mut nu, &mut dy);
+        let ya: [f64; D] = q.point(at).try_into().expect("D coordinates");
+        (ya, dy, mu, nu)
+    };
+    let value = |&(ya, dy, mu, nu): &([f64; D], [f64; D], [f64; D], [f64; D]), l: usize| {
+        let Some(wl) = l.checked_sub(1).map(|l| w[l]) else {
+            return ya;
+        };
+        std::array::from_fn(|c| ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]))
+    };
+    let bad = |x: &[f64; D]| x.iter().fold(false, |b, x| b | !x.is_finite());
+    crate::par::collect_units(crate::par::Units {
+        len: total,
+        per_unit: m,
+        head,
+        value,
+        bad,
+    })
+    .map(Points::from_array_rows)
+    .map_err(|index| {
+        Error::from(divdiff::Error::NonFinite {
+            field: "points",
+            index,
+        })
+    })
 }
 
 /// α₁ and α₃ of every data row ([`alpha_row`] of the sub-spans on either side, bit for bit;
@@ -205,30 +256,6 @@ impl pulp::WithSimd for Alphas<'_> {
         for (((a1, a3), &hl), &hr) in a1.iter_mut().zip(a3).zip(hl).zip(hr) {
             let [x, _, z] = alpha_row(hl, hr);
             (*a1, *a3) = (x, z);
-        }
-    }
-}
-
-/// One span's vertices (the data vertex, then the free ones) for fixed dimension D (see the
-/// module docs).
-#[inline]
-fn fill<const D: usize>(
-    out: &mut [f64],
-    ya: &[f64],
-    dy: &[f64],
-    mu: &[f64],
-    nu: &[f64],
-    w: &[[f64; 3]],
-) {
-    let ya: [f64; D] = ya.try_into().expect("D coordinates");
-    let dy: [f64; D] = dy.try_into().expect("D coordinates");
-    let mu: [f64; D] = mu.try_into().expect("D coordinates");
-    let nu: [f64; D] = nu.try_into().expect("D coordinates");
-    out[..D].copy_from_slice(&ya);
-    // (Arrays of D, not `chunks_exact_mut`, which re-splits the slice at every step.)
-    for (o, wl) in out[D..].as_chunks_mut::<D>().0.iter_mut().zip(w) {
-        for c in 0..D {
-            o[c] = ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]);
         }
     }
 }
