@@ -525,10 +525,6 @@ pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
         }
     }
     st.resolve();
-    eprintln!(
-        "DEBUG sweeps {sweeps} steps {} converged {converged}",
-        st.steps
-    );
     let active = st.active();
     Exchanged {
         gap: gap_of(&st.cur, &active, violation),
