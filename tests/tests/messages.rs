@@ -145,9 +145,20 @@ fn messages_say_what_the_field_must_be() {
             ),
             "error: constraint.sets[1]: is empty: its half-spaces 0, 1, 2 have no common point",
         ),
+        (
+            // Sites 1e6 + ~3e-5 apart and a strip ±8e-12 about a zigzag of slope ~6: the
+            // sites' rounding (slope × ulp(t) ≈ 7e-10) is wider than the strip, and the message
+            // blames t, not the bound (found by a sweep; shifted to 0 it solves, see
+            // crates/strip/tests/conditioning.rs).
+            "strip",
+            r#"{"t": [1000000.0, 1000000.0000315087, 1000000.000032026, 1000000.0000323687], "y": [1.5972995006188544e-06, -1.5972995006188544e-06, 1.5972995006188544e-06, -1.5972995006188544e-06], "lower": {"polyline": [[1000000.0, 1.597291377628902e-06], [1000000.0000315087, -1.5973076236088068e-06], [1000000.000032026, 1.597291377628902e-06], [1000000.0000323687, -1.5973076236088068e-06]]}, "upper": {"polyline": [[1000000.0, 1.5973076236088068e-06], [1000000.0000315087, -1.597291377628902e-06], [1000000.000032026, 1.5973076236088068e-06], [1000000.0000323687, -1.597291377628902e-06]]}}"#.to_string(),
+            "error: t: the solution leaves the upper bound by 8.1",
+        ),
     ];
     for (sub, doc, want) in cases {
         let got = message(sub, doc);
         assert!(got.starts_with(*want), "{doc}\n got: {got}\nwant: {want}");
     }
+    let got = message("strip", &cases.last().expect("the strip case").1);
+    assert!(got.ends_with("shift t to start near 0"), "{got}");
 }

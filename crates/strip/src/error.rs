@@ -172,8 +172,11 @@ pub enum Error {
     },
     /// The returned pieces leave the strip by more than the documented tolerance
     /// ([`crate::RESULT_FEASIBILITY_TOL`] times the value scale plus the rounding allowance
-    /// [`crate::ROUNDING_TOL`] times the magnitude of the values): the answer is refused.
-    #[error("the solution leaves the {side} bound by {by:e} in interval {interval} (tolerance {tolerance:e})")]
+    /// [`crate::ROUNDING_TOL`] times the magnitude of the values): the answer is refused. When
+    /// the excess is within [`SITES_ROUNDING_COUNTS`] times `sites_rounding`, the rounding of the
+    /// sites themselves is the cause (a strip narrower than slope × ulp(t), sites far from 0
+    /// against their spacing), and the message says so.
+    #[error("the solution leaves the {side} bound by {by:e} in interval {interval} (tolerance {tolerance:e}){}", sites_rounding_hint(*by, *sites_rounding))]
     StripViolated {
         /// The data interval (0-based).
         interval: usize,
@@ -183,6 +186,9 @@ pub enum Error {
         by: f64,
         /// The tolerance it exceeds.
         tolerance: f64,
+        /// How far the values there move when the abscissae move by one rounding
+        /// (max |f'| · ε · max |t| over the interval).
+        sites_rounding: f64,
     },
     /// The returned pieces do not join at `at` to the tolerance of [`Error::StripViolated`]: the
     /// cubic coefficients c·v/λ^k underflow or lose their precision (values tiny against the
@@ -214,3 +220,17 @@ pub(crate) fn bound_field(b: &crate::types::Bound, side: Side) -> &'static str {
 /// The reason given for numbers too badly scaled for double precision.
 pub(crate) const BADLY_SCALED: &str =
     "too badly scaled for double precision (a normalized number overflows; rescale t and the values)";
+
+/// A violation within this many times the sites' rounding (max |f'| · ε · |t|) is put down to
+/// it ([`Error::StripViolated`]): the bounds and the pieces are evaluated at abscissae that carry
+/// that much, and ε·|t| is half an ulp of t.
+pub const SITES_ROUNDING_COUNTS: f64 = 100.0;
+
+/// The end of [`Error::StripViolated`]'s message: why, when the sites' rounding explains it.
+pub fn sites_rounding_hint(by: f64, sites_rounding: f64) -> &'static str {
+    if by <= SITES_ROUNDING_COUNTS * sites_rounding {
+        ": the sites' own rounding moves the curve there by as much (slope × ulp(t)); shift t to start near 0"
+    } else {
+        ""
+    }
+}

@@ -113,7 +113,7 @@ mod strategy;
 mod types;
 mod validate;
 
-pub use error::{Error, Infeasibility};
+pub use error::{sites_rounding_hint, Error, Infeasibility, SITES_ROUNDING_COUNTS};
 
 /// The name [`Error::NotConverged`] and [`Error::Uncertified`] give the dual active-set exchange
 /// (the exact solver for polyline bounds, and the fallback of Newton on Φ), whose

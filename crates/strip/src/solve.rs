@@ -97,10 +97,30 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
                 side,
                 by,
                 tolerance,
+                sites_rounding: sites_rounding(problem, &sol, interval),
             });
         }
     }
     Ok(sol)
+}
+
+/// How far the values of the pieces over data interval `interval` move when their abscissae move
+/// by one rounding: max |f'| · ε · max |t| there (ε the unit roundoff, so at least half an ulp of
+/// t). A bound evaluated at a rounded abscissa is uncertain by as much; see
+/// [`Error::StripViolated`].
+fn sites_rounding(problem: &Problem, sol: &Solution, interval: usize) -> f64 {
+    let (a, b) = (problem.t[interval], problem.t[interval + 1]);
+    let mut worst = 0.0f64;
+    for (j, k) in sol.coefficients.iter().enumerate() {
+        let (x0, x1) = (sol.breaks[j], sol.breaks[j + 1]);
+        if x1 < a || x0 > b {
+            continue;
+        }
+        let h = x1 - x0;
+        let slope = k[1].abs() + h * (2.0 * k[2].abs() + 3.0 * h * k[3].abs());
+        worst = worst.max(slope * f64::EPSILON * x0.abs().max(x1.abs()));
+    }
+    worst
 }
 
 /// Solves `q`, the normalized form of `problem` in `frame`, and returns the solution in the

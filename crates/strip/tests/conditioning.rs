@@ -515,3 +515,40 @@ fn a_steep_zigzag_in_a_hair_thin_channel_is_uncertified_not_unconverged() {
         other => panic!("expected Uncertified, got {other:?}"),
     }
 }
+
+/// Sites 1e6 + s·3e-5 and a strip ±8e-12 about a zigzag whose pieces are as steep as ~6: moving
+/// t by one rounding (ulp(1e6) ≈ 1.2e-10) moves the curve by ~7e-10, far more than the strip is
+/// wide, so the answer's exact check fails there — refused with the sites' rounding named as the
+/// cause. The same problem with t shifted to start at 0 solves (its violation is then rounding
+/// of the values alone). Found by a sweep through the binary.
+#[test]
+fn a_strip_narrower_than_the_sites_rounding_names_it() {
+    let t0 = [0.0, 3.15087e-5, 3.2026e-5, 3.23687e-5];
+    let y: Vec<f64> = (0..4)
+        .map(|i| if i % 2 == 0 { 1.5973e-6 } else { -1.5973e-6 })
+        .collect();
+    let problem = |offset: f64| {
+        let t: Vec<f64> = t0.iter().map(|s| offset + s).collect();
+        let line = |w: f64| Bound::Polyline(t.iter().zip(&y).map(|(&t, &y)| [t, y + w]).collect());
+        Problem {
+            lower: line(-8.1e-12),
+            upper: line(8.1e-12),
+            t: t.clone(),
+            y: y.clone(),
+            end_slopes: [None, None],
+        }
+    };
+    let s = solve(&problem(0.0), &Options::default()).unwrap();
+    assert!(violation(&problem(0.0), &s) <= 1e-9 * 1.5973e-6);
+    match solve(&problem(1e6), &Options::default()) {
+        Err(
+            e @ Error::StripViolated {
+                by, sites_rounding, ..
+            },
+        ) => {
+            assert!(by <= strip::SITES_ROUNDING_COUNTS * sites_rounding, "{e}");
+            assert!(e.to_string().ends_with("shift t to start near 0"), "{e}");
+        }
+        other => panic!("expected StripViolated, got {other:?}"),
+    }
+}

@@ -188,14 +188,19 @@ fn input_error(t: &[f64], e: &strip::Error) -> InputError {
             interval,
             by,
             tolerance,
-        } => InputError::new(
-            side_name(*side),
-            format!(
-                "the solution leaves the {side} bound by {} in interval {interval} (tolerance {})",
-                num(*by),
-                num(*tolerance)
-            ),
-        ),
+            sites_rounding,
+        } => {
+            let hint = strip::sites_rounding_hint(*by, *sites_rounding);
+            // (the sites' rounding is the cause, not the bound: name `t`)
+            InputError::new(
+                if hint.is_empty() { side_name(*side) } else { "t" },
+                format!(
+                    "the solution leaves the {side} bound by {} in interval {interval} (tolerance {}){hint}",
+                    num(*by),
+                    num(*tolerance)
+                ),
+            )
+        }
         E::Discontinuous { at, by, tolerance } => InputError::new(
             "t",
             format!(
