@@ -10,14 +10,14 @@
 use crate::piece::{cubic_argmin, shift};
 use crate::types::{Bound, Problem, Side, Solution};
 
-/// Calls `visit(segment, a, excursion, at, start)` for every sub-interval \[a, b\] of the piecewise
-/// cubic (`breaks`, `coeffs`) and the bound `b` of `side`, where `excursion` is the largest
-/// amount by which f leaves the bound there (NaN propagates), `at` where, `start` the amount at
-/// a (negative inside), and `segment` the
-/// polyline segment (or the data interval, for cubic pieces) holding \[a, b\]. Where f is clearly
-/// inside (its distance to the bound at the ends exceeds its largest possible bend,
-/// |d''|·(b − a)²/8), a negative upper bound of the excursion is reported instead of the exact
-/// value, which spares the roots on most sub-intervals.
+/// Calls `visit(segment, a, excursion, at, start)` for every sub-interval \[a, b\] of the
+/// piecewise cubic (`breaks`, `coeffs`) and the bound `b` of `side`, where `excursion` is the
+/// largest amount by which f leaves the bound there (NaN propagates), `at` where, `start` the
+/// amount at a (negative inside), and `segment` the polyline segment (or the data interval, for
+/// cubic pieces) holding \[a, b\]. Where f is clearly inside (its distance to the bound at the
+/// ends exceeds its largest possible bend, |d''|·(b − a)²/8), a negative upper bound of the
+/// excursion is reported instead of the exact value, which spares the roots on most
+/// sub-intervals.
 pub(crate) fn excursions(
     b: &Bound,
     t: &[f64],

@@ -223,7 +223,7 @@ pub(crate) const BADLY_SCALED: &str =
 
 /// A violation within this many times the sites' rounding (max |f'| · ε · |t|) is put down to
 /// it ([`Error::StripViolated`]): the bounds and the pieces are evaluated at abscissae that carry
-/// that much, and ε·|t| is half an ulp of t.
+/// that much (ε·|t| is one to two ulps of t).
 pub const SITES_ROUNDING_COUNTS: f64 = 100.0;
 
 /// The end of [`Error::StripViolated`]'s message: why, when the sites' rounding explains it.

@@ -105,8 +105,8 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
 }
 
 /// How far the values of the pieces over data interval `interval` move when their abscissae move
-/// by one rounding: max |f'| · ε · max |t| there (ε the unit roundoff, so at least half an ulp of
-/// t). A bound evaluated at a rounded abscissa is uncertain by as much; see
+/// by one rounding: max |f'| · ε · max |t| there (ε = 2⁻⁵², so ε·|t| is one to two ulps of t).
+/// A bound evaluated at a rounded abscissa is uncertain by as much; see
 /// [`Error::StripViolated`].
 fn sites_rounding(problem: &Problem, sol: &Solution, interval: usize) -> f64 {
     let (a, b) = (problem.t[interval], problem.t[interval + 1]);
