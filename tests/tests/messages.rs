@@ -161,4 +161,24 @@ fn messages_say_what_the_field_must_be() {
     }
     let got = message("strip", &cases.last().expect("the strip case").1);
     assert!(got.ends_with("shift t to start near 0"), "{got}");
+
+    // One tiny ball among large ones (found by a sweep; ROBUSTNESS.md §4, item 20): the solve is
+    // not certified, and the refusal names the radius and the remedy, which works — radius 0
+    // solves.
+    let balls = |r3: &str| {
+        format!(
+            r#"{{"points": [[0, 0], [1, 1], [2, 0], [3, 1], [4, 0], [5, 1]], "k": 3, "closed": true, "constraint": {{"type": "balls", "radii": [0.3, 0.3, 0.3, {r3}, 0.3, 0.3]}}}}"#
+        )
+    };
+    let got = message("refine", &balls("1e-8"));
+    assert!(
+        got.starts_with("error: constraint.radii[3]: ")
+            && got.contains("this radius, 1e-8, is 2e-9 of the data's extent")
+            && got.ends_with(
+                "give that point radius 0 to interpolate it exactly, or a larger radius"
+            ),
+        "{got}"
+    );
+    let (code, _, err) = run_cli(&["refine", "-"], &balls("0"));
+    assert_eq!(code, 0, "{err}");
 }
