@@ -200,28 +200,26 @@ pub(crate) fn collect_units<Hd, T: Send>(
         impl Fn(&T) -> bool + Sync + Send,
     >,
 ) -> Result<Vec<T>, usize> {
-    let per_unit = units.per_unit.max(1);
+    let units = Units {
+        per_unit: units.per_unit.max(1),
+        ..units
+    };
     let flag = std::sync::atomic::AtomicBool::new(false);
+    let whole = 0..units.len;
     let mut out = Vec::new();
     #[cfg(not(target_arch = "wasm32"))]
     if units.len > CHUNK_VERTICES {
         use rayon::iter::IndexedParallelIterator;
         unit_iter::UnitPar {
             gen: &units,
-            range: 0..units.len,
-            per_unit,
+            range: whole.clone(),
             flag: &flag,
         }
         .collect_into_vec(&mut out);
     }
-    if out.len() != units.len {
+    if out.is_empty() {
         out.reserve_exact(units.len);
-        out.extend(unit_iter::UnitIter::new(
-            &units,
-            0..units.len,
-            per_unit,
-            &flag,
-        ));
+        out.extend(unit_iter::UnitIter::new(&units, whole, &flag));
     }
     if flag.into_inner() {
         return Err(out.iter().position(&units.bad).expect("a value marked bad"));
@@ -237,66 +235,82 @@ mod unit_iter {
 
     use super::Units;
 
+    /// [`Units`] as one bound: its closures' types behind associated types.
+    pub(super) trait Gen: Sync {
+        type Head;
+        type Item: Send;
+        fn per_unit(&self) -> usize;
+        fn head(&self, unit: usize) -> Self::Head;
+        fn value(&self, head: &Self::Head, j: usize) -> Self::Item;
+        fn bad(&self, value: &Self::Item) -> bool;
+    }
+
+    impl<Hd, T, H, V, B> Gen for Units<H, V, B>
+    where
+        T: Send,
+        H: Fn(usize) -> Hd + Sync,
+        V: Fn(&Hd, usize) -> T + Sync,
+        B: Fn(&T) -> bool + Sync,
+    {
+        type Head = Hd;
+        type Item = T;
+        fn per_unit(&self) -> usize {
+            self.per_unit
+        }
+        fn head(&self, unit: usize) -> Hd {
+            (self.head)(unit)
+        }
+        fn value(&self, head: &Hd, j: usize) -> T {
+            (self.value)(head, j)
+        }
+        fn bad(&self, value: &T) -> bool {
+            (self.bad)(value)
+        }
+    }
+
     /// The values at positions `pos .. end`, the head of the current unit kept.
-    pub(super) struct UnitIter<'a, H, V, B, Hd> {
-        gen: &'a Units<H, V, B>,
+    pub(super) struct UnitIter<'a, G: Gen> {
+        gen: &'a G,
         pos: usize,
         end: usize,
-        per_unit: usize,
         unit: usize,
         j: usize,
-        head: Option<Hd>,
+        head: Option<G::Head>,
         bad: bool,
         flag: &'a AtomicBool,
     }
 
-    impl<'a, H, V, B, Hd, T> UnitIter<'a, H, V, B, Hd>
-    where
-        H: Fn(usize) -> Hd,
-        V: Fn(&Hd, usize) -> T,
-        B: Fn(&T) -> bool,
-    {
-        pub(super) fn new(
-            gen: &'a Units<H, V, B>,
-            range: Range<usize>,
-            per_unit: usize,
-            flag: &'a AtomicBool,
-        ) -> Self {
-            let (unit, j) = (range.start / per_unit, range.start % per_unit);
+    impl<'a, G: Gen> UnitIter<'a, G> {
+        pub(super) fn new(gen: &'a G, range: Range<usize>, flag: &'a AtomicBool) -> Self {
+            let (unit, j) = (range.start / gen.per_unit(), range.start % gen.per_unit());
             UnitIter {
                 gen,
                 pos: range.start,
                 end: range.end,
-                per_unit,
                 unit,
                 j,
-                head: (range.start < range.end).then(|| (gen.head)(unit)),
+                head: (range.start < range.end).then(|| gen.head(unit)),
                 bad: false,
                 flag,
             }
         }
     }
 
-    impl<H, V, B, Hd, T> Iterator for UnitIter<'_, H, V, B, Hd>
-    where
-        H: Fn(usize) -> Hd,
-        V: Fn(&Hd, usize) -> T,
-        B: Fn(&T) -> bool,
-    {
-        type Item = T;
+    impl<G: Gen> Iterator for UnitIter<'_, G> {
+        type Item = G::Item;
 
         #[inline]
-        fn next(&mut self) -> Option<T> {
+        fn next(&mut self) -> Option<G::Item> {
             if self.pos >= self.end {
                 return None;
             }
-            if self.j == self.per_unit {
+            if self.j == self.gen.per_unit() {
                 self.unit += 1;
                 self.j = 0;
-                self.head = Some((self.gen.head)(self.unit));
+                self.head = Some(self.gen.head(self.unit));
             }
-            let v = (self.gen.value)(self.head.as_ref()?, self.j);
-            self.bad |= (self.gen.bad)(&v);
+            let v = self.gen.value(self.head.as_ref()?, self.j);
+            self.bad |= self.gen.bad(&v);
             self.j += 1;
             self.pos += 1;
             Some(v)
@@ -308,35 +322,24 @@ mod unit_iter {
         }
     }
 
-    impl<H, V, B, Hd, T> DoubleEndedIterator for UnitIter<'_, H, V, B, Hd>
-    where
-        H: Fn(usize) -> Hd,
-        V: Fn(&Hd, usize) -> T,
-        B: Fn(&T) -> bool,
-    {
+    impl<G: Gen> DoubleEndedIterator for UnitIter<'_, G> {
         /// (Rayon's collect walks forwards; this is the trait's other end, each value with its
         /// own head.)
-        fn next_back(&mut self) -> Option<T> {
+        fn next_back(&mut self) -> Option<G::Item> {
             if self.pos >= self.end {
                 return None;
             }
             self.end -= 1;
-            let head = (self.gen.head)(self.end / self.per_unit);
-            let v = (self.gen.value)(&head, self.end % self.per_unit);
-            self.bad |= (self.gen.bad)(&v);
+            let head = self.gen.head(self.end / self.gen.per_unit());
+            let v = self.gen.value(&head, self.end % self.gen.per_unit());
+            self.bad |= self.gen.bad(&v);
             Some(v)
         }
     }
 
-    impl<H, V, B, Hd, T> ExactSizeIterator for UnitIter<'_, H, V, B, Hd>
-    where
-        H: Fn(usize) -> Hd,
-        V: Fn(&Hd, usize) -> T,
-        B: Fn(&T) -> bool,
-    {
-    }
+    impl<G: Gen> ExactSizeIterator for UnitIter<'_, G> {}
 
-    impl<H, V, B, Hd> Drop for UnitIter<'_, H, V, B, Hd> {
+    impl<G: Gen> Drop for UnitIter<'_, G> {
         fn drop(&mut self) {
             if self.bad {
                 self.flag.store(true, Ordering::Relaxed);
@@ -347,10 +350,9 @@ mod unit_iter {
     /// The positions `range` of [`collect_units`] as rayon's indexed parallel iterator; it is
     /// also its own producer, split at any position.
     #[cfg(not(target_arch = "wasm32"))]
-    pub(super) struct UnitPar<'a, H, V, B> {
-        pub gen: &'a Units<H, V, B>,
+    pub(super) struct UnitPar<'a, G> {
+        pub gen: &'a G,
         pub range: Range<usize>,
-        pub per_unit: usize,
         pub flag: &'a AtomicBool,
     }
 
@@ -361,20 +363,14 @@ mod unit_iter {
         };
         use rayon::iter::{IndexedParallelIterator, ParallelIterator};
 
-        use super::{UnitIter, UnitPar};
+        use super::{Gen, UnitIter, UnitPar};
 
-        impl<'a, H, V, B, Hd, T> Producer for UnitPar<'a, H, V, B>
-        where
-            H: Fn(usize) -> Hd + Sync + Send,
-            V: Fn(&Hd, usize) -> T + Sync + Send,
-            B: Fn(&T) -> bool + Sync + Send,
-            T: Send,
-        {
-            type Item = T;
-            type IntoIter = UnitIter<'a, H, V, B, Hd>;
+        impl<'a, G: Gen> Producer for UnitPar<'a, G> {
+            type Item = G::Item;
+            type IntoIter = UnitIter<'a, G>;
 
             fn into_iter(self) -> Self::IntoIter {
-                UnitIter::new(self.gen, self.range, self.per_unit, self.flag)
+                UnitIter::new(self.gen, self.range, self.flag)
             }
 
             fn min_len(&self) -> usize {
@@ -396,16 +392,10 @@ mod unit_iter {
             }
         }
 
-        impl<H, V, B, Hd, T> ParallelIterator for UnitPar<'_, H, V, B>
-        where
-            H: Fn(usize) -> Hd + Sync + Send,
-            V: Fn(&Hd, usize) -> T + Sync + Send,
-            B: Fn(&T) -> bool + Sync + Send,
-            T: Send,
-        {
-            type Item = T;
+        impl<G: Gen> ParallelIterator for UnitPar<'_, G> {
+            type Item = G::Item;
 
-            fn drive_unindexed<C: UnindexedConsumer<T>>(self, consumer: C) -> C::Result {
+            fn drive_unindexed<C: UnindexedConsumer<G::Item>>(self, consumer: C) -> C::Result {
                 bridge(self, consumer)
             }
 
@@ -414,22 +404,16 @@ mod unit_iter {
             }
         }
 
-        impl<H, V, B, Hd, T> IndexedParallelIterator for UnitPar<'_, H, V, B>
-        where
-            H: Fn(usize) -> Hd + Sync + Send,
-            V: Fn(&Hd, usize) -> T + Sync + Send,
-            B: Fn(&T) -> bool + Sync + Send,
-            T: Send,
-        {
+        impl<G: Gen> IndexedParallelIterator for UnitPar<'_, G> {
             fn len(&self) -> usize {
                 self.range.len()
             }
 
-            fn drive<C: Consumer<T>>(self, consumer: C) -> C::Result {
+            fn drive<C: Consumer<G::Item>>(self, consumer: C) -> C::Result {
                 bridge(self, consumer)
             }
 
-            fn with_producer<CB: ProducerCallback<T>>(self, callback: CB) -> CB::Output {
+            fn with_producer<CB: ProducerCallback<G::Item>>(self, callback: CB) -> CB::Output {
                 callback.callback(self)
             }
         }

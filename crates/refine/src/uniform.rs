@@ -161,7 +161,7 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                     buf[..d].copy_from_slice(ya);
                     for (o, wl) in buf[d..].chunks_exact_mut(d).zip(&w) {
                         for c in 0..d {
-                            o[c] = ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]);
+                            o[c] = free_vertex(ya[c], dy[c], mu[c], nu[c], wl);
                         }
                     }
                 };
@@ -197,7 +197,7 @@ fn vertices<const D: usize>(
         let Some(wl) = l.checked_sub(1).map(|l| w[l]) else {
             return ya;
         };
-        std::array::from_fn(|c| ya[c] + dy[c] * wl[0] - (mu[c] * wl[1] + nu[c] * wl[2]))
+        std::array::from_fn(|c| free_vertex(ya[c], dy[c], mu[c], nu[c], &wl))
     };
     let bad = |x: &[f64; D]| x.iter().fold(false, |b, x| b | !x.is_finite());
     crate::par::collect_units(crate::par::Units {
@@ -214,6 +214,13 @@ fn vertices<const D: usize>(
             index,
         })
     })
+}
+
+/// One coordinate of a free vertex (module docs): y_i + (y_{i+1} − y_i) l/m − (μ W_g(l) +
+/// ν W_h(l)), with `wl` = [l/m, W_g(l), W_h(l)] and h_i³ in μ and ν.
+#[inline(always)]
+fn free_vertex(y: f64, dy: f64, mu: f64, nu: f64, wl: &[f64; 3]) -> f64 {
+    y + dy * wl[0] - (mu * wl[1] + nu * wl[2])
 }
 
 /// α₁ and α₃ of every data row ([`alpha_row`] of the sub-spans on either side, bit for bit;
