@@ -45,6 +45,7 @@
 use crate::check::excursions;
 use crate::spline::{moments, Curve, Spline, Work};
 use crate::types::{Bound, Problem, Side};
+use crate::Progress;
 
 /// The sweeps stop when f leaves the strip nowhere by more than this fraction of the value scale
 /// (normalized frame). Its first-order effect on the energy (holding every contact up by this
@@ -507,7 +508,12 @@ fn gap_of(s: &Spline, active: &[Contact], violation: f64) -> f64 {
 
 /// Solves the strip problem `q` (normalized, data strictly inside) to the excursion tolerance
 /// `tol` (`vscale` the value scale), tightened while the gap estimate exceeds [`GAP_TARGET`].
-pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
+pub(crate) fn exchange(
+    q: &Problem,
+    tol: f64,
+    vscale: f64,
+    progress: &dyn Fn(&Progress),
+) -> Exchanged {
     let mut tol = tol;
     let range = q.t[q.t.len() - 1] - q.t[0];
     let mut st = State::new(q);
@@ -558,6 +564,15 @@ pub(crate) fn exchange(q: &Problem, tol: f64, vscale: f64) -> Exchanged {
         }
         sweeps += 1;
         violation = worst.max(0.0);
+        progress(&Progress::Sweep {
+            sweep: sweeps,
+            excursion: violation / vscale,
+            contacts: st
+                .kind
+                .iter()
+                .filter(|k| matches!(k, Knot::Active(_)))
+                .count(),
+        });
         if candidates.is_empty() {
             converged = !worst.is_nan();
             if converged

@@ -107,6 +107,7 @@ mod outer;
 mod piece;
 mod poly;
 mod prepare;
+mod progress;
 mod solve;
 mod spline;
 mod strategy;
@@ -119,7 +120,8 @@ pub use error::{sites_rounding_hint, Error, Infeasibility, SITES_ROUNDING_COUNTS
 /// (the exact solver for polyline bounds, and the fallback of Newton on Φ), whose
 /// `NotConverged::residual` is the excursion left outside the strip, not a gap.
 pub const EXCHANGE: &str = "dual active-set exchange";
-pub use solve::solve;
+pub use progress::Progress;
+pub use solve::{solve, solve_observed};
 pub use types::{
     Bound, ExtraKnot, KnotKind, Method, Options, Problem, Pruning, Shape, Side, Solution,
     C2_ROUNDING, CONTACT_TOL, DEFAULT_BOUNDARY_MARGIN, DEFAULT_GRADIENT_TOL,

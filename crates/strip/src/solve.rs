@@ -9,6 +9,7 @@ use crate::piece::cubic3;
 use crate::strategy::{self, CellsOut, Staged};
 use crate::types::{Options, Problem, Solution, RESULT_FEASIBILITY_TOL, ROUNDING_TOL};
 use crate::validate::validate;
+use crate::Progress;
 
 /// Solves the strip problem.
 ///
@@ -27,29 +28,43 @@ use crate::validate::validate;
 /// naming the field and index; numbers too badly scaled for double precision give
 /// [`Error::InvalidValue`]; running out of iterations gives [`Error::NotConverged`].
 pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
+    solve_observed(problem, opts, &|_| {})
+}
+
+/// [`solve`], telling `progress` how a long solve goes ([`Progress`]: each sweep of the
+/// exchange), on the calling thread. Keep it cheap: it runs once a sweep.
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_observed(
+    problem: &Problem,
+    opts: &Options,
+    progress: &dyn Fn(&Progress),
+) -> Result<Solution, Error> {
     validate(problem)?;
     let frame = Frame::of(problem)?;
     let normalized = frame.forward(problem)?;
-    let sol = solve_normalized(problem, &normalized, &frame, opts).map_err(|e| match e {
-        // distances and places in the caller's units
-        Error::Infeasible {
-            field,
-            index,
-            reason,
-        } => Error::Infeasible {
-            field,
-            index,
-            reason: match reason {
-                Infeasibility::OutsideBound { side, by } => Infeasibility::OutsideBound {
-                    side,
-                    by: by * frame.c,
+    let sol =
+        solve_normalized(problem, &normalized, &frame, opts, progress).map_err(|e| match e {
+            // distances and places in the caller's units
+            Error::Infeasible {
+                field,
+                index,
+                reason,
+            } => Error::Infeasible {
+                field,
+                index,
+                reason: match reason {
+                    Infeasibility::OutsideBound { side, by } => Infeasibility::OutsideBound {
+                        side,
+                        by: by * frame.c,
+                    },
+                    Infeasibility::Closed { at } => Infeasibility::Closed { at: frame.time(at) },
+                    other => other,
                 },
-                Infeasibility::Closed { at } => Infeasibility::Closed { at: frame.time(at) },
-                other => other,
             },
-        },
-        other => other,
-    })?;
+            other => other,
+        })?;
     let finite = sol.energy.is_finite()
         && sol.slopes.iter().all(|z| z.is_finite())
         && sol.coefficients.iter().flatten().all(|c| c.is_finite())
@@ -130,10 +145,16 @@ fn solve_normalized(
     q: &Problem,
     frame: &Frame,
     opts: &Options,
+    progress: &dyn Fn(&Progress),
 ) -> Result<Solution, Error> {
     let ef = frame.energy_factor();
-    let (staged, shifted) =
-        strategy::run(q, opts, frame.scale / frame.c, ef * frame.lam / frame.c)?;
+    let (staged, shifted) = strategy::run(
+        q,
+        opts,
+        frame.scale / frame.c,
+        ef * frame.lam / frame.c,
+        progress,
+    )?;
     let sol = match staged {
         Staged::Spline { q: qs, ex } => assemble_spline(problem, &qs, frame, &ex, shifted),
         Staged::Cells(CellsOut {

@@ -46,6 +46,7 @@ pub(crate) const ACCEPT_GAP: f64 = 1e-9;
 use crate::outer::{self, setup, Hints, OuterOut, Setup};
 use crate::prepare::prepare;
 use crate::types::{Bound, Method, Options, Problem};
+use crate::Progress;
 
 /// What the strategy produces: the cells of the exact Φ-problem, or the exchange's spline.
 pub(crate) enum Staged {
@@ -64,8 +65,8 @@ pub(crate) struct CellsOut {
 /// The exchange on `q`; `NotConverged` with the excursion left (relative to the value scale)
 /// when it stops with the curve still outside the strip, `Uncertified` with its gap when it
 /// converged but the gap is beyond what is reported as optimal.
-fn by_exchange(q: Problem, vscale: f64) -> Result<Staged, Error> {
-    let ex = exchange(&q, EXCHANGE_TOL * vscale, vscale);
+fn by_exchange(q: Problem, vscale: f64, progress: &dyn Fn(&Progress)) -> Result<Staged, Error> {
+    let ex = exchange(&q, EXCHANGE_TOL * vscale, vscale, progress);
     if !ex.converged || ex.gap.is_nan() {
         return Err(Error::NotConverged {
             solver: crate::EXCHANGE,
@@ -91,6 +92,7 @@ pub(crate) fn run(
     opts: &Options,
     vscale: f64,
     unit: f64,
+    progress: &dyn Fn(&Progress),
 ) -> Result<(Staged, Vec<usize>), Error> {
     if !(0.0..0.5).contains(&opts.boundary_margin) {
         return Err(Error::InvalidValue {
@@ -110,7 +112,7 @@ pub(crate) fn run(
                 reason: "BFGS is the seed's method for cubic pieces; polyline bounds are solved by the exchange",
             });
         }
-        return Ok((by_exchange(q, vscale)?, shifted));
+        return Ok((by_exchange(q, vscale, progress)?, shifted));
     }
     let mut st = setup(&q, opts, vscale)?;
     st.outer.unit.iter_mut().for_each(|u| *u = unit);
@@ -201,7 +203,7 @@ pub(crate) fn run(
         // above rounding, or a cell outside Theorem 2.1's shapes (no feasible candidate): the
         // exchange, which needs neither
         Ok(_) | Err(Error::Unsupported { .. }) if opts.method == Method::Newton => {
-            Ok((by_exchange(q, vscale)?, shifted))
+            Ok((by_exchange(q, vscale, progress)?, shifted))
         }
         // the seed's BFGS, chosen explicitly: refused with the larger of its gap and its C²
         // defect (relative to max|f''|)

@@ -287,3 +287,51 @@ fn a_zigzag_dipping_through_the_bound_in_every_interval() {
         assert!(s.rounds < 100, "n = {n}: {} sweeps", s.rounds);
     }
 }
+
+/// `solve_observed` tells of every sweep of the exchange in order, the last one being the
+/// answer's: its number is `rounds`, its excursion within the exchange's tolerance, its
+/// contacts the answer's extra knots; and the answer is `solve`'s, bit for bit.
+#[test]
+fn the_observer_is_told_of_every_sweep() {
+    let n = 400;
+    let t: Vec<f64> = (0..n).map(|i| i as f64).collect();
+    let y: Vec<f64> = (0..n)
+        .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+        .collect();
+    let line = |off: f64| Bound::Polyline(t.iter().zip(&y).map(|(&t, &y)| [t, y + off]).collect());
+    let p = Problem {
+        t: t.clone(),
+        y: y.clone(),
+        lower: line(-0.05),
+        upper: line(0.05),
+        end_slopes: [None, None],
+    };
+    let events = std::sync::Mutex::new(Vec::new());
+    let s = strip::solve_observed(&p, &Options::default(), &|e| {
+        events.lock().unwrap().push(*e)
+    })
+    .unwrap();
+    let events = events.into_inner().unwrap();
+    let sweeps: Vec<(usize, f64, usize)> = events
+        .iter()
+        .map(|e| match *e {
+            strip::Progress::Sweep {
+                sweep,
+                excursion,
+                contacts,
+            } => (sweep, excursion, contacts),
+            _ => unreachable!("only sweeps are reported"),
+        })
+        .collect();
+    assert_eq!(
+        sweeps.iter().map(|s| s.0).collect::<Vec<_>>(),
+        (1..=s.rounds).collect::<Vec<_>>()
+    );
+    let (_, excursion, contacts) = *sweeps.last().unwrap();
+    assert!(sweeps[0].1 > 1e-3, "first excursion {:e}", sweeps[0].1);
+    assert!(excursion <= 1e-12, "last excursion {excursion:e}");
+    assert_eq!(contacts, s.extra_knots.len());
+    let plain = solve(&p, &Options::default()).unwrap();
+    assert_eq!(plain.energy.to_bits(), s.energy.to_bits());
+    assert_eq!(plain.breaks, s.breaks);
+}

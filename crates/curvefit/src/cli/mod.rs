@@ -36,11 +36,11 @@ pub trait Command {
     type Solution: serde::Serialize;
     /// Validates and solves; errors name the field path and index.
     fn solve(problem: &Self::Problem) -> Result<Self::Solution, InputError>;
-    /// [`Command::solve`], telling `progress` how a long solve goes (the default: a command
-    /// with no progress events solves without).
+    /// [`Command::solve`], telling the progress `line` how a long solve goes (the default: a
+    /// command with no progress events solves without).
     fn solve_observed(
         problem: &Self::Problem,
-        _progress: ::refine::Observer,
+        _line: &std::sync::Arc<progress::Line>,
     ) -> Result<Self::Solution, InputError> {
         Self::solve(problem)
     }
@@ -539,7 +539,7 @@ pub fn run_json_with<C: Command>(
     let t1 = Instant::now();
     let solution = if args.stderr_is_terminal && !args.quiet {
         let line = progress::Line::new(name_static(name));
-        let solution = C::solve_observed(&problem, line.observer());
+        let solution = C::solve_observed(&problem, &line);
         line.finish();
         solution?
     } else {

@@ -1,8 +1,9 @@
 //! The progress line of a long solve: once a solve has run for [`QUIET_FOR`], one line on
-//! standard error (stage, knot iteration, solver iteration, residual, elapsed time), rewritten in
-//! place at most every [`EVERY`] and cleared when the solve ends. Only when standard error is a
-//! terminal and `--quiet` is not given; the events come from the library's observer
-//! ([`refine::Progress`]), the printing is the binary's.
+//! standard error (for `refine` the stage, knot iteration, solver iteration and residual; for
+//! `strip` the exchange's sweep, excursion and contacts; the elapsed time), rewritten in place at
+//! most every [`EVERY`] and cleared when the solve ends. Only when standard error is a terminal
+//! and `--quiet` is not given; the events come from the libraries' observers
+//! ([`refine::Progress`], [`strip::Progress`]), the printing is the binary's.
 
 use std::io::Write;
 use std::sync::{Arc, Mutex};
@@ -66,25 +67,61 @@ impl Line {
         s + &format!(" {:.1} s", elapsed.as_secs_f64())
     }
 
+    /// The text for a sweep of `strip`'s exchange.
+    pub fn strip_text(label: &str, event: &strip::Progress, elapsed: Duration) -> String {
+        let mut s = format!("{label}:");
+        if let strip::Progress::Sweep {
+            sweep,
+            excursion,
+            contacts,
+        } = event
+        {
+            s += &format!(
+                " {} sweep {sweep}, excursion {excursion:.1e}, {contacts} contacts,",
+                strip::EXCHANGE
+            );
+        }
+        s + &format!(" {:.1} s", elapsed.as_secs_f64())
+    }
+
     fn event(&self, event: &refine::Progress) {
+        self.update(
+            |st| {
+                if let refine::Progress::Solve {
+                    stage,
+                    knot_iteration,
+                    knot_iterations,
+                } = *event
+                {
+                    st.solve = Some((stage, knot_iteration, knot_iterations));
+                }
+            },
+            |st, elapsed| Self::text(self.label, st.solve, event, elapsed),
+        );
+    }
+
+    /// Updates the line for a sweep of `strip`'s exchange.
+    pub fn strip_event(&self, event: &strip::Progress) {
+        self.update(
+            |_| {},
+            |_, elapsed| Self::strip_text(self.label, event, elapsed),
+        );
+    }
+
+    /// Records an event (`note`) and, once the solve has run for [`QUIET_FOR`] and the line is
+    /// at least [`EVERY`] old, rewrites it with `text`.
+    fn update(&self, note: impl FnOnce(&mut State), text: impl FnOnce(&State, Duration) -> String) {
         let Ok(mut st) = self.state.lock() else {
             return;
         };
-        if let refine::Progress::Solve {
-            stage,
-            knot_iteration,
-            knot_iterations,
-        } = *event
-        {
-            st.solve = Some((stage, knot_iteration, knot_iterations));
-        }
+        note(&mut st);
         let now = Instant::now();
         let elapsed = now - self.start;
         if elapsed < QUIET_FOR || st.last.is_some_and(|t| now - t < EVERY) {
             return;
         }
         st.last = Some(now);
-        let text = Self::text(self.label, st.solve, event, elapsed);
+        let text = text(&st, elapsed);
         // Carriage return, the text, erase to the end of the line. A failed write to the
         // terminal only loses the line.
         let _ = write!(std::io::stderr().lock(), "\r{text}\x1b[K");
@@ -114,6 +151,20 @@ mod tests {
         assert_eq!(
             t,
             "refine: stage 0, knot iteration 1/3, condensed working set iteration 12, residual 3.1e-5, 2.3 s"
+        );
+    }
+
+    #[test]
+    fn the_strip_line_names_sweep_excursion_contacts_and_time() {
+        let e = strip::Progress::Sweep {
+            sweep: 7,
+            excursion: 2.5e-6,
+            contacts: 14_200,
+        };
+        let t = Line::strip_text("strip", &e, Duration::from_millis(4049));
+        assert_eq!(
+            t,
+            "strip: dual active-set exchange sweep 7, excursion 2.5e-6, 14200 contacts, 4.0 s"
         );
     }
 }

@@ -249,7 +249,18 @@ fn input_error(t: &[f64], e: &strip::Error) -> InputError {
 /// # Errors
 /// An [`InputError`] naming the user's field and index.
 pub fn solve(p: &Problem) -> Result<Solution, InputError> {
-    solve_data(p.t.0.clone(), p.y.0.clone(), p)
+    solve_observed(p, &|_| {})
+}
+
+/// [`solve`], telling `progress` of each sweep of the exchange ([`strip::solve_observed`]).
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_observed(
+    p: &Problem,
+    progress: &dyn Fn(&strip::Progress),
+) -> Result<Solution, InputError> {
+    solve_data(p.t.0.clone(), p.y.0.clone(), p, progress)
 }
 
 /// [`solve`] for a problem that is not needed afterwards: its data `t` and `y` move into the
@@ -259,11 +270,16 @@ pub fn solve(p: &Problem) -> Result<Solution, InputError> {
 /// As [`solve`].
 pub fn solve_owned(mut p: Problem) -> Result<Solution, InputError> {
     let (t, y) = (std::mem::take(&mut p.t.0), std::mem::take(&mut p.y.0));
-    solve_data(t, y, &p)
+    solve_data(t, y, &p, &|_| {})
 }
 
 /// The strip of data `t`, `y` (the problem's, moved or copied) with `p`'s bounds and ends.
-fn solve_data(t: Vec<f64>, y: Vec<f64>, p: &Problem) -> Result<Solution, InputError> {
+fn solve_data(
+    t: Vec<f64>,
+    y: Vec<f64>,
+    p: &Problem,
+    progress: &dyn Fn(&strip::Progress),
+) -> Result<Solution, InputError> {
     if t.len() > MAX_POINTS {
         return Err(InputError::new(
             "t",
@@ -277,7 +293,7 @@ fn solve_data(t: Vec<f64>, y: Vec<f64>, p: &Problem) -> Result<Solution, InputEr
         upper: bound(&p.upper),
         end_slopes: p.end_slopes.unwrap_or([None, None]),
     };
-    let s = strip::solve(&problem, &strip::Options::default())
+    let s = strip::solve_observed(&problem, &strip::Options::default(), progress)
         .map_err(|e| input_error(&problem.t, &e))?;
     Ok(Solution {
         breaks: s.breaks,

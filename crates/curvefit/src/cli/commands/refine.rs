@@ -77,9 +77,9 @@ impl super::super::Command for RefineCmd {
 
     fn solve_observed(
         problem: &RefineProblem,
-        progress: refine::Observer,
+        line: &std::sync::Arc<crate::cli::progress::Line>,
     ) -> Result<RefineResult, InputError> {
-        crate::spec::refine::solve_observed(problem, Some(progress))
+        crate::spec::refine::solve_observed(problem, Some(line.observer()))
     }
 
     fn svg(problem: &RefineProblem, solution: &RefineResult) -> Option<String> {

@@ -33,6 +33,13 @@ impl super::super::Command for Strip {
         crate::spec::strip(p)
     }
 
+    fn solve_observed(
+        p: &Problem,
+        line: &std::sync::Arc<crate::cli::progress::Line>,
+    ) -> Result<Solution, InputError> {
+        crate::spec::strip::solve_observed(p, &|e| line.strip_event(e))
+    }
+
     /// `--points FILE.csv` with two columns: the sites `t` and the values `y`.
     fn set_points(p: &mut Problem, csv: super::super::input::Csv) -> Result<(), InputError> {
         if !p.t.is_empty() || !p.y.is_empty() {
