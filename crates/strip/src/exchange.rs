@@ -60,8 +60,34 @@ pub(crate) const GAP_TARGET: f64 = 1e-11;
 const TOL_FLOOR: f64 = 1e-15;
 /// Sweeps before giving up.
 pub(crate) const MAX_SWEEPS: usize = 400;
-/// Dual steps (additions and removals) before giving up.
+/// Dual steps (additions and removals) before giving up: this many, or [`STEPS_PER_KNOT`] per
+/// site and polyline vertex if more.
 const MAX_STEPS: usize = 2_000_000;
+/// Noisy sites in a channel ±0.02 (`cargo xtask bench strip`'s hard table) take about 22 steps
+/// a site (2.2·10⁵ at n = 10⁴): with the fixed limit alone, n = 10⁵ ran out of steps.
+const STEPS_PER_KNOT: usize = 50;
+
+/// When the exchange gives up (sweeps, dual steps).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Limits {
+    pub sweeps: usize,
+    pub steps: usize,
+}
+
+impl Limits {
+    /// [`MAX_SWEEPS`], and [`MAX_STEPS`] or [`STEPS_PER_KNOT`] per site and vertex of `q`.
+    fn of(q: &Problem) -> Self {
+        let vertices = |b: &Bound| match b {
+            Bound::Polyline(v) => v.len(),
+            _ => 0,
+        };
+        let knots = q.t.len() + vertices(&q.lower) + vertices(&q.upper);
+        Limits {
+            sweeps: MAX_SWEEPS,
+            steps: MAX_STEPS.max(STEPS_PER_KNOT.saturating_mul(knots)),
+        }
+    }
+}
 
 /// An active point: abscissa, side, and its bound value there.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -144,6 +170,8 @@ struct State<'a> {
     /// Abscissae of the knots added and removed since the last sweep.
     touched: Vec<f64>,
     steps: usize,
+    /// The dual steps allowed ([`Limits`]).
+    max_steps: usize,
     solves: usize,
 }
 
@@ -164,6 +192,7 @@ impl<'a> State<'a> {
             response: Vec::new(),
             touched: Vec::new(),
             steps: 0,
+            max_steps: MAX_STEPS,
             solves: 0,
         };
         st.resolve();
@@ -355,7 +384,7 @@ impl<'a> State<'a> {
                     }
                 }
             }
-            if self.steps >= MAX_STEPS {
+            if self.steps >= self.max_steps {
                 // the point stays short of its bound: the next sweep sees the excursion, and
                 // the caller stops at the step limit
                 self.kind[p] = Knot::Active(side);
@@ -539,12 +568,35 @@ pub(crate) fn exchange(
     vscale: f64,
     progress: &dyn Fn(&Progress),
 ) -> Exchanged {
+    exchange_within(q, tol, vscale, progress, Limits::of(q))
+}
+
+/// The knots, their kinds, the excursion and the gap estimate of a converged iterate, kept while
+/// the sweeps go on with a tighter tolerance: if those run out of sweeps or steps, or end with a
+/// larger gap, the answer is this one (the caller decides whether its gap is certified).
+struct Converged {
+    spline: Spline,
+    kind: Vec<Knot>,
+    violation: f64,
+    gap: f64,
+}
+
+/// [`exchange`] within `limits`.
+pub(crate) fn exchange_within(
+    q: &Problem,
+    tol: f64,
+    vscale: f64,
+    progress: &dyn Fn(&Progress),
+    limits: Limits,
+) -> Exchanged {
     let mut tol = tol;
     let range = q.t[q.t.len() - 1] - q.t[0];
     let mut st = State::new(q);
+    st.max_steps = limits.steps;
     let mut sweeps = 0;
     let mut violation;
     let mut converged = false;
+    let mut kept: Option<Converged> = None;
     loop {
         st.resolve();
         st.release();
@@ -600,16 +652,22 @@ pub(crate) fn exchange(
         });
         if candidates.is_empty() {
             converged = !worst.is_nan();
-            if converged
-                && gap_of(&st.cur, &st.active(), violation) > GAP_TARGET
-                && tol > TOL_FLOOR * vscale
-            {
+            let gap = gap_of(&st.cur, &st.active(), violation);
+            if converged && gap > GAP_TARGET && tol > TOL_FLOOR * vscale {
                 tol = (tol * 1e-2).max(TOL_FLOOR * vscale);
+                // (the moments are fresh: nothing was added since the resolve above)
+                kept = Some(Converged {
+                    spline: st.cur.clone(),
+                    kind: st.kind.clone(),
+                    violation,
+                    gap,
+                });
+                converged = false;
                 continue;
             }
             break;
         }
-        if sweeps >= MAX_SWEEPS || st.steps >= MAX_STEPS {
+        if sweeps >= limits.sweeps || st.steps >= limits.steps {
             break;
         }
         let mut added = false;
@@ -646,9 +704,15 @@ pub(crate) fn exchange(
         }
     }
     st.resolve();
+    let mut gap = gap_of(&st.cur, &st.active(), violation);
+    if let Some(c) = kept.filter(|c| !converged || c.gap < gap) {
+        // the tighter tolerance ran out of sweeps or steps, or did worse: the last converged
+        // iterate (its moments as they were solved)
+        (st.cur, st.kind, violation, gap, converged) = (c.spline, c.kind, c.violation, c.gap, true);
+    }
     let active = st.active();
     Exchanged {
-        gap: gap_of(&st.cur, &active, violation),
+        gap,
         active,
         violation,
         converged,
@@ -662,6 +726,75 @@ pub(crate) fn exchange(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Jittered noisy sites in a channel ±0.02 (as `cargo xtask bench strip`'s hard table).
+    fn noisy_channel(n: usize) -> Problem {
+        let mut s: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut unif = move || {
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut t = vec![0.0];
+        for _ in 1..n {
+            let last = t[t.len() - 1];
+            t.push(last + 0.2 + unif());
+        }
+        let y: Vec<f64> = t.iter().map(|x| (0.7 * x).sin() + 0.3 * unif()).collect();
+        let line =
+            |off: f64| Bound::Polyline(t.iter().zip(&y).map(|(&t, &y)| [t, y + off]).collect());
+        Problem {
+            lower: line(-0.02),
+            upper: line(0.02),
+            t: t.clone(),
+            y: y.clone(),
+            end_slopes: [None, None],
+        }
+    }
+
+    /// When the sweeps with a tightened tolerance run out (here of sweeps: the limit is the
+    /// second sweep after the first convergence), the answer is the converged iterate before them —
+    /// its excursion and contacts as that sweep reported them, converged — not the half-done
+    /// iterate the limit stopped, which was once returned as converged with its excursion (at
+    /// n = 10⁵ the step limit did this, and the solve was refused with a gap of 4e-8).
+    #[test]
+    fn a_tightening_cut_short_returns_the_converged_iterate() {
+        let q = noisy_channel(300);
+        let events = std::cell::RefCell::new(Vec::new());
+        let full = exchange(&q, EXCHANGE_TOL, 1.0, &|e| {
+            let Progress::Sweep {
+                sweep,
+                excursion,
+                contacts,
+            } = *e;
+            events.borrow_mut().push((sweep, excursion, contacts));
+        });
+        assert!(
+            full.converged && full.gap <= GAP_TARGET,
+            "gap {:e}",
+            full.gap
+        );
+        let events = events.into_inner();
+        let first = events
+            .iter()
+            .position(|e| e.1 <= EXCHANGE_TOL)
+            .expect("a converged sweep");
+        // (sweep + 1 sees the same curve with the tighter tolerance and adds; sweep + 2 is the
+        // first after additions)
+        assert!(first + 2 < events.len(), "no tightening: {events:?}");
+        let (sweep, excursion, contacts) = events[first];
+        assert_ne!(events[first + 2], events[first]);
+        let limits = Limits {
+            sweeps: sweep + 2,
+            steps: usize::MAX,
+        };
+        let cut = exchange_within(&q, EXCHANGE_TOL, 1.0, &|_| {}, limits);
+        assert!(cut.converged);
+        assert_eq!(cut.violation.to_bits(), excursion.to_bits());
+        assert_eq!(cut.active.len(), contacts);
+        assert!(cut.gap > GAP_TARGET, "gap {:e}", cut.gap);
+    }
 
     /// Dual steps on split knots ([`State::seek`]) against the same steps on whole vectors: the
     /// same knots, values, moments and kinds, bit for bit (every step reads only its window,
