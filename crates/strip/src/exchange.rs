@@ -21,9 +21,10 @@
 //! first, the move stops there and that point leaves the active set (its jump is zero, so the
 //! spline does not change), and the move continues; otherwise q joins. Each step is one or two
 //! tridiagonal solves (diagonally dominant: well conditioned however uneven the spacing), over
-//! the [`RESPONSE_REACH`] knots on each side of the point, beyond which the response is below
-//! rounding: a step costs the same at M = 10² and 10⁵ knots. The dual objective increases
-//! strictly, so the method cannot cycle.
+//! the [`SHORT_REACH`] knots on each side of the point, or the [`RESPONSE_REACH`] where the
+//! response has not fallen below rounding at the first: beyond them it is below rounding, and a
+//! step costs the same at M = 10² and 10⁵ knots. The dual objective increases strictly, so the
+//! method cannot cycle.
 //!
 //! **Exchange.** An O(M) sweep ([`crate::check::excursions`]) finds, on every sub-interval
 //! between consecutive knots and bound breakpoints, where f leaves the strip most (the real roots
@@ -394,7 +395,8 @@ impl<'a> State<'a> {
     }
 }
 
-/// Knots on each side of an added point within which [`response`] solves. The moments' system
+/// Knots on each side of an added point within which [`response`] solves when [`SHORT_REACH`]
+/// is not enough (and within which it always suffices). The moments' system
 /// is tridiagonal with its diagonal twice the sum of its off-diagonal entries in every row
 /// (whatever the spacing), so A = D(I − N) with ‖N‖_∞ ≤ ½ and an entry of A⁻¹ at distance j
 /// from the diagonal is at most 2·2⁻ʲ of the diagonal's scale: the response to a unit value at
