@@ -62,13 +62,7 @@ pub(super) fn star_problem(n: usize, k: usize) -> serde_json::Value {
 /// The noisy star, closed or open (an arc of nine tenths of the turn), in the plane or lifted
 /// to d = 3 by z = 0.3 sin 3θ.
 pub(super) fn star_case(n: usize, k: usize, closed: bool, d: usize) -> serde_json::Value {
-    let mut s: u64 = 0x2545_F491_4F6C_DD1D;
-    let mut unif = move || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut unif = super::uniform(0x2545_F491_4F6C_DD1D);
     let turn = if closed { 1.0 } else { 0.9 };
     let points: Vec<Vec<f64>> = (0..n)
         .map(|i| {

@@ -17,6 +17,19 @@ pub struct Opts {
     pub quick: bool,
 }
 
+/// The benches' uniform numbers in \[0, 1): a 64-bit LCG (Knuth's MMIX constants) from `seed`,
+/// its top 53 bits. The noisy star and the noisy strip channel are drawn from it, so a table's
+/// data are reproduced from the seed.
+pub(super) fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 /// Median wall time of `reps` runs of `f` (after one warm-up run).
 pub fn time_median<T>(reps: usize, mut f: impl FnMut() -> T) -> Duration {
     std::hint::black_box(f());

@@ -31,13 +31,7 @@ fn channel(m: usize, n: usize) -> Problem {
 /// uniform in [0, 1), a fixed LCG), polyline bounds ±0.02 about the data — the natural spline
 /// leaves the channel in nearly every interval, and the answer has about 1.5 contacts a site.
 fn noisy_channel(n: usize) -> Problem {
-    let mut s: u64 = 0x2545_F491_4F6C_DD1D;
-    let mut unif = move || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut unif = super::uniform(0x2545_F491_4F6C_DD1D);
     let mut t = vec![0.0];
     for _ in 1..n {
         let last = t[t.len() - 1];
