@@ -5,7 +5,10 @@ Usage: python bench.py [--quick] [--reps R]
 
 Every case times the call a Python user makes, numpy in and numpy out (curvefit: the
 ``curvefit.refine`` call including reading the arrays and building the result object), as the
-median of R repetitions after one warm-up call. Data: a noisy star with jittered angles
+median of R repetitions after one warm-up call. Where the peer is fast enough (interpolation,
+smoothing) the peer and curvefit are called in alternation and the ratio printed is the median
+of the R pairs' ratios, so that the machine's drift during a run does not fall on one side of
+it. Data: a noisy star with jittered angles
 (r_i = 1 + 0.35·(i mod 2) + 0.05·N(0,1), θ_i = 2π(i + U(−0.4, 0.4))/n, sorted; seed fixed).
 
 1. interpolation, closed, n = 10⁵, k = 7: ``curvefit.refine(q, closed=True, k=7,
@@ -76,6 +79,27 @@ def median_time(f, reps):
     return statistics.median(times), out
 
 
+def paired_times(peer, ours, reps):
+    """Medians of `peer` and `ours` timed in alternation (one warm-up call each, then `reps`
+    pairs), and the median of the pairs' ratios peer/ours: a drift of the machine's speed during
+    the run (this 2-core machine's speed moves by tens of per cent within seconds) falls on both
+    sides of a pair instead of on one side of the ratio."""
+    peer()
+    ours()
+    tp, to, ratios = [], [], []
+    out_p = out_o = None
+    for _ in range(reps):
+        t0 = time.perf_counter()
+        out_p = peer()
+        t1 = time.perf_counter()
+        out_o = ours()
+        t2 = time.perf_counter()
+        tp.append(t1 - t0)
+        to.append(t2 - t1)
+        ratios.append((t1 - t0) / (t2 - t1))
+    return statistics.median(tp), statistics.median(to), statistics.median(ratios), out_p, out_o
+
+
 def ms(t):
     return f"{t * 1e3:9.2f}"
 
@@ -91,15 +115,16 @@ def interpolation(n, k, reps):
     def scipy_fit():
         return CubicSpline(u, qc, bc_type="periodic")(t)
 
-    ts, ys = median_time(scipy_fit, reps)
-    tc, r = median_time(lambda: curvefit.refine(q, closed=True, k=k, knot_iterations=0), reps)
+    ts, tc, ratio, ys, r = paired_times(
+        scipy_fit, lambda: curvefit.refine(q, closed=True, k=k, knot_iterations=0), reps
+    )
     td, rd = median_time(lambda: curvefit.refine(q, closed=True, k=k), max(1, reps // 2))
     assert r.points.shape == ys.shape, (r.points.shape, ys.shape)
     print(f"1. interpolation, closed, n = {n}, k = {k}: {(k + 1) * n} points out")
     print(f"   scipy CubicSpline(periodic) fit + eval      {ms(ts)} ms")
-    print(f"   curvefit.refine, knot_iterations = 0        {ms(tc)} ms   ratio {ts / tc:5.2f}x  (kkt {r.kkt_residual:.1e})")
+    print(f"   curvefit.refine, knot_iterations = 0        {ms(tc)} ms   ratio {ratio:5.2f}x  (kkt {r.kkt_residual:.1e})")
     print(f"   curvefit.refine, default knot_iterations 3  {ms(td)} ms   ratio {ts / td:5.2f}x  (kkt {rd.kkt_residual:.1e})")
-    return {"scipy": ts, "curvefit": tc, "curvefit_default": td}
+    return {"scipy": ts, "curvefit": tc, "ratio": ratio, "curvefit_default": td}
 
 
 def radii_for(q, seed=7):
@@ -208,14 +233,15 @@ def smoothing(n, k, reps):
     def peer():
         return csaps.CubicSmoothingSpline(u, q.T, weights=w, smooth=0.5)(t).T
 
-    ts, ys = median_time(peer, reps)
-    tc, r = median_time(lambda: curvefit.refine(q, k=k, knot_iterations=0, weights=w), reps)
+    ts, tc, ratio, ys, r = paired_times(
+        peer, lambda: curvefit.refine(q, k=k, knot_iterations=0, weights=w), reps
+    )
     gap = np.linalg.norm(r.points - ys, axis=1).max()
     print(f"3. smoothing, open, n = {n}, k = {k}, weights in [50, 500]: {len(t)} points out")
     print(f"   csaps CubicSmoothingSpline fit + eval        {ms(ts)} ms")
-    print(f"   curvefit.refine(weights=...)                 {ms(tc)} ms   ratio {ts / tc:5.2f}x  (kkt {r.kkt_residual:.1e})")
+    print(f"   curvefit.refine(weights=...)                 {ms(tc)} ms   ratio {ratio:5.2f}x  (kkt {r.kkt_residual:.1e})")
     print(f"   largest distance between the two curves at the same parameters: {gap:.1e} (data spread ~1)")
-    return {"csaps": ts, "curvefit": tc}
+    return {"csaps": ts, "curvefit": tc, "ratio": ratio}
 
 
 def main():
