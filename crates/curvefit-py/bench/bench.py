@@ -79,24 +79,32 @@ def median_time(f, reps):
     return statistics.median(times), out
 
 
+def timed(f):
+    t0 = time.perf_counter()
+    out = f()
+    return time.perf_counter() - t0, out
+
+
 def paired_times(peer, ours, reps):
     """Medians of `peer` and `ours` timed in alternation (one warm-up call each, then `reps`
-    pairs), and the median of the pairs' ratios peer/ours: a drift of the machine's speed during
-    the run (this 2-core machine's speed moves by tens of per cent within seconds) falls on both
-    sides of a pair instead of on one side of the ratio."""
+    pairs, the pair's order swapped every other pair), and the median of the pairs' ratios
+    peer/ours: a drift of the machine's speed during the run (this 2-core machine's speed moves
+    by tens of per cent within seconds) falls on both sides of a pair instead of on one side of
+    the ratio, and neither side always runs right after the other."""
     peer()
     ours()
     tp, to, ratios = [], [], []
     out_p = out_o = None
-    for _ in range(reps):
-        t0 = time.perf_counter()
-        out_p = peer()
-        t1 = time.perf_counter()
-        out_o = ours()
-        t2 = time.perf_counter()
-        tp.append(t1 - t0)
-        to.append(t2 - t1)
-        ratios.append((t1 - t0) / (t2 - t1))
+    for i in range(reps):
+        if i % 2 == 0:
+            a, out_p = timed(peer)
+            b, out_o = timed(ours)
+        else:
+            b, out_o = timed(ours)
+            a, out_p = timed(peer)
+        tp.append(a)
+        to.append(b)
+        ratios.append(a / b)
     return statistics.median(tp), statistics.median(to), statistics.median(ratios), out_p, out_o
 
 
