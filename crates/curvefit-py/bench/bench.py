@@ -68,21 +68,20 @@ def split(u, k):
     return (u[:-1, None] * (1.0 - s) + u[1:, None] * s).ravel()
 
 
+def timed(f):
+    t0 = time.perf_counter()
+    out = f()
+    return time.perf_counter() - t0, out
+
+
 def median_time(f, reps):
     f()
     times = []
     out = None
     for _ in range(reps):
-        t0 = time.perf_counter()
-        out = f()
-        times.append(time.perf_counter() - t0)
+        t, out = timed(f)
+        times.append(t)
     return statistics.median(times), out
-
-
-def timed(f):
-    t0 = time.perf_counter()
-    out = f()
-    return time.perf_counter() - t0, out
 
 
 def paired_times(peer, ours, reps):
