@@ -258,7 +258,8 @@ struct Block {
     w: Vec<f64>,
     /// Its reciprocal (0 where it does not exist).
     iw: Vec<f64>,
-    /// One coordinate of the local vertices.
+    /// The local vertices' coordinates, coordinate by coordinate: coordinate c of local vertex
+    /// l at c·len + l.
     x: Vec<f64>,
     /// Slopes s_j of the local spans.
     s: Vec<f64>,
@@ -274,12 +275,51 @@ impl Block {
             &mut self.ih,
             &mut self.w,
             &mut self.iw,
-            &mut self.x,
             &mut self.s,
             &mut self.c,
             &mut self.v,
         ] {
             b.resize(len, 0.0);
+        }
+    }
+
+    /// Fills `x` with the `d` coordinates of the local vertices `len` long from the interleaved
+    /// `from` (local vertex l at l·d): one read of each point for all its coordinates, with the
+    /// dimension known to the compiler for d = 2 and 3, instead of one strided read per
+    /// coordinate with a run-time stride (a quarter of the pass's samples at N = 8·10⁵; the
+    /// pass went from 3.36 to 2.78 ms there, medians of 240 calls on two threads).
+    #[inline(always)]
+    fn gather(&mut self, from: &[f64], d: usize, len: usize) {
+        self.x.resize(len * d, 0.0);
+        let x = &mut self.x[..len * d];
+        match d {
+            2 => deinterleave::<2>(x, &from[..len * 2], len),
+            3 => deinterleave::<3>(x, &from[..len * 3], len),
+            _ => {
+                for c in 0..d {
+                    for (l, xl) in x[c * len..(c + 1) * len].iter_mut().enumerate() {
+                        *xl = from[l * d + c];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `x[c·len + l] = from[l·D + c]`: D interleaved coordinates to D contiguous rows.
+#[inline(always)]
+fn deinterleave<const D: usize>(x: &mut [f64], from: &[f64], len: usize) {
+    let (points, _) = from.as_chunks::<D>();
+    let mut rows: [&mut [f64]; D] = [(); D].map(|_| &mut [][..]);
+    let mut rest = x;
+    for row in rows.iter_mut() {
+        let (here, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        *row = here;
+        rest = tail;
+    }
+    for (l, pt) in points[..len].iter().enumerate() {
+        for c in 0..D {
+            rows[c][l] = pt[c];
         }
     }
 }
@@ -424,25 +464,23 @@ fn sweep(
             let ahead = &dv[next_data..(next_data + m).min(dv.len())];
             next_data + ahead.partition_point(|&v| v < b)
         });
-        for coord in 0..d {
-            // One coordinate of the local vertices (0 where a vertex does not exist).
-            {
-                let xl = &mut bl.x[..len];
-                if inner {
-                    let from = &x[(a - 2) * d + coord..];
-                    for (k, xk) in xl.iter_mut().enumerate() {
-                        *xk = from[k * d];
-                    }
-                } else {
-                    for (l, xk) in xl.iter_mut().enumerate() {
-                        *xk = wrap(base + l as isize, n, closed).map_or(0.0, |i| x[i * d + coord]);
-                    }
+        // The local vertices' coordinates (0 where a vertex does not exist).
+        if inner {
+            bl.gather(&x[(a - 2) * d..], d, len);
+        } else {
+            bl.x.resize(len * d, 0.0);
+            for coord in 0..d {
+                for (l, xk) in bl.x[coord * len..(coord + 1) * len].iter_mut().enumerate() {
+                    *xk = wrap(base + l as isize, n, closed).map_or(0.0, |i| x[i * d + coord]);
                 }
             }
+        }
+        for (coord, &mid) in center.iter().enumerate().take(d) {
+            let xc = &bl.x[coord * len..(coord + 1) * len];
             // s_j = (p_{j+1} − p_j)/h_j for local spans 0 .. len − 1.
             {
                 let k = len - 1;
-                let (x0, x1, ih, s) = (&bl.x[..k], &bl.x[1..len], &bl.ih[..k], &mut bl.s[..k]);
+                let (x0, x1, ih, s) = (&xc[..k], &xc[1..len], &bl.ih[..k], &mut bl.s[..k]);
                 for j in 0..k {
                     s[j] = (x1[j] - x0[j]) * ih[j];
                 }
@@ -477,8 +515,8 @@ fn sweep(
                 }
                 out.energy += (e[0] + e[1]) + (e[2] + e[3]);
             }
-            let own = &bl.x[2..m + 2];
-            raise_abs(&mut out.extent, own, center[coord]);
+            let own = &xc[2..m + 2];
+            raise_abs(&mut out.extent, own, mid);
             raise_abs(&mut out.magnitude, own, 0.0);
             let v = &mut bl.v[..m];
             match data {
@@ -686,6 +724,13 @@ mod tests {
     }
 
     fn pass_is_the_jumps(n: usize) {
+        // d = 2 and 3 read a block's points with the dimension fixed, other d generically.
+        for d in 1..=4 {
+            pass_is_the_jumps_in(n, d);
+        }
+    }
+
+    fn pass_is_the_jumps_in(n: usize, d: usize) {
         let mut unif = crate::par::uniform_stream(7);
         for topo in [Topology::Open, Topology::Closed] {
             let spans = if topo == Topology::Closed { n } else { n - 1 };
@@ -694,9 +739,9 @@ mod tests {
                 t.push(t[j] + 0.1 + unif());
             }
             let kn = Knots::new(topo, t).unwrap();
-            let x: Vec<f64> = (0..2 * n).map(|_| unif() - 0.5).collect();
-            let p = Points::new(2, x).unwrap();
-            let pass = super::pass(&kn, &p, &[0.0, 0.0], None);
+            let x: Vec<f64> = (0..d * n).map(|_| unif() - 0.5).collect();
+            let p = Points::new(d, x).unwrap();
+            let pass = super::pass(&kn, &p, &vec![0.0; d], None);
             let jmp = divdiff::jumps(&kn, &p).unwrap();
             let scale = pass.hp.iter().fold(1.0f64, |a, v| a.max(v.abs()));
             for (j, (a, b)) in pass.hp.iter().zip(jmp.coords()).enumerate() {
@@ -713,10 +758,10 @@ mod tests {
             );
             // The data-vertex form keeps the same values at the data vertices.
             let data: Vec<usize> = (0..n).step_by(8).collect();
-            let compact = super::pass(&kn, &p, &[0.0, 0.0], Some(&data));
+            let compact = super::pass(&kn, &p, &vec![0.0; d], Some(&data));
             let kept: Vec<f64> = data
                 .iter()
-                .flat_map(|&v| pass.hp[2 * v..2 * v + 2].to_vec())
+                .flat_map(|&v| pass.hp[d * v..d * v + d].to_vec())
                 .collect();
             assert_eq!(compact.hp_data, kept);
         }
