@@ -260,7 +260,24 @@ fn exact_split_grid(v: &[f64], m: usize) -> Vec<f64> {
     }
     // |round(x/g)|·m ≤ 2^52 + m: every product and sum of the split is an integer multiple of
     // `unit` below 2^53, so exact.
-    v.iter().map(|&x| (x / grid).round() * grid).collect()
+    crate::par::vectorized(OnGrid { v, grid })
+}
+
+/// The rounding of [`exact_split_grid`] as [`crate::par::vectorized`] runs it: with SSE4.1
+/// `round` is a few vector instructions, on the x86-64 baseline a call into libm per knot
+/// (~0.3 ms of the 10⁵-point interpolation's ~10).
+struct OnGrid<'a> {
+    v: &'a [f64],
+    grid: f64,
+}
+
+impl pulp::WithSimd for OnGrid<'_> {
+    type Output = Vec<f64>;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Vec<f64> {
+        let grid = self.grid;
+        self.v.iter().map(|&x| (x / grid).round() * grid).collect()
+    }
 }
 
 /// The smallest power of two at least `x` (x > 0 finite; 0 for x = 0).
