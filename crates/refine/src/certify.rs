@@ -475,7 +475,7 @@ fn sweep(
                 }
             }
         }
-        for (coord, &mid) in center.iter().enumerate().take(d) {
+        for (coord, &mid) in center[..d].iter().enumerate() {
             let xc = &bl.x[coord * len..(coord + 1) * len];
             // s_j = (p_{j+1} − p_j)/h_j for local spans 0 .. len − 1.
             {
