@@ -15,7 +15,9 @@ it. Data: a noisy star with jittered angles
    knot_iterations=0)`` (one solve on the centripetal data parameters, its KKT certificate
    included) against scipy ``CubicSpline(u, q, bc_type="periodic")`` fit + evaluation at the
    same (k + 1)·n parameters (every span cut into k + 1 equal sub-spans; u centripetal, the
-   same data parameters). Also the default three knot updates (four solves).
+   same data parameters). The same pairs again with every call after 50 ms asleep: a user's
+   single call, not one right after the same call. Also the default three knot updates (four
+   solves).
 2. balls, closed, n = 10⁴, k = 3, knot_iterations = 0, radii in [0.2, 0.7] × the mean data
    spacing, on the noisy star (most balls active at the optimum) and on xtask's smooth wavy
    circle (most inactive): ``curvefit.refine(q, ..., radii=r)`` against Clarabel (Python) on the same
@@ -68,7 +70,14 @@ def split(u, k):
     return (u[:-1, None] * (1.0 - s) + u[1:, None] * s).ravel()
 
 
-def timed(f):
+# The pause before each call of the "after idle" pairs (interpolation): a user's single call
+# finds the machine after other work or none, not right after the same call.
+IDLE_S = 0.05
+
+
+def timed(f, idle=0.0):
+    if idle:
+        time.sleep(idle)
     t0 = time.perf_counter()
     out = f()
     return time.perf_counter() - t0, out
@@ -84,23 +93,24 @@ def median_time(f, reps):
     return statistics.median(times), out
 
 
-def paired_times(peer, ours, reps):
+def paired_times(peer, ours, reps, idle=0.0):
     """Medians of `peer` and `ours` timed in alternation (one warm-up call each, then `reps`
     pairs, the pair's order swapped every other pair), and the median of the pairs' ratios
     peer/ours: a drift of the machine's speed during the run (this 2-core machine's speed moves
     by tens of per cent within seconds) falls on both sides of a pair instead of on one side of
-    the ratio, and neither side always runs right after the other."""
+    the ratio, and neither side always runs right after the other. With `idle`, every call
+    comes after that many seconds asleep (not timed)."""
     peer()
     ours()
     tp, to, ratios = [], [], []
     out_p = out_o = None
     for i in range(reps):
         if i % 2 == 0:
-            a, out_p = timed(peer)
-            b, out_o = timed(ours)
+            a, out_p = timed(peer, idle)
+            b, out_o = timed(ours, idle)
         else:
-            b, out_o = timed(ours)
-            a, out_p = timed(peer)
+            b, out_o = timed(ours, idle)
+            a, out_p = timed(peer, idle)
         tp.append(a)
         to.append(b)
         ratios.append(a / b)
@@ -122,16 +132,20 @@ def interpolation(n, k, reps):
     def scipy_fit():
         return CubicSpline(u, qc, bc_type="periodic")(t)
 
-    ts, tc, ratio, ys, r = paired_times(
-        scipy_fit, lambda: curvefit.refine(q, closed=True, k=k, knot_iterations=0), reps
-    )
+    def ours():
+        return curvefit.refine(q, closed=True, k=k, knot_iterations=0)
+
+    ts, tc, ratio, ys, r = paired_times(scipy_fit, ours, reps)
+    tsi, tci, ratio_idle, _, _ = paired_times(scipy_fit, ours, reps, IDLE_S)
     td, rd = median_time(lambda: curvefit.refine(q, closed=True, k=k), max(1, reps // 2))
     assert r.points.shape == ys.shape, (r.points.shape, ys.shape)
     print(f"1. interpolation, closed, n = {n}, k = {k}: {(k + 1) * n} points out")
     print(f"   scipy CubicSpline(periodic) fit + eval      {ms(ts)} ms")
     print(f"   curvefit.refine, knot_iterations = 0        {ms(tc)} ms   ratio {ratio:5.2f}x  (kkt {r.kkt_residual:.1e})")
+    print(f"   the same pairs, each call after {IDLE_S * 1e3:.0f} ms idle: scipy {ms(tsi).strip()} ms, curvefit {ms(tci).strip()} ms, ratio {ratio_idle:5.2f}x")
     print(f"   curvefit.refine, default knot_iterations 3  {ms(td)} ms   ratio {ts / td:5.2f}x  (kkt {rd.kkt_residual:.1e})")
-    return {"scipy": ts, "curvefit": tc, "ratio": ratio, "curvefit_default": td}
+    return {"scipy": ts, "curvefit": tc, "ratio": ratio, "curvefit_default": td,
+            "scipy_idle": tsi, "curvefit_idle": tci, "ratio_idle": ratio_idle}
 
 
 def radii_for(q, seed=7):

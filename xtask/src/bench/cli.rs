@@ -20,14 +20,15 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::Opts;
 
 /// The scipy peer: reads the problem's points, times fit + evaluation in memory: a closed curve
 /// by the periodic `CubicSpline` through the points and the first again, an open one by the
 /// natural `CubicSpline` (curvefit's default ends), on the centripetal parameters, evaluated at
-/// the (k + 1)·spans parameters of the split (and the last one of an open curve).
+/// the (k + 1)·spans parameters of the split (and the last one of an open curve). An optional
+/// third argument, in milliseconds, sleeps that long before each timed call (see [`peer`]).
 const PEER: &str = r#"
 import json, sys, time
 try:
@@ -36,6 +37,7 @@ try:
 except ImportError as e:
     print(json.dumps({"skipped": str(e)})); sys.exit(3)
 p = json.load(open(sys.argv[1])); reps = int(sys.argv[2]); k = p["k"]
+idle = float(sys.argv[3]) / 1e3 if len(sys.argv) > 3 else 0.0
 closed = p.get("closed", False)
 q = np.array(p["points"]); qc = np.vstack([q, q[:1]]) if closed else q
 u = np.concatenate([[0.0], np.cumsum(np.sqrt(np.linalg.norm(np.diff(qc, axis=0), axis=1)))])
@@ -49,6 +51,7 @@ def run():
 run()
 ts = []
 for _ in range(reps):
+    time.sleep(idle)
     t0 = time.perf_counter(); out = run(); ts.append(time.perf_counter() - t0)
 ts.sort()
 print(json.dumps({"median_s": ts[len(ts) // 2], "evaluations": int(out.shape[0])}))
@@ -126,11 +129,15 @@ fn run_once(bin: &Path, problem: &Path, out: &Path, format: &str) -> anyhow::Res
     Ok([f("parse_s"), f("solve_s"), f("write_s"), wall, size])
 }
 
-pub(super) fn peer(problem: &Path, reps: usize) -> Option<f64> {
+/// The median seconds of [`PEER`]'s fit + evaluation on `problem`, `reps` calls after a warm-up,
+/// each call after `idle` asleep (zero: back to back, the loop a warm cache favours most), or
+/// `None` with the reason printed when python3 with numpy and scipy cannot run it.
+pub(super) fn peer(problem: &Path, reps: usize, idle: Duration) -> Option<f64> {
     match Command::new("python3")
         .args(["-c", PEER])
         .arg(problem)
         .arg(reps.to_string())
+        .arg(idle.as_millis().to_string())
         .output()
     {
         Ok(o) if o.status.success() => {
@@ -165,7 +172,7 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         "cli: curvefit refine, closed noisy star, n = {n}, k = {k}, centripetal, knot_iterations = 0 ({} vertices; input {input_mb:.1} MB); medians of {reps}",
         (k + 1) * n
     );
-    let scipy = peer(&problem, reps);
+    let scipy = peer(&problem, reps, Duration::ZERO);
     println!(
         "  {:>6} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>14}",
         "format",

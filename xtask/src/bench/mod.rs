@@ -30,11 +30,21 @@ pub(super) fn uniform(seed: u64) -> impl FnMut() -> f64 {
     }
 }
 
-/// Median wall time of `reps` runs of `f` (after one warm-up run).
-pub fn time_median<T>(reps: usize, mut f: impl FnMut() -> T) -> Duration {
+/// Median wall time of `reps` runs of `f` (after one warm-up run), back to back.
+pub fn time_median<T>(reps: usize, f: impl FnMut() -> T) -> Duration {
+    time_median_idle(reps, Duration::ZERO, f)
+}
+
+/// Median wall time of `reps` runs of `f` (after one warm-up run), each after `idle` asleep
+/// (outside the time): a call that finds the machine idle, as a user's single call does, instead
+/// of one right after the same call with its memory in cache.
+pub fn time_median_idle<T>(reps: usize, idle: Duration, mut f: impl FnMut() -> T) -> Duration {
     std::hint::black_box(f());
     let mut v: Vec<Duration> = (0..reps.max(1))
         .map(|_| {
+            if !idle.is_zero() {
+                std::thread::sleep(idle);
+            }
             let t = Instant::now();
             std::hint::black_box(f());
             t.elapsed()
