@@ -31,7 +31,7 @@ use std::time::{Duration, Instant};
 use divdiff::Points;
 use refine::{Constraint, Problem};
 
-use super::{time_median, Opts};
+use super::{time_median, time_median_idle, Opts};
 
 /// The closed test curve shared with the peer script: a wavy circle
 /// r(θ) = 1 + 0.3 sin 5θ + 0.1 cos 17θ sampled at θ_i = 2πi/n.
@@ -415,7 +415,6 @@ const IDLE: Duration = Duration::from_millis(50);
 /// them after other work or none, so the solve and scipy are also timed each after [`IDLE`]
 /// asleep ("after idle"), and their ratio printed beside the back-to-back one.
 pub fn hard(opts: Opts) -> anyhow::Result<()> {
-    use super::time_median_idle;
     let k = 7;
     let reps = if opts.quick { 3 } else { 7 };
     let sizes: &[usize] = if opts.quick {
