@@ -397,6 +397,16 @@ fn factored_energy(
     out
 }
 
+/// A peer's median in ms for a table cell ("-" when the peer could not run).
+fn peer_ms(peer_s: Option<f64>) -> String {
+    peer_s.map_or("-".into(), |s| format!("{:.2}", s * 1e3))
+}
+
+/// The ratio peer / ours for a table cell ("-" when the peer could not run).
+fn peer_ratio(peer_s: Option<f64>, ours: Duration) -> String {
+    peer_s.map_or("-".into(), |s| format!("{:.2}x", s / ours.as_secs_f64()))
+}
+
 /// How long the "after idle" columns of [`hard`] sleep before each timed call. (On the 2-core
 /// development machine, 2026-12-04, the closed d = 2 solve at n = 10⁵ took 13.2–15.5 ms after
 /// 50 ms asleep against 9.4–9.7 ms back to back; scipy 54–57 ms against 49–50.)
@@ -469,11 +479,11 @@ pub fn hard(opts: Opts) -> anyhow::Result<()> {
                 .with_parametrization(divdiff::Parametrization::Centripetal)
                 .with_k(k)
                 .with_knot_iterations(0);
-            let one = time_median(reps, || problem.solve().expect("interpolation solves"));
+            let solve = || problem.solve().expect("interpolation solves");
+            let one = time_median(reps, solve);
             // The same solve on one thread: what the parallel passes (refine's `par`) give.
             let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-            let single = pool
-                .install(|| time_median(reps, || problem.solve().expect("interpolation solves")));
+            let single = pool.install(|| time_median(reps, solve));
             let updates = problem.clone().with_knot_iterations(3);
             let three = time_median(reps.min(3), || {
                 updates
@@ -481,9 +491,7 @@ pub fn hard(opts: Opts) -> anyhow::Result<()> {
                     .expect("interpolation with knot updates solves")
             });
             let scipy = super::cli::peer(&file, reps, Duration::ZERO);
-            let idle = time_median_idle(reps, IDLE, || {
-                problem.solve().expect("interpolation solves")
-            });
+            let idle = time_median_idle(reps, IDLE, solve);
             let idle_scipy = super::cli::peer(&file, reps, IDLE);
             let nv = Problem::refined_len(topology, n, k);
             println!(
@@ -495,13 +503,13 @@ pub fn hard(opts: Opts) -> anyhow::Result<()> {
                 ms(one),
                 one.as_secs_f64() * 1e9 / nv as f64,
                 ms(single),
-                scipy.map_or("-".into(), |s| format!("{:.2}", s * 1e3)),
-                scipy.map_or("-".into(), |s| format!("{:.2}x", s / one.as_secs_f64())),
+                peer_ms(scipy),
+                peer_ratio(scipy, one),
                 ms(three),
                 three.as_secs_f64() / one.as_secs_f64(),
                 ms(idle),
-                idle_scipy.map_or("-".into(), |s| format!("{:.2}", s * 1e3)),
-                idle_scipy.map_or("-".into(), |s| format!("{:.2}x", s / idle.as_secs_f64()))
+                peer_ms(idle_scipy),
+                peer_ratio(idle_scipy, idle)
             );
         }
     }
