@@ -55,9 +55,9 @@
 //! multiplier is w_i ≈ F/ε_i and rounding alone moves the ball's force by ~1e-7 of F.
 //!
 //! The verification suite's independent recomputation (`xtask/src/verify/refine/kkt.rs`) uses
-//! the same scale with ‖H‖_∞ alone in R (the same largest row sum, see [`Pass::h_norm`]): this
-//! certificate is exactly as strict as that one except for radii or weights large enough that
-//! w_max is comparable to ‖H‖_∞, where that one asks for accuracy below rounding.
+//! the same scale and the same R (‖H‖_∞ the same largest row sum, see [`Pass::h_norm`]; w_max
+//! the largest ball multiplier or smoothing weight). It does not discount the rounding of each
+//! smoothing force at its own vertex, so it is as strict as this certificate or stricter.
 
 use divdiff::{DerivativeRule, Knots, Points};
 

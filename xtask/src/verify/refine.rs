@@ -83,6 +83,7 @@ mod algorithm;
 mod derivatives;
 mod fixed_knots;
 mod free_knots;
+mod hard;
 mod kkt;
 
 use divdiff::{Points, Topology};
@@ -208,6 +209,7 @@ pub fn cases() -> Vec<Case> {
     let mut v = fixed_knots::cases();
     v.extend(derivatives::cases());
     v.extend(algorithm::cases());
+    v.extend(hard::cases());
     v.extend(free_knots::cases());
     v
 }

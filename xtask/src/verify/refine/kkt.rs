@@ -8,13 +8,19 @@
 //!   i_k: (Hp)_{i_k} + w_i(p_{i_k} − q_i) = 0 (balls (3.5), smoothing (3.6)),
 //!   (Hp)_{i_k} + Σ_j w_ij n_ij = 0 (half-spaces (3.8)); relative to the force scale
 //!   F = max(max_j |(Hp)_j|, R / 1e-9): the largest reaction, but no smaller than the scale at
-//!   which the rounding level R = 16 ε ‖H‖_∞ max_j |p_j| is 1e-9 of it. R bounds what rounding
-//!   alone leaves: evaluating 2·jmp from points of size |p| errs by up to ε‖H‖_∞|p| (the slopes
-//!   err by 2ε|p|/h, and Hp = 2·jmp divides three differences of them by h², as the row
-//!   (1, −4, 6, −4, 1)/h³ of H does), and a backward-stable banded solve leaves a residual of a
-//!   few (bandwidth + 1) ε‖H‖|p| more; a residual below R cannot be told from 0. Where the
-//!   reactions are far above rounding the scale is the largest reaction — much stricter than the
-//!   solver's own certificate, which divides by ‖H‖_∞ · max step;
+//!   which the rounding level R = 16 ε (‖H‖_∞ + w_max) max_j |p_j| is 1e-9 of it. R bounds what
+//!   rounding alone leaves: evaluating 2·jmp from points of size |p| errs by up to ε‖H‖_∞|p|
+//!   (the slopes err by 2ε|p|/h, and Hp = 2·jmp divides three differences of them by h², as the
+//!   row (1, −4, 6, −4, 1)/h³ of H does), and a backward-stable banded solve of the system
+//!   (H + W)p = Wq̃ leaves a residual of a few (bandwidth + 1) ε‖H + W‖|p| more in any of its
+//!   rows, free vertices' included. W holds the constraints' stiffness: a ball's multiplier or
+//!   a smoothing weight w_i at its data vertex (its force w_i(p_{i_k} − q_i) is linear in p with
+//!   that slope; half-spaces add none), so w_max, the largest, joins ‖H‖_∞. A residual below R
+//!   cannot be told from 0. Where the reactions are far above rounding the scale is the largest
+//!   reaction — much stricter than the solver's own certificate, which divides by
+//!   ‖H‖_∞ · max step. (Without w_max, stiff constraints — balls of 10⁻³ of a 10⁻⁴ span, weights
+//!   of 10⁵ — were asked for a stationarity up to 100 times below what rounding leaves:
+//!   `hard.rs`'s draws, where w_max reaches 10¹⁰ ‖H‖_∞);
 //! - **primal feasibility**: |p_{i_k} − q_i| ≤ ε_i, n_ij·p_{i_k} ≤ c_ij, p_{i_k} = q_i
 //!   (violation relative to L, the largest coordinate distance of a data point from the data's
 //!   centroid);
@@ -79,10 +85,25 @@ pub fn extent(q: &Points) -> f64 {
 /// tolerance of the cases).
 const KKT_SCALE: f64 = super::KKT_TOL;
 
-/// R = 16 ε ‖H‖_∞ max_j |p_j|: the level of a residual of Hp that rounding alone leaves (see
-/// the module docs).
+/// 16 ε ‖H‖_∞ max_j |p_j|: the level of a residual of Hp that rounding alone leaves without
+/// constraint stiffness (see the module docs).
 pub fn rounding_level(knots: &divdiff::Knots, points: &Points) -> f64 {
-    16.0 * f64::EPSILON * h_norm(knots) * worst(points.coords().iter().map(|x| x.abs()))
+    16.0 * f64::EPSILON * h_norm(knots) * magnitude(points)
+}
+
+/// max_j |p_j|_∞.
+fn magnitude(points: &Points) -> f64 {
+    worst(points.coords().iter().map(|x| x.abs()))
+}
+
+/// w_max of the module docs: the largest ball multiplier (as returned) or smoothing weight (as
+/// given); 0 for interpolation and half-spaces.
+fn stiffness(problem: &Problem, r: &Refinement) -> f64 {
+    match &problem.constraint {
+        Constraint::Balls(_) => worst(r.multipliers.iter().flatten().map(|w| w.max(0.0))),
+        Constraint::Smoothing(w) => worst(w.iter().copied()),
+        Constraint::Interpolate | Constraint::HalfSpaces(_) => 0.0,
+    }
 }
 
 /// ‖H‖_∞, the largest absolute row sum of H, from its bands.
@@ -123,7 +144,8 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
         .iter()
         .map(|j| j.iter().map(|x| 2.0 * x).collect())
         .collect();
-    let rounding = rounding_level(&r.knots, &r.points);
+    let rounding = rounding_level(&r.knots, &r.points)
+        + 16.0 * f64::EPSILON * stiffness(problem, r) * magnitude(&r.points);
     let force = worst(hp.iter().flat_map(|v| v.iter().map(|x| x.abs())))
         .max(rounding / KKT_SCALE)
         .max(f64::MIN_POSITIVE);
