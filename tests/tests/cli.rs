@@ -181,7 +181,7 @@ fn catalogue_of_bad_inputs() {
         (
             "refine",
             r#"{"points": [[0, 0], [1, 0], [0, 1]], "k": 1000000000}"#,
-            "levels",
+            "k",
         ),
         (
             "refine",

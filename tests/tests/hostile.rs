@@ -58,17 +58,17 @@ const SQUARE: &str = r#"[[0,0],[1,0],[1,1],[0,1]]"#;
 
 #[test]
 fn refine_refuses_results_too_large_for_memory() {
-    // k = 10^9 on four points: 4·10^9 vertices.
+    // k = 10^9 on four points: 4·10^9 vertices (k alone is to blame).
     refused(
         "refine",
         &format!(r#"{{"points": {SQUARE}, "k": 1000000000}}"#),
-        "levels",
+        "k",
     );
     // k = usize::MAX: the vertex count overflows usize.
     refused(
         "refine",
         &format!(r#"{{"points": {SQUARE}, "k": {}}}"#, usize::MAX),
-        "levels",
+        "k",
     );
     // 60 further levels: 2^60 times the vertices.
     refused(
@@ -110,7 +110,7 @@ fn refine_refuses_many_points_times_k_up_front() {
         pts.push(row.replacen("0.5", &format!("{i}"), 1));
     }
     let json = format!(r#"{{"points": [{}], "k": 10}}"#, pts.join(","));
-    refused("refine", &json, "levels");
+    refused("refine", &json, "k");
 }
 
 #[test]

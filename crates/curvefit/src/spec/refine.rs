@@ -146,6 +146,16 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
         return Err(InputError::new("level_k", "must be at least 1"));
     }
     let mut vertices = split_count(n, p.k, p.closed);
+    // (k alone past the limit names k: the levels are not to blame.)
+    if vertices.is_none_or(|m| m.saturating_mul(d) > MAX_REFINED_COORDS) {
+        return Err(InputError::new(
+            "k",
+            format!(
+                "{n} points with k = {} give a refined curve of more than {MAX_REFINED_COORDS} coordinates; lower k",
+                p.k
+            ),
+        ));
+    }
     for _ in 0..p.levels {
         vertices = vertices.and_then(|m| split_count(m, p.level_k, p.closed));
         if vertices.is_none_or(|m| m.saturating_mul(d) > MAX_REFINED_COORDS) {
