@@ -18,9 +18,9 @@
 //!   that slope; half-spaces add none), so w_max, the largest, joins ‖H‖_∞. A residual below R
 //!   cannot be told from 0. Where the reactions are far above rounding the scale is the largest
 //!   reaction — much stricter than the solver's own certificate, which divides by
-//!   ‖H‖_∞ · max step. (Without w_max, stiff constraints — balls of 10⁻³ of a 10⁻⁴ span, weights
-//!   of 10⁵ — were asked for a stationarity up to 100 times below what rounding leaves:
-//!   `hard.rs`'s draws, where w_max reaches 10¹⁰ ‖H‖_∞);
+//!   ‖H‖_∞ · max step. (Without w_max, `hard.rs`'s draws asked stiff constraints for less than
+//!   rounding leaves: ball multipliers of 10⁸ against ‖H‖_∞ = 1.8·10⁷ left a free vertex at
+//!   3·10⁻⁹ of the force scale, and weights of 10¹⁰ ‖H‖_∞ a data vertex at 8·10⁻²);
 //! - **primal feasibility**: |p_{i_k} − q_i| ≤ ε_i, n_ij·p_{i_k} ≤ c_ij, p_{i_k} = q_i
 //!   (violation relative to L, the largest coordinate distance of a data point from the data's
 //!   centroid);
