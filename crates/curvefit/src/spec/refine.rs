@@ -145,9 +145,10 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     if p.level_k == 0 {
         return Err(InputError::new("level_k", "must be at least 1"));
     }
+    let too_large = |v: Option<usize>| v.is_none_or(|m| m.saturating_mul(d) > MAX_REFINED_COORDS);
     let mut vertices = split_count(n, p.k, p.closed);
     // (k alone past the limit names k: the levels are not to blame.)
-    if vertices.is_none_or(|m| m.saturating_mul(d) > MAX_REFINED_COORDS) {
+    if too_large(vertices) {
         return Err(InputError::new(
             "k",
             format!(
@@ -158,18 +159,15 @@ pub fn validate(p: &RefineProblem) -> Result<usize, InputError> {
     }
     for _ in 0..p.levels {
         vertices = vertices.and_then(|m| split_count(m, p.level_k, p.closed));
-        if vertices.is_none_or(|m| m.saturating_mul(d) > MAX_REFINED_COORDS) {
+        if too_large(vertices) {
             break;
         }
     }
-    match vertices {
-        Some(m) if m.saturating_mul(d) <= MAX_REFINED_COORDS => {}
-        _ => {
-            return Err(InputError::new(
-                "levels",
-                format!("the refined curve would exceed {MAX_REFINED_COORDS} coordinates; lower k, levels or level_k"),
-            ))
-        }
+    if too_large(vertices) {
+        return Err(InputError::new(
+            "levels",
+            format!("the refined curve would exceed {MAX_REFINED_COORDS} coordinates; lower k, levels or level_k"),
+        ));
     }
     match &p.constraint {
         ConstraintSpec::Interpolate => {}

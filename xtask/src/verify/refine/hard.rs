@@ -40,6 +40,7 @@ use refine::{Constraint, HalfSpace, Problem};
 
 use super::kkt::{self, Kkt};
 use super::{lcg, KKT_TOL};
+use crate::verify::kersey_defs::{dist, dot, norm2};
 use crate::verify::{Case, Oracle, Outcome};
 
 /// Problems per constraint kind.
@@ -106,7 +107,7 @@ fn draw(kind: Kind, index: usize) -> (Problem, String) {
             (0..n)
                 .map(|i| {
                     let a = unit(d, &mut next);
-                    let at: f64 = a.iter().zip(q.point(i)).map(|(x, y)| x * y).sum();
+                    let at = dot(&a, q.point(i));
                     let minus: Vec<f64> = a.iter().map(|x| -x).collect();
                     vec![
                         HalfSpace {
@@ -195,19 +196,12 @@ fn spacings(q: &Points, closed: bool) -> Vec<f64> {
     let n = q.len();
     (0..n)
         .map(|i| {
-            let j = if i + 1 < n {
-                i + 1
-            } else if closed {
-                0
-            } else {
-                i - 1
+            let j = match (i + 1 < n, closed) {
+                (true, _) => i + 1,
+                (false, true) => 0,
+                (false, false) => i - 1,
             };
-            q.point(i)
-                .iter()
-                .zip(q.point(j))
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>()
-                .sqrt()
+            dist(q.point(i), q.point(j))
         })
         .collect()
 }
@@ -216,7 +210,7 @@ fn spacings(q: &Points, closed: bool) -> Vec<f64> {
 fn unit(d: usize, next: &mut impl FnMut() -> f64) -> Vec<f64> {
     loop {
         let v: Vec<f64> = (0..d).map(|_| 2.0 * next() - 1.0).collect();
-        let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let len = norm2(&v).sqrt();
         if len > 0.1 {
             return v.iter().map(|x| x / len).collect();
         }
