@@ -150,6 +150,19 @@ pub enum Error {
         /// The data point (or end).
         point: usize,
     },
+    /// An open curve's end condition and the tangent set of the data point at the same end
+    /// constrain the same derivative Df at that vertex, and their sets are `gap` apart (proved
+    /// before any solve): no curve meets both. `end` is 0 for the start, 1 for the end; `point`
+    /// the data point (0 or n − 1).
+    #[error("tangents[{point}] and the end condition at the {} constrain the same derivative, and their sets are {gap:.3e} apart", if *end == 0 { "start" } else { "end" })]
+    EndConflict {
+        /// 0 = start, 1 = end.
+        end: usize,
+        /// The data point at that end.
+        point: usize,
+        /// The distance between the two sets (a lower bound for half-space sets).
+        gap: f64,
+    },
     /// The exact solver found no point that meets every constraint, but nothing proves that
     /// there is none: its interior-point method stopped uncertified with the primal residual
     /// `violation` (relative) and `field[point]` the constraint it violated most (named as in

@@ -187,7 +187,8 @@ impl Problem {
     /// [`Error::TooFewWeights`], [`Error::Unsupported`] (boundary on a closed curve, the paper
     /// solver with tangents or end constraints), [`Error::TooLarge`] (`k`) when the exact solver
     /// would need the general interior-point method on more than [`MAX_CONIC_COORDS`]
-    /// coordinates.
+    /// coordinates, [`Error::EndConflict`] when an end condition and the tangent set at the
+    /// same end are clearly apart (both constrain Df at that vertex).
     pub fn validate(&self) -> Result<(), Error> {
         let n = self.points.len();
         let d = self.points.dim();
@@ -276,6 +277,10 @@ impl Problem {
         }
         for kind in self.kinds() {
             kind.validate(self)?;
+        }
+        // An end condition and a tangent set at the same end must meet (proved apart: refused).
+        if let Some((end, point, gap)) = crate::constraint::ends::conflict(self) {
+            return Err(Error::EndConflict { end, point, gap });
         }
         // The general interior-point method (derivative constraints, half-spaces) costs O(N) per
         // iteration over tens of iterations on the first stage's N vertices; beyond this size

@@ -8,7 +8,7 @@
 
 use divdiff::Topology;
 
-use super::{At, Boundary, Kind, Rows, Terms};
+use super::{At, Boundary, Kind, Rows, Tangent, Terms};
 use crate::conic_problem::ConvexSet;
 use crate::problem::Problem;
 use crate::stage::FixedProblem;
@@ -85,4 +85,87 @@ impl Kind for Ends<'_> {
             super::derivative_terms(at, terms, v, &set);
         }
     }
+}
+
+/// An end condition and a tangent set at the same end of an open curve both constrain Df at
+/// that vertex (the same derivative stencil, [`divdiff::derivative_stencil`]): the end's set —
+/// the point v (clamped) or the ball |Df − v| ≤ ε (near-clamped) — must meet the tangent set of
+/// the end's data point. A proof that they do not, found before any solve: the end (0 = start,
+/// 1 = end), its data point, and the distance between the two sets, which exceeds
+/// [`CONFLICT_MARGIN`] times their size. Without it such problems ran the interior-point method to
+/// its iteration limit and were refused as not converged, naming nothing (ROBUSTNESS.md §4, 22).
+pub(crate) fn conflict(problem: &Problem) -> Option<(usize, usize, f64)> {
+    let (starts, radius) = match &problem.boundary {
+        Boundary::Natural => return None,
+        Boundary::Clamped { start, end } => ([start, end], 0.0),
+        Boundary::NearClamped { start, end, radius } => ([start, end], *radius),
+    };
+    let tangents = problem.tangents.as_ref()?;
+    let n = problem.points.len();
+    if problem.topology != Topology::Open || tangents.len() != n {
+        return None;
+    }
+    [0, n - 1]
+        .into_iter()
+        .zip(starts)
+        .enumerate()
+        .find_map(|(end, (point, center))| {
+            let tangent = tangents[point].as_ref()?;
+            let (gap, size) = gap(center, radius, tangent)?;
+            (gap > CONFLICT_MARGIN * size).then_some((end, point, gap))
+        })
+}
+
+/// Sets closer than this fraction of their size are left to the solver (whose feasibility is
+/// judged at rounding); only a clear separation is refused up front.
+const CONFLICT_MARGIN: f64 = 1e-6;
+
+/// A lower bound on the distance between the ball |x − c| ≤ r and a tangent set (exact for
+/// balls, the tension ball and wedges; for half-spaces the largest distance to one of them), and
+/// the two sets' size (the largest of |c|, r and the tangent set's own scale). `None` for
+/// non-finite values (validation reports those).
+fn gap(c: &[f64], r: f64, tangent: &Tangent) -> Option<(f64, f64)> {
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let nc = norm(c);
+    let (dist, scale) = match tangent {
+        Tangent::Ball { center, radius } => {
+            let apart: Vec<f64> = c.iter().zip(center).map(|(a, b)| a - b).collect();
+            (norm(&apart) - radius, norm(center) + radius)
+        }
+        Tangent::Tension { radius } => (nc - radius, *radius),
+        Tangent::Wedge {
+            direction,
+            half_angle,
+        } => {
+            // The distance from c to the cone of half-angle θ about a: 0 inside, |c| sin(φ − θ)
+            // at an angle φ from the axis up to θ + π/2, |c| (the apex) beyond.
+            let len = norm(direction);
+            let along = dot(c, direction) / len;
+            let off_axis: Vec<f64> = c
+                .iter()
+                .zip(direction)
+                .map(|(x, a)| x - along * a / len)
+                .collect();
+            let phi = norm(&off_axis).atan2(along);
+            let dist = if phi <= *half_angle {
+                0.0
+            } else if phi >= half_angle + std::f64::consts::FRAC_PI_2 {
+                nc
+            } else {
+                nc * (phi - half_angle).sin()
+            };
+            (dist, 0.0)
+        }
+        Tangent::HalfSpaces(hs) => hs.iter().fold((0.0f64, 0.0f64), |(d, s), h| {
+            let nn = norm(&h.normal);
+            (
+                d.max((dot(&h.normal, c) - h.offset) / nn),
+                s.max(h.offset.abs() / nn),
+            )
+        }),
+    };
+    let gap = dist - r;
+    let size = nc.max(r).max(scale);
+    (gap.is_finite() && size.is_finite()).then_some((gap, size))
 }
