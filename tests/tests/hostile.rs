@@ -290,6 +290,29 @@ fn general_interior_point_problems_have_a_size_limit() {
     refused("refine", &halfspaces, "k");
 }
 
+/// An end condition and a tangent set at the same end of an open curve constrain the same
+/// derivative: sets clearly apart are refused at once, naming the tangent's point and the end
+/// (ROBUSTNESS.md §4, 22: such a problem ran 160 interior-point iterations and was refused as
+/// not converged, naming nothing). The same problem with the end's ball grown to meet the
+/// tension ball is solved.
+#[test]
+fn an_end_condition_apart_from_the_tangent_set_at_that_end_is_refused() {
+    let problem = |radius: f64| {
+        format!(
+            r#"{{"points": [[0, 0], [1, 1], [2, 0], [3, 1]], "closed": false, "knot_iterations": 0,
+            "boundary": {{"type": "near_clamped", "start": [1, 0], "end": [1, 0], "radius": {radius}}},
+            "tangents": [null, null, null, {{"type": "tension", "radius": 0.5}}]}}"#
+        )
+    };
+    let message = refused("refine", &problem(0.2), "tangents[3]");
+    assert!(
+        message.contains("boundary.end") && message.contains("3.000e-1 apart"),
+        "{message}"
+    );
+    let solved = accepted("refine", &problem(0.6));
+    assert!(solved["kkt_residual"].as_f64().unwrap() <= 1e-9);
+}
+
 /// An endless input: `head`, then `item` forever; counts the bytes handed out.
 struct Endless {
     head: Vec<u8>,

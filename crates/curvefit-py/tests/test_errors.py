@@ -35,6 +35,7 @@ CASES = [
     ("refine", f'{{{P}, "closed": false, "boundary": {{"type": "clamp"}}}}'),
     ("refine", f'{{{P}, "closed": true, "boundary": {{"type": "clamped", "start": [1, 0], "end": [1, 0]}}}}'),
     ("refine", f'{{{P}, "boundary": {{"type": "clamped", "start": [1], "end": [1, 0]}}}}'),
+    ("refine", f'{{{P}, "closed": false, "boundary": {{"type": "near_clamped", "start": [1, 0], "end": [1, 0], "radius": 0.2}}, "tangents": [null, null, {{"type": "tension", "radius": 0.5}}]}}'),
     ("refine", f'{{{P}, "k": -1}}'),
     ("refine", f'{{{P}, "k": 1.5}}'),
     ("refine", f'{{{P}, "k": 0}}'),

@@ -578,6 +578,17 @@ fn user_error(e: refine::Error) -> InputError {
             constraint_field(field, point),
             "cannot be satisfied together with the other constraints",
         ),
+        E::EndConflict { end, point, gap } => {
+            let (side, vertex) = if end == 0 {
+                ("start", "first")
+            } else {
+                ("end", "last")
+            };
+            InputError::new(
+                format!("tangents[{point}]"),
+                format!("cannot hold together with boundary.{side}: both constrain the derivative Df at the curve's {vertex} vertex, and their sets are {gap:.3e} apart, so no curve meets both; loosen one of them (a larger boundary.radius or tangent radius, a wider half_angle) or drop it"),
+            )
+        }
         E::NoFeasiblePointFound {
             field,
             point,
