@@ -586,7 +586,7 @@ fn user_error(e: refine::Error) -> InputError {
             };
             InputError::new(
                 format!("tangents[{point}]"),
-                format!("cannot hold together with boundary.{side}: both constrain the derivative Df at the curve's {vertex} vertex, and their sets are {gap:.3e} apart, so no curve meets both; loosen one of them (a larger boundary.radius or tangent radius, a wider half_angle) or drop it"),
+                format!("cannot hold together with boundary.{side}: both constrain the derivative Df at the curve's {vertex} vertex, and their sets are {gap:.3e} apart, so no curve meets both; loosen one of them (a near_clamped end with a larger radius, a larger tangent radius, a wider half_angle) or drop it"),
             )
         }
         E::NoFeasiblePointFound {
