@@ -148,3 +148,18 @@ fn a_constraint_is_not_called_infeasible_on_a_guess() {
     let r = solved(&v.to_string());
     assert!(r["kkt_residual"].as_f64().unwrap() <= 1e-9, "{r}");
 }
+
+#[test]
+fn an_uncertified_solve_with_derivative_constraints_names_them() {
+    // ROBUSTNESS.md §4, 22 (seed 1107 of that sweep, rounded): eight points with balls, a
+    // tension tangent and a wedge of half-angle 0.005 at a point whose optimal derivative
+    // vanishes (the wedge's apex). The general interior-point method stops uncertified (~1e-6);
+    // it was refused as "full-vertex interior point did not converge …", naming nothing. It now
+    // names `tangents`, and the advice holds: with a wider half_angle it is certified.
+    let (doc, line) = refused_fixture("refine-apex-wedge.json");
+    assert!(line.starts_with("error: tangents: "), "{line}");
+    assert!(line.contains("a wider half_angle"), "{line}");
+    let mut v: serde_json::Value = serde_json::from_str(&doc).unwrap();
+    v["tangents"][5]["half_angle"] = 0.05.into();
+    solved(&v.to_string());
+}

@@ -436,10 +436,38 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
                     num(r / extent)
                 ),
             ),
-            None => user_error(e),
+            None => match derivative_field(&prob) {
+                Some(field) => InputError::new(
+                    field,
+                    format!(
+                        "{solver} did not converge in {iterations} iterations (best residual {}, accepted at most {}): the derivative constraints put this problem on the general interior-point method, which does not always certify a narrow wedge where the optimal derivative vanishes (the wedge's apex) or derivative constraints on very unequal spacing; loosen them (a wider half_angle, a larger radius, a near_clamped end instead of a clamped one) or constrain fewer points",
+                        num(residual),
+                        num(prob.options.accept_kkt)
+                    ),
+                ),
+                None => user_error(e),
+            },
         },
         e => user_error(e),
     })
+}
+
+/// The field of the derivative constraints that send a problem to the general interior-point
+/// method (`tangents` when any point has a tangent set, else `boundary` for end conditions),
+/// named when that method does not certify it: every such refusal of the sweeps had them
+/// (ROBUSTNESS.md §4, items 14, 15 and 22), and loosening them is what the user can do.
+fn derivative_field(prob: &refine::Problem) -> Option<&'static str> {
+    if prob
+        .tangents
+        .as_ref()
+        .is_some_and(|t| t.iter().any(Option::is_some))
+    {
+        Some("tangents")
+    } else if prob.boundary != refine::Boundary::Natural {
+        Some("boundary")
+    } else {
+        None
+    }
 }
 
 /// Radii below this fraction of the data's extent are named when a ball problem is not
