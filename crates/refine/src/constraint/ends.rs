@@ -125,14 +125,10 @@ const CONFLICT_MARGIN: f64 = 1e-6;
 /// the two sets' size (the largest of |c|, r and the tangent set's own scale). `None` for
 /// non-finite values (validation reports those).
 fn gap(c: &[f64], r: f64, tangent: &Tangent) -> Option<(f64, f64)> {
-    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    use banded::vector::{dist, dot, norm};
     let nc = norm(c);
-    let (dist, scale) = match tangent {
-        Tangent::Ball { center, radius } => {
-            let apart: Vec<f64> = c.iter().zip(center).map(|(a, b)| a - b).collect();
-            (norm(&apart) - radius, norm(center) + radius)
-        }
+    let (apart, scale) = match tangent {
+        Tangent::Ball { center, radius } => (dist(c, center) - radius, norm(center) + radius),
         Tangent::Tension { radius } => (nc - radius, *radius),
         Tangent::Wedge {
             direction,
@@ -148,14 +144,14 @@ fn gap(c: &[f64], r: f64, tangent: &Tangent) -> Option<(f64, f64)> {
                 .map(|(x, a)| x - along * a / len)
                 .collect();
             let phi = norm(&off_axis).atan2(along);
-            let dist = if phi <= *half_angle {
+            let to_cone = if phi <= *half_angle {
                 0.0
             } else if phi >= half_angle + std::f64::consts::FRAC_PI_2 {
                 nc
             } else {
                 nc * (phi - half_angle).sin()
             };
-            (dist, 0.0)
+            (to_cone, 0.0)
         }
         Tangent::HalfSpaces(hs) => hs.iter().fold((0.0f64, 0.0f64), |(d, s), h| {
             let nn = norm(&h.normal);
@@ -165,7 +161,7 @@ fn gap(c: &[f64], r: f64, tangent: &Tangent) -> Option<(f64, f64)> {
             )
         }),
     };
-    let gap = dist - r;
+    let gap = apart - r;
     let size = nc.max(r).max(scale);
     (gap.is_finite() && size.is_finite()).then_some((gap, size))
 }
