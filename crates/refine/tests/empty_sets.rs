@@ -5,10 +5,10 @@
 //! is a nonempty set, below −1e-6 an empty one even after growing every half-space by 1e-6;
 //! the sets in between (touching, within Clarabel's tolerance) are not judged.
 
+mod clarabel_support;
+
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
+use clarabel::solver::SupportedConeT;
 use divdiff::Points;
 use proptest::prelude::*;
 use refine::{Constraint, Error, HalfSpace, Problem};
@@ -34,25 +34,10 @@ fn margin(set: &[HalfSpace], d: usize) -> f64 {
     vals.push(1.0);
     b.push(1.0);
     let a = CscMatrix::new_from_triplets(m + 1, d + 1, rows, cols, vals);
-    let p = CscMatrix::zeros((d + 1, d + 1));
     let mut q = vec![0.0; d + 1];
     q[d] = -1.0;
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .build()
-        .unwrap();
     let cones = [SupportedConeT::NonnegativeConeT(m + 1)];
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
-    solver.solve();
-    assert!(
-        matches!(
-            solver.solution.status,
-            SolverStatus::Solved | SolverStatus::AlmostSolved
-        ),
-        "{:?}",
-        solver.solution.status
-    );
-    solver.solution.x[d]
+    clarabel_support::minimize_linear(&q, &a, &b, &cones, None)[d]
 }
 
 /// A set of 2–7 half-spaces with small integer normals (non-zero) and offsets in halves: exact

@@ -7,10 +7,10 @@
 //! apart is refused, except sets of several half-spaces, whose reported gap is only the largest
 //! distance to one of them.
 
+mod clarabel_support;
+
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
+use clarabel::solver::SupportedConeT;
 use divdiff::{Points, Topology};
 use proptest::prelude::*;
 use refine::{Boundary, Error, HalfSpace, Problem, Tangent};
@@ -86,28 +86,10 @@ fn distance(c: &[f64], r: f64, tangent: &Tangent) -> f64 {
             cones.push(SupportedConeT::NonnegativeConeT(hs.len()));
         }
     }
-    let m = b.len();
-    let a = CscMatrix::new_from_triplets(m, nv, rows, cols, vals);
-    let p = CscMatrix::zeros((nv, nv));
+    let a = CscMatrix::new_from_triplets(b.len(), nv, rows, cols, vals);
     let mut q = vec![0.0; nv];
     q[0] = 1.0;
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(1e-12)
-        .tol_gap_rel(1e-12)
-        .build()
-        .unwrap();
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
-    solver.solve();
-    assert!(
-        matches!(
-            solver.solution.status,
-            SolverStatus::Solved | SolverStatus::AlmostSolved
-        ),
-        "{:?}",
-        solver.solution.status
-    );
-    solver.solution.x[0]
+    clarabel_support::minimize_linear(&q, &a, &b, &cones, Some(1e-12))[0]
 }
 
 /// Four data points on an open curve in d dimensions, the end condition at one end and the
