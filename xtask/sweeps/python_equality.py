@@ -8,8 +8,10 @@ import numpy as np
 import curvefit
 OUT = os.environ.get("SWEEP_OUT", "/tmp/curvefit-sweep/refine")
 ok = diff = err_same = err_diff = 0
-for f in sorted(glob.glob(f"{OUT}/p*.json"), key=lambda s: int(re.findall(r"\d+", s)[0]))[:200]:
-    c = int(re.findall(r"\d+", f)[0]); prob = json.load(open(f))
+# (The case number from the file's name, not its path: $SWEEP_OUT may hold digits.)
+case = lambda path: int(re.findall(r"\d+", os.path.basename(path))[0])
+for f in sorted(glob.glob(f"{OUT}/p*.json"), key=case)[:200]:
+    c = case(f); prob = json.load(open(f))
     if len(prob["points"]) > 1000: continue
     ro = f"{OUT}/r{c}.json"
     try: r = curvefit.refine(**prob); perr = None
