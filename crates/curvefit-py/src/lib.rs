@@ -268,8 +268,7 @@ fn solve_many<'py>(
             ))
         }
         Some(n) => Some(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
+            curvefit::threads::builder(Some(n))
                 .build()
                 .map_err(|e| PyValueError::new_err(format!("threads: {e}")))?,
         ),
@@ -323,6 +322,8 @@ fn _panic_guard_check(py: Python<'_>) -> PyResult<()> {
 
 #[pymodule]
 fn _curvefit(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The solves' worker threads, each on its own processor (`curvefit::threads`).
+    curvefit::threads::install_global();
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_many, m)?)?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;

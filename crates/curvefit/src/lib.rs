@@ -38,6 +38,7 @@ pub mod export;
 #[cfg(feature = "cli")]
 pub mod plot;
 pub mod spec;
+pub mod threads;
 
 pub use divdiff;
 pub use energy;

@@ -13,6 +13,9 @@ fn main() {
     if std::env::var_os("CURVEFIT_DEBUG_PANICS").is_none() {
         std::panic::set_hook(Box::new(|_| {}));
     }
+    // Each worker on its own processor (`curvefit::threads`: a woken worker otherwise waited
+    // behind the thread that woke it).
+    curvefit::threads::install_global();
     use std::io::IsTerminal;
     let stdin = std::io::stdin();
     let code = curvefit::cli::run_with_terminals(

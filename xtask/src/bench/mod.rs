@@ -63,7 +63,9 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
         .map(String::as_str)
         .unwrap_or("");
     let opts = Opts { quick };
-    println!("(allocator: mimalloc, as in the curvefit binary and the Python module; threads: rayon's pool, {} here)", rayon::current_num_threads());
+    // The binary's and the Python module's pool: each worker on its own processor.
+    curvefit::threads::install_global();
+    println!("(allocator: mimalloc, as in the curvefit binary and the Python module; threads: rayon's pool, {} here, each worker on its own processor as in the binary and the Python module: curvefit::threads)", rayon::current_num_threads());
     if "energy".contains(filter) || filter.is_empty() {
         energy::run(opts)?;
     }
