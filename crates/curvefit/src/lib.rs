@@ -38,6 +38,7 @@ pub mod export;
 #[cfg(feature = "cli")]
 pub mod plot;
 pub mod spec;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod threads;
 
 pub use divdiff;

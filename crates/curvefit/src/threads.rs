@@ -21,9 +21,10 @@
 //! (modulo their number) of those the calling thread may run on — so a process started with
 //! `taskset`, or in a container's cpuset, keeps to its processors. Nothing is restricted for a
 //! pool of one worker, when fewer than two processors are allowed, on systems other than Linux,
-//! or when the environment variable `CURVEFIT_PIN_THREADS` is `0`. [`install_global`] makes it rayon's global pool
-//! (the binary at start, the Python module at import); the library crates leave their pool to
-//! the caller (`refine::par`: the global one, or the one a caller installs).
+//! or when the environment variable `CURVEFIT_PIN_THREADS` is `0`. [`install_global`] makes it
+//! rayon's global pool (the binary at start, the Python module at import); the library crates
+//! leave their pool to the caller (`refine::par`: the global one, or the one a caller
+//! installs). Not on wasm32, which has no threads.
 
 /// Rayon's pool builder for `threads` workers (`None`: rayon's default, `RAYON_NUM_THREADS` or
 /// one per processor), each kept on a processor of its own when there are two or more (module

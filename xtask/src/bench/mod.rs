@@ -65,7 +65,7 @@ pub fn run(args: &[String]) -> anyhow::Result<bool> {
     let opts = Opts { quick };
     // The binary's and the Python module's pool: each worker on its own processor.
     curvefit::threads::install_global();
-    println!("(allocator: mimalloc, as in the curvefit binary and the Python module; threads: rayon's pool, {} here, each worker on its own processor as in the binary and the Python module: curvefit::threads)", rayon::current_num_threads());
+    println!("(allocator: mimalloc, as in the curvefit binary and the Python module; threads: rayon's pool, {} here, as the binary's and the Python module's: curvefit::threads, each worker on its own processor unless CURVEFIT_PIN_THREADS=0)", rayon::current_num_threads());
     if "energy".contains(filter) || filter.is_empty() {
         energy::run(opts)?;
     }
