@@ -9,7 +9,7 @@
 use divdiff::Topology;
 
 use super::{At, Boundary, Kind, Rows, Tangent, Terms};
-use crate::conic_problem::ConvexSet;
+use crate::conic_problem::{set_distance, ConvexSet};
 use crate::problem::Problem;
 use crate::stage::FixedProblem;
 use crate::Error;
@@ -120,48 +120,14 @@ pub(crate) fn conflict(problem: &Problem) -> Option<(usize, usize, f64)> {
 /// judged at rounding); only a clear separation is refused up front.
 const CONFLICT_MARGIN: f64 = 1e-6;
 
-/// A lower bound on the distance between the ball |x − c| ≤ r and a tangent set (exact for
-/// balls, the tension ball and wedges; for half-spaces the largest distance to one of them), and
-/// the two sets' size (the largest of |c|, r and the tangent set's own scale). `None` for
-/// non-finite values (validation reports those).
+/// A lower bound on the distance between the ball |x − c| ≤ r and a tangent set — the distance
+/// from c to the set ([`set_distance`]: exact for balls, the tension ball and wedges; for
+/// half-spaces the largest distance to one of them) less r — and the two sets' size (the largest
+/// of |c|, r and the tangent set's own scale). `None` for non-finite values (validation reports
+/// those).
 fn gap(c: &[f64], r: f64, tangent: &Tangent) -> Option<(f64, f64)> {
-    use banded::vector::{dist, dot, norm};
-    let nc = norm(c);
-    let (apart, scale) = match tangent {
-        Tangent::Ball { center, radius } => (dist(c, center) - radius, norm(center) + radius),
-        Tangent::Tension { radius } => (nc - radius, *radius),
-        Tangent::Wedge {
-            direction,
-            half_angle,
-        } => {
-            // The distance from c to the cone of half-angle θ about a: 0 inside, |c| sin(φ − θ)
-            // at an angle φ from the axis up to θ + π/2, |c| (the apex) beyond.
-            let len = norm(direction);
-            let along = dot(c, direction) / len;
-            let off_axis: Vec<f64> = c
-                .iter()
-                .zip(direction)
-                .map(|(x, a)| x - along * a / len)
-                .collect();
-            let phi = norm(&off_axis).atan2(along);
-            let to_cone = if phi <= *half_angle {
-                0.0
-            } else if phi >= half_angle + std::f64::consts::FRAC_PI_2 {
-                nc
-            } else {
-                nc * (phi - half_angle).sin()
-            };
-            (to_cone, 0.0)
-        }
-        Tangent::HalfSpaces(hs) => hs.iter().fold((0.0f64, 0.0f64), |(d, s), h| {
-            let nn = norm(&h.normal);
-            (
-                d.max((dot(&h.normal, c) - h.offset) / nn),
-                s.max(h.offset.abs() / nn),
-            )
-        }),
-    };
-    let gap = apart - r;
-    let size = nc.max(r).max(scale);
+    let (to_set, scale) = set_distance(&super::tangents::set(tangent, c.len()), c);
+    let gap = to_set - r;
+    let size = banded::vector::norm(c).max(r).max(scale);
     (gap.is_finite() && size.is_finite()).then_some((gap, size))
 }

@@ -29,27 +29,32 @@ fn unit(v: &[f64]) -> Vec<f64> {
 impl Tangents<'_> {
     /// Each constraint's data point and set (on the stencil at its data vertex).
     fn sets(&self, d: usize) -> impl Iterator<Item = (usize, ConvexSet)> + '_ {
-        self.0.iter().enumerate().filter_map(move |(i, t)| {
-            let set = match t.as_ref()? {
-                Tangent::Ball { center, radius } => ConvexSet::Ball {
-                    center: center.clone(),
-                    radius: *radius,
-                },
-                Tangent::Wedge {
-                    direction,
-                    half_angle,
-                } => ConvexSet::Cone {
-                    axis: unit(direction),
-                    half_angle: *half_angle,
-                },
-                Tangent::Tension { radius } => ConvexSet::Ball {
-                    center: vec![0.0; d],
-                    radius: *radius,
-                },
-                Tangent::HalfSpaces(h) => super::polytope(h),
-            };
-            Some((i, set))
-        })
+        self.0
+            .iter()
+            .enumerate()
+            .filter_map(move |(i, t)| Some((i, set(t.as_ref()?, d))))
+    }
+}
+
+/// A tangent constraint's set of Df in R^d.
+pub(crate) fn set(tangent: &Tangent, d: usize) -> ConvexSet {
+    match tangent {
+        Tangent::Ball { center, radius } => ConvexSet::Ball {
+            center: center.clone(),
+            radius: *radius,
+        },
+        Tangent::Wedge {
+            direction,
+            half_angle,
+        } => ConvexSet::Cone {
+            axis: unit(direction),
+            half_angle: *half_angle,
+        },
+        Tangent::Tension { radius } => ConvexSet::Ball {
+            center: vec![0.0; d],
+            radius: *radius,
+        },
+        Tangent::HalfSpaces(h) => super::polytope(h),
     }
 }
 
