@@ -34,10 +34,14 @@ pub fn builder(threads: Option<usize>) -> rayon::ThreadPoolBuilder {
     if let Some(n) = threads {
         builder = builder.num_threads(n);
     }
-    let workers = threads.or_else(default_threads).unwrap_or(1);
     match allowed_processors() {
-        Some(cpus) if workers >= 2 => builder.start_handler(move |i| pin_to(cpus[i % cpus.len()])),
-        _ => builder,
+        // (In the start handler the worker already belongs to its pool: rayon's own count.)
+        Some(cpus) => builder.start_handler(move |i| {
+            if rayon::current_num_threads() >= 2 {
+                pin_to(cpus[i % cpus.len()]);
+            }
+        }),
+        None => builder,
     }
 }
 
@@ -45,16 +49,6 @@ pub fn builder(threads: Option<usize>) -> rayon::ThreadPoolBuilder {
 /// nothing changes: the first configuration stays).
 pub fn install_global() {
     let _ = builder(None).build_global();
-}
-
-/// The number of workers rayon gives a pool by default: `RAYON_NUM_THREADS` when it is a
-/// positive number, else the processors available to the process.
-fn default_threads() -> Option<usize> {
-    std::env::var("RAYON_NUM_THREADS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .filter(|&n| n > 0)
-        .or_else(|| std::thread::available_parallelism().ok().map(|n| n.get()))
 }
 
 /// The processors the calling thread may run on, when the workers are to be kept on them: at
