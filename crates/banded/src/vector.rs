@@ -98,7 +98,6 @@ pub fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// If `coords` holds fewer than `out.len() + 1` rows.
 #[inline(always)]
 pub fn consecutive_dists(coords: &[f64], d: usize, out: &mut [f64]) {
-    const LANES: usize = 4;
     let rows = out.len();
     assert!(
         rows == 0 || coords.len() >= (rows + 1) * d,
@@ -106,6 +105,57 @@ pub fn consecutive_dists(coords: &[f64], d: usize, out: &mut [f64]) {
         coords.len(),
         rows + 1
     );
+    match d {
+        1 => consecutive_dists_d::<1>(coords, out),
+        2 => consecutive_dists_d::<2>(coords, out),
+        3 => consecutive_dists_d::<3>(coords, out),
+        _ => consecutive_dists_any(coords, d, out),
+    }
+}
+
+/// [`consecutive_dists`] for a compile-time d: the rows of each block of [`DIST_LANES`] read
+/// as one window, so the differences and sums are straight vector arithmetic.
+#[inline(always)]
+fn consecutive_dists_d<const D: usize>(coords: &[f64], out: &mut [f64]) {
+    let rows = out.len();
+    let blocks = rows / DIST_LANES;
+    for (b, o) in out[..blocks * DIST_LANES]
+        .chunks_exact_mut(DIST_LANES)
+        .enumerate()
+    {
+        let w = &coords[b * DIST_LANES * D..][..(DIST_LANES + 1) * D];
+        let (mut sum, mut middle) = ([0.0; DIST_LANES], true);
+        for c in 0..D {
+            for (lane, s) in sum.iter_mut().enumerate() {
+                let v = (w[(lane + 1) * D + c] - w[lane * D + c]).abs();
+                middle &= v == 0.0 || (SMALL..=BIG).contains(&v);
+                *s += v * v;
+            }
+        }
+        if middle {
+            for (o, s) in o.iter_mut().zip(sum) {
+                *o = s.sqrt();
+            }
+        } else {
+            for (lane, o) in o.iter_mut().enumerate() {
+                let j = b * DIST_LANES + lane;
+                *o = dist(&coords[(j + 1) * D..][..D], &coords[j * D..][..D]);
+            }
+        }
+    }
+    for (j, o) in out.iter_mut().enumerate().skip(blocks * DIST_LANES) {
+        *o = dist(&coords[(j + 1) * D..][..D], &coords[j * D..][..D]);
+    }
+}
+
+/// Rows per block of [`consecutive_dists`].
+const DIST_LANES: usize = 4;
+
+/// [`consecutive_dists`] for any d.
+#[inline(always)]
+fn consecutive_dists_any(coords: &[f64], d: usize, out: &mut [f64]) {
+    const LANES: usize = DIST_LANES;
+    let rows = out.len();
     let row = |j: usize| &coords[j * d..(j + 1) * d];
     let mut j = 0;
     while j + LANES <= rows {
@@ -272,6 +322,33 @@ mod tests {
         assert_eq!(r, 1.0);
         let r = norm(&[3e-160, 4e-160, 0.0]);
         assert!((r / 5e-160 - 1.0).abs() < 1e-15);
+    }
+
+    /// `consecutive_dists` against `dist` row by row, bit for bit: middle-range rows (the
+    /// four-row blocks), blocks holding a tiny, huge, zero or NaN difference (row by row), rows
+    /// left after the last block, d = 1 … 5 (the compile-time d = 1, 2, 3 and any d).
+    #[test]
+    fn consecutive_dists_are_dist_row_by_row() {
+        for d in 1..=5 {
+            for rows in [0, 1, 3, 4, 9, 23] {
+                let mut c: Vec<f64> = (0..(rows + 1) * d)
+                    .map(|i| ((i * 7919) % 103) as f64 / 17.0 - 2.5)
+                    .collect();
+                if rows >= 9 {
+                    c[2 * d] = c[d] + 1e-200; // tiny difference in row 1 → 2
+                    c[5 * d] = 3e200; // huge differences around row 5
+                    c[8 * d] = f64::NAN; // NaN in rows 7 → 8 and 8 → 9
+                    c[3 * d..4 * d].fill(0.5);
+                    c[4 * d..5 * d].fill(0.5); // a zero-length row 3 → 4
+                }
+                let mut out = vec![-1.0; rows];
+                consecutive_dists(&c, d, &mut out);
+                for (j, o) in out.iter().enumerate() {
+                    let want = dist(&c[(j + 1) * d..(j + 2) * d], &c[j * d..(j + 1) * d]);
+                    assert_eq!(o.to_bits(), want.to_bits(), "d = {d}, row {j}");
+                }
+            }
+        }
     }
 
     /// `max_dist` against the fold of `dist` it stands for, bit for bit: middle-range rows
