@@ -338,36 +338,49 @@ fn constant_points(n: usize, c: &[f64]) -> Points {
     Points::new(c.len(), coords).expect("a finite common point")
 }
 
-/// The updated knots `t` mapped affinely onto the span [a, b] of the knots they replace:
-/// t'_j = a + (b − a)(t_j − t_0)/(t_N − t_0). Every stage starts from the k-level split of the
-/// data parameters (or of the previous stage, itself on the data span), so all knots of a
-/// refinement span the data parameters u_0 … u_n whatever k and the number of updates: a
-/// derivative Df (clamped and near-clamped ends, tangent constraints) is a derivative with
-/// respect to the data's parameter at every k, and E of (2.1) is measured in that parameter.
-/// Without it the chords of the refined vertices set the scale (knots 0…36 at k = 30 where the
-/// data span 0…3.2), and a clamped end derivative meant a different curve at every k.
-fn rescale_to(t: Knots, like: &Knots, stage: usize) -> Result<Knots, Error> {
-    let (topology, vertices) = (t.topology(), t.vertex_count());
-    let mut out = t.into_values(); // mapped in place: no second N-sized buffer per update
-    let (t0, tn) = (out[0], out[out.len() - 1]);
-    let w = like.values();
-    let (a, b) = (w[0], w[w.len() - 1]);
-    let ratio = (b - a) / (tn - t0);
-    for x in &mut out {
-        *x = a + (*x - t0) * ratio;
-    }
-    // The ends exactly (rounding of the ratio must not move the span).
-    out[0] = a;
-    let last = out.len() - 1;
-    out[last] = b;
-    Knots::new(topology, out).map_err(|e| match e {
-        divdiff::Error::NonIncreasingKnots { index } => Error::DegenerateRefinedSpan {
-            stage,
-            index: index - 1,
-            next: index % vertices,
+/// The knot update of stage `stage` in place (Algorithm 4.1, [`crate::par::update_knots`]): the
+/// knots of the refined vertices `points`, t_{j+1} = t_j + |p_{j+1} − p_j|^e, mapped affinely
+/// onto the span [a, b] of the knots they replace: t'_j = a + (b − a)(t_j − t_0)/(t_N − t_0).
+/// Every stage starts from the k-level split of the data parameters (or of the previous stage,
+/// itself on the data span), so all knots of a refinement span the data parameters u_0 … u_n
+/// whatever k and the number of updates: a derivative Df (clamped and near-clamped ends, tangent
+/// constraints) is a derivative with respect to the data's parameter at every k, and E of (2.1)
+/// is measured in that parameter. Without it the chords of the refined vertices set the scale
+/// (knots 0…36 at k = 30 where the data span 0…3.2), and a clamped end derivative meant a
+/// different curve at every k.
+fn update_knots(
+    knots: &mut Knots,
+    points: &Points,
+    param: Parametrization,
+    stage: usize,
+) -> Result<(), Error> {
+    let (topology, vertices) = (knots.topology(), knots.vertex_count());
+    crate::par::update_knots(knots, points, param).map_err(|err| match err {
+        crate::par::KnotUpdateError::Spans(err) => match err {
+            divdiff::Error::ZeroLengthSpan { index, next } => {
+                Error::DegenerateRefinedSpan { stage, index, next }
+            }
+            // A span |p_{j+1} − p_j|^e lost to rounding or overflowing: the exponent.
+            divdiff::Error::NonIncreasingKnots { .. } | divdiff::Error::NonFinite { .. } => {
+                Error::InvalidParameter {
+                    field: "parametrization.exponent",
+                    value: param.exponent(),
+                    reason: "the knot update's spans |p_{j+1} - p_j|^e over- or underflow, or vanish against the knot values, at this exponent; use a smaller exponent or knot_iterations 0",
+                }
+            }
+            e => Error::Divdiff(e),
         },
-        e => Error::Divdiff(e),
-    })
+        crate::par::KnotUpdateError::Mapped(err) => match err {
+            divdiff::Error::NonIncreasingKnots { index } => Error::DegenerateRefinedSpan {
+                stage,
+                index: index - 1,
+                next: index % vertices,
+            },
+            e => Error::Divdiff(e),
+        },
+    })?;
+    debug_assert_eq!(knots.topology(), topology);
+    Ok(())
 }
 
 /// Why a system that turned singular after a knot update is refused (`knot_iterations`).
@@ -386,7 +399,7 @@ fn closed_form_first(problem: &Problem) -> bool {
 /// Solve on the initial knots (or take `first`, the first solve's answer computed beside the
 /// knots), then `knot_iterations` times: update the knots from the refined vertices
 /// (t_{i+1} = t_i + |p_{i+1} − p_i|^e), mapped back onto the data parameters' span
-/// ([`rescale_to`]), and solve again — so the returned points are the solution for the returned
+/// ([`update_knots`]), and solve again — so the returned points are the solution for the returned
 /// knots.
 #[allow(clippy::too_many_arguments)]
 fn stage_loop(
@@ -417,22 +430,7 @@ fn stage_loop(
             if degenerate::is_constant(points) {
                 break;
             }
-            let updated =
-                crate::par::parametrize(points, knots.topology(), param).map_err(|err| match err {
-                    divdiff::Error::ZeroLengthSpan { index, next } => {
-                        Error::DegenerateRefinedSpan { stage, index, next }
-                    }
-                    // A span |p_{j+1} − p_j|^e lost to rounding or overflowing: the exponent.
-                    divdiff::Error::NonIncreasingKnots { .. } | divdiff::Error::NonFinite { .. } => {
-                        Error::InvalidParameter {
-                            field: "parametrization.exponent",
-                            value: param.exponent(),
-                            reason: "the knot update's spans |p_{j+1} - p_j|^e over- or underflow, or vanish against the knot values, at this exponent; use a smaller exponent or knot_iterations 0",
-                        }
-                    }
-                    e => Error::Divdiff(e),
-                })?;
-            *knots = rescale_to(updated, knots, stage)?;
+            update_knots(knots, points, param, stage)?;
             iterations.knot_updates += 1;
         }
         let fp = FixedProblem {
