@@ -487,7 +487,7 @@ pub(crate) fn parametrize(
 /// Beyond one chunk each chunk sums its own spans from zero while they are in cache, and adds
 /// the sum of the chunks' totals before it, in order: the running sums of fixed chunks, the same
 /// bits on any number of threads, equal to the one-loop sums of [`parametrize`] to rounding
-/// (a few ulps of u_N: tested). At N = 8·10⁵ the serial running sum, its validation, the
+/// (and closer to compensated sums than those: tested). At N = 8·10⁵ the serial running sum, its validation, the
 /// mapping and its validation were ~3 ms of each update's ~20 on two threads. Up to one chunk,
 /// and on any failure (to report the first bad span or knot as the serial path names it), the
 /// result is [`parametrize`] then [`rescale`] exactly.
@@ -513,12 +513,11 @@ pub(crate) fn update_knots(
     if spans <= CHUNK_VERTICES || w.len() != spans + 1 {
         return serial(knots);
     }
-    // The old buffer, swapped out for a placeholder (put back on error).
+    // The old buffer, swapped out for a placeholder (a failure below recomputes serially).
     let placeholder = divdiff::Knots::new(topology, vec![0.0, 1.0, 2.0, 3.0])
         .expect("four increasing knots are valid");
     let old = std::mem::replace(knots, placeholder);
     let mut t = old.into_values();
-    t[0] = 0.0;
     let chunks: Vec<(usize, &mut [f64])> = t[1..]
         .chunks_mut(CHUNK_VERTICES)
         .enumerate()
