@@ -105,29 +105,29 @@ pub fn consecutive_dists(coords: &[f64], d: usize, out: &mut [f64]) {
         coords.len(),
         rows + 1
     );
+    // (Literal d = 1, 2, 3: the inlined body is specialized, its indexing and loops fixed.)
     match d {
-        1 => consecutive_dists_d::<1>(coords, out),
-        2 => consecutive_dists_d::<2>(coords, out),
-        3 => consecutive_dists_d::<3>(coords, out),
-        _ => consecutive_dists_any(coords, d, out),
+        1 => dist_blocks(coords, 1, out),
+        2 => dist_blocks(coords, 2, out),
+        3 => dist_blocks(coords, 3, out),
+        _ => dist_blocks(coords, d, out),
     }
 }
 
-/// [`consecutive_dists`] for a compile-time d: the rows of each block of [`DIST_LANES`] read
-/// as one window, so the differences and sums are straight vector arithmetic.
+/// The body of [`consecutive_dists`]: blocks of four rows, each read as one window, so the
+/// differences and sums are straight vector arithmetic when `d` is a constant.
 #[inline(always)]
-fn consecutive_dists_d<const D: usize>(coords: &[f64], out: &mut [f64]) {
-    let rows = out.len();
-    let blocks = rows / DIST_LANES;
-    for (b, o) in out[..blocks * DIST_LANES]
-        .chunks_exact_mut(DIST_LANES)
-        .enumerate()
-    {
-        let w = &coords[b * DIST_LANES * D..][..(DIST_LANES + 1) * D];
-        let (mut sum, mut middle) = ([0.0; DIST_LANES], true);
-        for c in 0..D {
+fn dist_blocks(coords: &[f64], d: usize, out: &mut [f64]) {
+    const LANES: usize = 4;
+    let row = |j: usize| &coords[j * d..(j + 1) * d];
+    let blocks = out.len() / LANES;
+    let (head, tail) = out.split_at_mut(blocks * LANES);
+    for (b, o) in head.chunks_exact_mut(LANES).enumerate() {
+        let w = &coords[b * LANES * d..][..(LANES + 1) * d];
+        let (mut sum, mut middle) = ([0.0; LANES], true);
+        for c in 0..d {
             for (lane, s) in sum.iter_mut().enumerate() {
-                let v = (w[(lane + 1) * D + c] - w[lane * D + c]).abs();
+                let v = (w[(lane + 1) * d + c] - w[lane * d + c]).abs();
                 middle &= v == 0.0 || (SMALL..=BIG).contains(&v);
                 *s += v * v;
             }
@@ -138,49 +138,14 @@ fn consecutive_dists_d<const D: usize>(coords: &[f64], out: &mut [f64]) {
             }
         } else {
             for (lane, o) in o.iter_mut().enumerate() {
-                let j = b * DIST_LANES + lane;
-                *o = dist(&coords[(j + 1) * D..][..D], &coords[j * D..][..D]);
+                let j = b * LANES + lane;
+                *o = dist(row(j + 1), row(j));
             }
         }
     }
-    for (j, o) in out.iter_mut().enumerate().skip(blocks * DIST_LANES) {
-        *o = dist(&coords[(j + 1) * D..][..D], &coords[j * D..][..D]);
-    }
-}
-
-/// Rows per block of [`consecutive_dists`].
-const DIST_LANES: usize = 4;
-
-/// [`consecutive_dists`] for any d.
-#[inline(always)]
-fn consecutive_dists_any(coords: &[f64], d: usize, out: &mut [f64]) {
-    const LANES: usize = DIST_LANES;
-    let rows = out.len();
-    let row = |j: usize| &coords[j * d..(j + 1) * d];
-    let mut j = 0;
-    while j + LANES <= rows {
-        let (mut sum, mut middle) = ([0.0; LANES], true);
-        for c in 0..d {
-            for (lane, s) in sum.iter_mut().enumerate() {
-                let v = (coords[(j + lane + 1) * d + c] - coords[(j + lane) * d + c]).abs();
-                middle &= v == 0.0 || (SMALL..=BIG).contains(&v);
-                *s += v * v;
-            }
-        }
-        let out = &mut out[j..j + LANES];
-        if middle {
-            for (o, s) in out.iter_mut().zip(sum) {
-                *o = s.sqrt();
-            }
-        } else {
-            for (lane, o) in out.iter_mut().enumerate() {
-                *o = dist(row(j + lane + 1), row(j + lane));
-            }
-        }
-        j += LANES;
-    }
-    for (jj, o) in out.iter_mut().enumerate().skip(j) {
-        *o = dist(row(jj + 1), row(jj));
+    for (jj, o) in tail.iter_mut().enumerate() {
+        let j = blocks * LANES + jj;
+        *o = dist(row(j + 1), row(j));
     }
 }
 
