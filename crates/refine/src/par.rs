@@ -460,20 +460,7 @@ pub(crate) fn parametrize(
         return divdiff::parametrize(points, topology, parametrization);
     }
     let mut t = vec![0.0; spans + 1];
-    let chunks: Vec<(usize, &mut [f64])> = t[1..]
-        .chunks_mut(CHUNK_VERTICES)
-        .enumerate()
-        .map(|(c, out)| (c * CHUNK_VERTICES, out))
-        .collect();
-    let done = map(chunks, |(first, out)| {
-        vectorized(SpanPowers {
-            points,
-            parametrization,
-            first,
-            out,
-        })
-    });
-    done.into_iter().collect::<Result<(), _>>()?;
+    span_chunks(&mut t[1..], points, parametrization, |_| ())?;
     divdiff::accumulate(&mut t);
     divdiff::Knots::new(topology, t)
 }
@@ -518,25 +505,13 @@ pub(crate) fn update_knots(
         .expect("four increasing knots are valid");
     let old = std::mem::replace(knots, placeholder);
     let mut t = old.into_values();
-    let chunks: Vec<(usize, &mut [f64])> = t[1..]
-        .chunks_mut(CHUNK_VERTICES)
-        .enumerate()
-        .map(|(c, out)| (c * CHUNK_VERTICES, out))
-        .collect();
     // Each chunk: its spans, then their running sums from zero; its total.
-    let totals = map(chunks, |(first, out)| -> Result<f64, divdiff::Error> {
-        vectorized(SpanPowers {
-            points,
-            parametrization,
-            first,
-            out: &mut *out,
-        })?;
+    let totals = span_chunks(&mut t[1..], points, parametrization, |out| {
         divdiff::accumulate(out);
-        Ok(out[out.len() - 1])
+        out[out.len() - 1]
     });
-    let totals = match totals.into_iter().collect::<Result<Vec<f64>, _>>() {
-        Ok(v) => v,
-        Err(_) => return serial(knots),
+    let Ok(totals) = totals else {
+        return serial(knots);
     };
     // The offset of each chunk: the totals before it, summed in order; u_N last.
     let mut offsets = Vec::with_capacity(totals.len());
@@ -595,6 +570,33 @@ pub(crate) fn rescale(t: divdiff::Knots, a: f64, b: f64) -> Result<divdiff::Knot
     let last = out.len() - 1;
     out[last] = b;
     divdiff::Knots::new(topology, out)
+}
+
+/// The spans |p_{j+1} − p_j|^e of `points` into `out` (span j at `out[j]`), in parallel chunks
+/// of [`CHUNK_VERTICES`], each chunk then handed to `then` while it is in cache: its results in
+/// chunk order, or the first failing span's error.
+fn span_chunks<T: Send>(
+    out: &mut [f64],
+    points: &Points,
+    parametrization: divdiff::Parametrization,
+    then: impl Fn(&mut [f64]) -> T + Sync + Send,
+) -> Result<Vec<T>, divdiff::Error> {
+    let chunks: Vec<(usize, &mut [f64])> = out
+        .chunks_mut(CHUNK_VERTICES)
+        .enumerate()
+        .map(|(c, out)| (c * CHUNK_VERTICES, out))
+        .collect();
+    map(chunks, |(first, out)| {
+        vectorized(SpanPowers {
+            points,
+            parametrization,
+            first,
+            out: &mut *out,
+        })?;
+        Ok(then(out))
+    })
+    .into_iter()
+    .collect()
 }
 
 /// One chunk of [`parametrize`]: [`divdiff::span_powers`] (inlined always) as [`vectorized`]
