@@ -765,12 +765,14 @@ mod tests {
         let q = noisy_channel(300);
         let events = std::cell::RefCell::new(Vec::new());
         let full = exchange(&q, EXCHANGE_TOL, 1.0, &|e| {
-            let Progress::Sweep {
+            if let Progress::Sweep {
                 sweep,
                 excursion,
                 contacts,
-            } = *e;
-            events.borrow_mut().push((sweep, excursion, contacts));
+            } = *e
+            {
+                events.borrow_mut().push((sweep, excursion, contacts));
+            }
         });
         assert!(
             full.converged && full.gap <= GAP_TARGET,

@@ -120,6 +120,8 @@ pub use error::{sites_rounding_hint, Error, Infeasibility, SITES_ROUNDING_COUNTS
 /// (the exact solver for polyline bounds, and the fallback of Newton on Φ), whose
 /// `NotConverged::residual` is the excursion left outside the strip, not a gap.
 pub const EXCHANGE: &str = "dual active-set exchange";
+/// The name of Newton's method on Φ in messages and progress lines.
+pub const NEWTON: &str = "Newton on Φ";
 pub use progress::Progress;
 pub use solve::{solve, solve_observed};
 pub use types::{

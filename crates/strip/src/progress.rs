@@ -7,6 +7,17 @@
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum Progress {
+    /// An iteration of Newton's method on Φ ([`crate::NEWTON`], the solver for bounds given as
+    /// cubic pieces) begins.
+    Newton {
+        /// The iteration, from 1.
+        iteration: usize,
+        /// The largest f'' jump at a data site, relative to max|f''| (½‖∇Φ‖∞ / max|f''|): the
+        /// iteration stops when it is at its rounding level.
+        jump: f64,
+        /// Cells solved so far (every evaluation of Φ solves the cell of each data interval).
+        cell_solves: usize,
+    },
     /// A sweep of the exchange ([`crate::EXCHANGE`], the solver for polyline bounds and the
     /// fallback of Newton on Φ) has checked the curve against the strip.
     Sweep {

@@ -31,8 +31,9 @@ pub fn solve(problem: &Problem, opts: &Options) -> Result<Solution, Error> {
     solve_observed(problem, opts, &|_| {})
 }
 
-/// [`solve`], telling `progress` how a long solve goes ([`Progress`]: each sweep of the
-/// exchange), on the calling thread. Keep it cheap: it runs once a sweep.
+/// [`solve`], telling `progress` how a long solve goes ([`Progress`]: each iteration of Newton
+/// on Φ, each sweep of the exchange), on the calling thread. Keep it cheap: it runs once an
+/// iteration or sweep.
 ///
 /// # Errors
 /// As [`solve`].

@@ -137,9 +137,15 @@ pub(crate) fn run(
     }
     let mut hints: Hints = vec![None; m - 1];
     let out = match opts.method {
-        Method::Newton => {
-            outer::newton(&st.outer, x, opts, &mut hints, &mut stats, &mut cell_solves)
-        }
+        Method::Newton => outer::newton(
+            &st.outer,
+            x,
+            opts,
+            &mut hints,
+            &mut stats,
+            &mut cell_solves,
+            progress,
+        ),
         // the seed's BFGS stops when Φ no longer changes beyond rounding, with f'' still jumping
         // by ~1e-8 of max|f''| at the sites (measured on `conditioning.rs`'s base strip: 17
         // iterations, then 1.2e-8): Newton's method on the banded Hessian finishes the jumps
@@ -160,6 +166,7 @@ pub(crate) fn run(
                     &mut hints,
                     &mut stats,
                     &mut cell_solves,
+                    progress,
                 )?;
                 n.iterations += b.iterations;
                 Ok(n)

@@ -67,19 +67,31 @@ impl Line {
         s + &format!(" {:.1} s", elapsed.as_secs_f64())
     }
 
-    /// The text for a sweep of `strip`'s exchange.
+    /// The text for an iteration of `strip`'s Newton method or a sweep of its exchange.
     pub fn strip_text(label: &str, event: &strip::Progress, elapsed: Duration) -> String {
         let mut s = format!("{label}:");
-        if let strip::Progress::Sweep {
-            sweep,
-            excursion,
-            contacts,
-        } = event
-        {
-            s += &format!(
-                " {} sweep {sweep}, excursion {excursion:.1e}, {contacts} contacts,",
-                strip::EXCHANGE
-            );
+        match *event {
+            strip::Progress::Newton {
+                iteration,
+                jump,
+                cell_solves,
+            } => {
+                s += &format!(
+                    " {} iteration {iteration}, f'' jump {jump:.1e} of max|f''|, {cell_solves} cell solves,",
+                    strip::NEWTON
+                );
+            }
+            strip::Progress::Sweep {
+                sweep,
+                excursion,
+                contacts,
+            } => {
+                s += &format!(
+                    " {} sweep {sweep}, excursion {excursion:.1e}, {contacts} contacts,",
+                    strip::EXCHANGE
+                );
+            }
+            _ => {}
         }
         s + &format!(" {:.1} s", elapsed.as_secs_f64())
     }
@@ -100,7 +112,7 @@ impl Line {
         );
     }
 
-    /// Updates the line for a sweep of `strip`'s exchange.
+    /// Updates the line for an iteration or sweep of `strip`.
     pub fn strip_event(&self, event: &strip::Progress) {
         self.update(
             |_| {},
@@ -165,6 +177,20 @@ mod tests {
         assert_eq!(
             t,
             "strip: dual active-set exchange sweep 7, excursion 2.5e-6, 14200 contacts, 4.0 s"
+        );
+    }
+
+    #[test]
+    fn the_strip_line_names_newton_iteration_jump_and_cell_solves() {
+        let e = strip::Progress::Newton {
+            iteration: 12,
+            jump: 3.31e-4,
+            cell_solves: 61_000,
+        };
+        let t = Line::strip_text("strip", &e, Duration::from_millis(1960));
+        assert_eq!(
+            t,
+            "strip: Newton on Φ iteration 12, f'' jump 3.3e-4 of max|f''|, 61000 cell solves, 2.0 s"
         );
     }
 }

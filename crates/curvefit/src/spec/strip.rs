@@ -252,7 +252,8 @@ pub fn solve(p: &Problem) -> Result<Solution, InputError> {
     solve_observed(p, &|_| {})
 }
 
-/// [`solve`], telling `progress` of each sweep of the exchange ([`strip::solve_observed`]).
+/// [`solve`], telling `progress` of each iteration of Newton on Φ and each sweep of the exchange
+/// ([`strip::solve_observed`]).
 ///
 /// # Errors
 /// As [`solve`].
