@@ -11,7 +11,8 @@
 //!    with the relative gap ½gᵀH⁻¹g / Φ ≤ [`ACCEPT_GAP`] and every f'' jump (at the sites: half
 //!    the gradient; at the extra knots) at its rounding level ([`crate::C2_ROUNDING`]); if Newton
 //!    stops short of that (its
-//!    iteration limit, or a line search that can no longer decrease Φ) or meets a cell outside
+//!    iteration limit, a line search that can no longer decrease Φ, or a stall: ten iterations
+//!    that neither lower Φ by a tenth nor halve the f'' jumps) or meets a cell outside
 //!    Theorem 2.1's shapes, step 3 solves the problem instead (BFGS, the seed's method chosen
 //!    explicitly, is refused with the gap).
 //! 3. **Polyline bounds** (§4, any M), and the fallback of step 2: the dual active-set exchange

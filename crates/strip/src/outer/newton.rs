@@ -79,18 +79,18 @@ pub(crate) fn newton(
     // is measured), for the stall test
     let mut history: Vec<f64> = Vec::new();
     // Φ and ‖∇Φ‖∞ at the start of every iteration, for the stall test of STALL_GRADIENT
-    let mut plateau: Vec<(f64, f64)> = Vec::new();
+    let mut trail: Vec<(f64, f64)> = Vec::new();
     let mut stalled = false;
     while it < opts.max_iterations {
         let gnorm = inf_norm(&ev.grad);
         if gnorm <= tol(&ev) || nv == 0 {
             break;
         }
-        plateau.push((ev.phi, gnorm));
-        if let Some(&(phi0, g0)) = plateau
+        trail.push((ev.phi, gnorm));
+        if let Some(&(phi0, g0)) = trail
             .len()
             .checked_sub(STALL_ITERATIONS + 1)
-            .map(|k| &plateau[k])
+            .map(|k| &trail[k])
         {
             if phi0 - ev.phi <= STALL_PHI * phi0.abs() + PHI_ROUNDING * (1.0 + ev.phi.abs())
                 && gnorm > STALL_GRADIENT * g0
