@@ -14,7 +14,8 @@ Checks, none of which uses the solver's code: the exit code is 0 or 2 (never a p
 timeout) and nothing is written on a refusal; an answer's breaks contain the sites, its pieces
 interpolate the data (1e-9 of the value scale), join C² at every break (value and slope 1e-9,
 f'' 1e-8 of their scales), keep inside both bounds on 16 points per piece and at every bound
-breakpoint (1e-9 of the value scale), report their own energy ∫f''² and slopes; the energy is at
+breakpoint (1e-9 of the value scale), put every reported contact (touch, subarc end) on its
+bound, report their own energy ∫f''² and slopes; the energy is at
 least the unconstrained spline's (scipy CubicSpline, same ends), and equals it (1e-9) where that
 spline keeps inside the bounds with room (1e-6 of the scale) to spare. ROBUSTNESS.md reports runs.
 """
@@ -225,7 +226,20 @@ def check(p, r):
     allow = 1e-9 * vrange + 1e-14 * vscale + 4 * EPS * np.abs(x).max() * np.abs(m0).max()
     if viol > allow:
         flags.append(f"bound violated {viol / vrange:.1e} of the value range ({viol / allow:.1f}x allowed)")
-    # energy and slopes as reported
+    # every reported contact is one: f on its bound there (to the value allowance), and f' along
+    # the bound's slope where the bound is smooth (a touch is tangent; a subarc's ends too)
+    for k in r["extra_knots"]:
+        side = -1 if k["kind"].endswith("lower") else +1
+        spec = p.get("lower" if side < 0 else "upper")
+        if spec is None:
+            flags.append(f"{k['kind']} at {k['t']} without that bound")
+            continue
+        x0 = k["t"]
+        jk = int(np.clip(np.searchsorted(br, x0, side="right") - 1, 0, len(h) - 1))
+        i = int(np.clip(np.searchsorted(t, x0, side="right") - 1, 0, len(t) - 2))
+        gap = abs(val(jk, x0 - br[jk]) - bound_at_piece(spec, t, i, x0 - t[i]))
+        if gap > allow:
+            flags.append(f"{k['kind']} at {x0}: f is {gap / vrange:.1e} of the range off the bound")
     a, b = 6 * co[:, 3], 2 * co[:, 2]
     e = float(np.sum(b * b * h + a * b * h * h + a * a * h ** 3 / 3))
     if abs(e - r["energy"]) > 1e-9 * max(abs(e), 1e-300) + 1e-300:
