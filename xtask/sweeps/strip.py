@@ -12,12 +12,14 @@ slopes on 30 %; 8 % move one value outside its bound (a refusal is due).
 
 Checks, none of which uses the solver's code: the exit code is 0 or 2 (never a panic or a
 timeout) and nothing is written on a refusal; an answer's breaks contain the sites, its pieces
-interpolate the data (1e-9 of the value scale), join C² at every break (value and slope 1e-9,
-f'' 1e-8 of their scales), keep inside both bounds on 16 points per piece and at every bound
-breakpoint (1e-9 of the value scale), put every reported contact (touch, subarc end) on its
-bound, report their own energy ∫f''² and slopes; the energy is at
-least the unconstrained spline's (scipy CubicSpline, same ends), and equals it (1e-9) where that
-spline keeps inside the bounds with room (1e-6 of the scale) to spare. ROBUSTNESS.md reports runs.
+interpolate the data (1e-9 of the value range), join in value and slope (1e-9 of their scales)
+and in f'' to its rounding (the strip crate's C2_ROUNDING model at 16ε, plus |f'''| times the
+rounding of the break's abscissa), keep inside both bounds on 16 points per piece and at every
+polyline vertex (1e-9 of the value range plus the abscissa's rounding), put every reported
+contact (touch, subarc end) on its bound, and report their own energy ∫f''² and slopes; the
+energy is at least the unconstrained spline's (scipy CubicSpline, same ends), and equals it
+(1e-9) where that spline keeps inside the bounds with room (1e-6 of the range) to spare.
+ROBUSTNESS.md item 25 reports runs.
 """
 import json, os, re, subprocess, sys, time
 import numpy as np
