@@ -4,11 +4,12 @@
     python xtask/sweeps/strip.py SEED COUNT       # numpy and scipy needed; problems to $SWEEP_OUT
 
 Problems: n = 2 ... 5000 sites, even, jittered, very unequal (log-normal spans over up to eight
-decades) or clustered, at scales 1e-3 ... 1e4 and offsets up to 1e6; values smooth, noisy, a random
-walk or steps, at scales 1e-3 ... 1e4; bounds as cubic pieces (a band about the data polygon,
-constants jumping at the sites, one side only) or polylines with their own breakpoints (the band
-sampled off the sites, a steep narrow wiggle), half-widths from 1e-6 to 1 of the value range, end
-slopes on 30 %; 8 % move one value outside its bound (a refusal is due).
+decades) or clustered, at scales 1e-3 ... 1e4 and offsets up to 10³ ranges; values smooth, noisy, a
+random walk or steps, at scales 1e-3 ... 1e4 and offsets up to 10³ of their scale; bounds as cubic
+pieces (a band about the data polygon, constants jumping at the sites, one side only) or
+polylines with their own breakpoints (the band sampled off the sites, a steep narrow wiggle),
+half-widths from 1e-6 to 1 of the value range, end slopes on 30 %; 8 % move one value outside
+its bound (a refusal is due).
 
 Checks, none of which uses the solver's code: the exit code is 0 or 2 (never a panic or a
 timeout) and nothing is written on a refusal; an answer's breaks contain the sites, its pieces
