@@ -6,7 +6,9 @@
 //! now has increasing breaks and each contact once, and is checked independently of the solver
 //! (strip-testkit): the strip exactly and interpolation.
 
-use strip::{solve, Bound, Options, Problem};
+mod common;
+
+use strip::{solve, Options, Problem};
 
 const T: [f64; 30] = [
     2999999.9999999995,
@@ -78,27 +80,7 @@ const Y: [f64; 30] = [
 const W: f64 = 1.2765004197281087;
 
 fn far_sites() -> Problem {
-    let band = |side: f64| {
-        Bound::Pieces(
-            (0..T.len() - 1)
-                .map(|i| {
-                    [
-                        Y[i] + side * W,
-                        (Y[i + 1] - Y[i]) / (T[i + 1] - T[i]),
-                        0.0,
-                        0.0,
-                    ]
-                })
-                .collect(),
-        )
-    };
-    Problem {
-        t: T.to_vec(),
-        y: Y.to_vec(),
-        lower: band(-1.0),
-        upper: band(1.0),
-        end_slopes: [None, None],
-    }
+    strip_testkit::examples::polygon_band(&T, &Y, W)
 }
 
 #[test]
@@ -124,18 +106,5 @@ fn knots_within_an_ulp_give_no_empty_piece_and_no_contact_twice() {
             "site {t} not a break"
         );
     }
-    let v = p.y.iter().fold(1.0f64, |m, y| m.max(y.abs()));
-    let viol = strip_testkit::strip_violation(&p, &s);
-    assert!(
-        viol.by <= 1e-9 * v,
-        "strip left by {:e} at {}",
-        viol.by,
-        viol.at
-    );
-    let mut q = p.clone();
-    for &i in &s.shifted_data {
-        q.y[i] = s.grid_values[i];
-    }
-    let interp = strip_testkit::interpolation_error(&q, &s);
-    assert!(interp <= 1e-12 * v, "interpolation {interp:e}");
+    common::assert_keeps_strip_and_data(&p, &s);
 }

@@ -8,7 +8,9 @@
 //! (strip-testkit): C² to rounding, the strip exactly, interpolation, and the reported gap.
 
 use std::sync::Mutex;
-use strip::{solve_observed, Bound, Options, Problem, Progress};
+mod common;
+
+use strip::{solve_observed, Options, Problem, Progress};
 
 const T: [f64; 70] = [
     35.334489446138235,
@@ -161,27 +163,7 @@ const W: f64 = 6.707183615617396e-06;
 
 /// The sweep's problem: the data polygon ± W as one linear piece per interval.
 fn plateau() -> Problem {
-    let band = |side: f64| {
-        Bound::Pieces(
-            (0..T.len() - 1)
-                .map(|i| {
-                    [
-                        Y[i] + side * W,
-                        (Y[i + 1] - Y[i]) / (T[i + 1] - T[i]),
-                        0.0,
-                        0.0,
-                    ]
-                })
-                .collect(),
-        )
-    };
-    Problem {
-        t: T.to_vec(),
-        y: Y.to_vec(),
-        lower: band(-1.0),
-        upper: band(1.0),
-        end_slopes: [None, None],
-    }
+    strip_testkit::examples::polygon_band(&T, &Y, W)
 }
 
 #[test]
@@ -200,7 +182,6 @@ fn a_plateau_of_newton_hands_over_to_the_exchange() {
         (10..=40).contains(&iterations),
         "{iterations} Newton iterations"
     );
-    let v = p.y.iter().fold(1.0f64, |m, y| m.max(y.abs()));
     let c2 = strip_testkit::c2_rounding(&p, &s);
     assert!(
         c2.rounding <= 1.0,
@@ -210,17 +191,5 @@ fn a_plateau_of_newton_hands_over_to_the_exchange() {
         c2.rounding
     );
     assert!(s.gap <= 1e-9, "gap {:e}", s.gap);
-    let viol = strip_testkit::strip_violation(&p, &s);
-    assert!(
-        viol.by <= 1e-9 * v,
-        "strip left by {:e} at {}",
-        viol.by,
-        viol.at
-    );
-    let mut q = p.clone();
-    for &i in &s.shifted_data {
-        q.y[i] = s.grid_values[i];
-    }
-    let interp = strip_testkit::interpolation_error(&q, &s);
-    assert!(interp <= 1e-12 * v, "interpolation {interp:e}");
+    common::assert_keeps_strip_and_data(&p, &s);
 }

@@ -148,6 +148,16 @@ pub fn strip_violation(p: &Problem, s: &Solution) -> Violation {
     worst
 }
 
+/// The data the solution `s` of `p` interpolates: `p` with the values Remark 4.2 moved inside
+/// their bounds (`s.shifted_data`) replaced by the solution's (`s.grid_values`).
+pub fn moved_data(p: &Problem, s: &Solution) -> Problem {
+    let mut q = p.clone();
+    for &i in &s.shifted_data {
+        q.y[i] = s.grid_values[i];
+    }
+    q
+}
+
 /// The largest |f(t_i±) − y_i| over the data, from the pieces on both sides of each site.
 pub fn interpolation_error(p: &Problem, s: &Solution) -> f64 {
     let mut worst: f64 = 0.0;

@@ -13,19 +13,26 @@ pub const Y16: [f64; 16] = [
 /// Data at t = 0, 1, …, n − 1 in a strip of half-width `w` about the data polygon (bounds
 /// linear in every interval, continuous).
 pub fn polygon_strip(y: &[f64], w: f64) -> Problem {
-    let n = y.len();
-    let t: Vec<f64> = (0..n).map(|i| i as f64).collect();
-    let lo = (0..n.saturating_sub(1))
-        .map(|i| [y[i] - w, y[i + 1] - y[i], 0.0, 0.0])
-        .collect();
-    let up = (0..n.saturating_sub(1))
-        .map(|i| [y[i] + w, y[i + 1] - y[i], 0.0, 0.0])
-        .collect();
+    let t: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
+    polygon_band(&t, y, w)
+}
+
+/// Data (`t`, `y`) in a strip of half-width `w` about the data polygon: one linear piece per
+/// interval on each side, y_i ∓ w with the polygon's slope.
+pub fn polygon_band(t: &[f64], y: &[f64], w: f64) -> Problem {
+    let slope = |i: usize| (y[i + 1] - y[i]) / (t[i + 1] - t[i]);
+    let side = |off: f64| {
+        Bound::Pieces(
+            (0..y.len().saturating_sub(1))
+                .map(|i| [y[i] + off, slope(i), 0.0, 0.0])
+                .collect(),
+        )
+    };
     Problem {
-        t,
+        t: t.to_vec(),
         y: y.to_vec(),
-        lower: Bound::Pieces(lo),
-        upper: Bound::Pieces(up),
+        lower: side(-w),
+        upper: side(w),
         end_slopes: [None, None],
     }
 }

@@ -21,8 +21,8 @@ pub mod lower_bound;
 
 pub use channel::{BoundKind, Channel};
 pub use exact::{
-    c2_jump, c2_rounding, interpolation_error, lemma_1_1, strip_violation, C2Rounding, Lemma11,
-    Violation,
+    c2_jump, c2_rounding, interpolation_error, lemma_1_1, moved_data, strip_violation, C2Rounding,
+    Lemma11, Violation,
 };
 pub use lower_bound::{fine_grid, lower_bound, lower_bound_qp, LowerBound, LowerBoundQp};
 
