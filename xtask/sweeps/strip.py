@@ -123,28 +123,25 @@ def problem():
     return p, dict(n=n, t=str(tkind), y=str(ykind), bounds=str(bkind), w=float(w / spread), outside=bool(outside))
 
 
-def bound_at(spec, t, x):
-    """Independent evaluation of a bound at x (None: no bound)."""
+def bound_at(spec, t, x, side="right"):
+    """Independent evaluation of a bound at x (None: no bound). Cubic pieces are read in the
+    data interval starting at x where x is a site (`side="right"`) or in the one ending there
+    (`side="left"`, the left limit of a bound that jumps at a site)."""
     if spec is None:
         return None
     if "polyline" in spec:
         pl = np.array(spec["polyline"])
         return np.interp(x, pl[:, 0], pl[:, 1])
     c = np.array(spec["pieces"])
-    i = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
+    i = np.clip(np.searchsorted(t, x, side=side) - 1, 0, len(t) - 2)
     s = x - t[i]
     return c[i, 0] + s * (c[i, 1] + s * (c[i, 2] + s * c[i, 3]))
 
 
-def bound_at_piece(spec, t, i, s):
-    """A piece bound on interval i at s (so that a bound jumping at a site is read on its own
-    side), or a polyline at t_i + s."""
-    if spec is None:
-        return None
-    if "polyline" in spec:
-        return bound_at(spec, t, t[i] + s)
-    c = spec["pieces"][i]
-    return c[0] + s * (c[1] + s * (c[2] + s * c[3]))
+def energy(c2, c3, h):
+    """∫ f''² over pieces c0 + c1 s + c2 s² + c3 s³ of lengths h: f'' = 2c2 + 6c3 s."""
+    b, a = 2 * c2, 6 * c3
+    return float(np.sum(b * b * h + a * b * h * h + a * a * h ** 3 / 3))
 
 
 def natural_energy(t, y, ends):
@@ -152,11 +149,8 @@ def natural_energy(t, y, ends):
     for s in ends:
         bc.append((1, s) if s is not None else (2, 0.0))
     cs = CubicSpline(t, y, bc_type=(bc[0], bc[1]))
-    c = cs.c  # c[0] s³ + c[1] s² + c[2] s + c[3]
-    h = np.diff(t)
-    a, b = 6 * c[0], 2 * c[1]  # f'' = b + a s
-    e = float(np.sum(b * b * h + a * b * h * h + a * a * h ** 3 / 3))
-    return e, cs
+    # scipy's c[0] s³ + c[1] s² + c[2] s + c[3]
+    return energy(cs.c[1], cs.c[0], np.diff(t)), cs
 
 
 def check(p, r):
@@ -213,17 +207,13 @@ def check(p, r):
     jj = np.repeat(np.arange(len(h)), len(s)); ss = np.tile(s, len(h)) * h[jj]
     x = br[jj] + ss
     f = val(jj, ss)
-    site = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
-    # a break that is a site starts a new data interval: read piece bounds on the own side
+    # (a break that is a site starts a new data interval: piece bounds are read on its side)
     viol = 0.0
     for spec, side in ((p.get("lower"), -1), (p.get("upper"), +1)):
         if spec is None:
             continue
-        if "pieces" in spec:
-            c = np.array(spec["pieces"]); u = x - t[site]
-            b = c[site, 0] + u * (c[site, 1] + u * (c[site, 2] + u * c[site, 3]))
-        else:
-            b = bound_at(spec, t, x)
+        b = bound_at(spec, t, x)
+        if "polyline" in spec:
             pl = np.array(spec["polyline"])
             jb = np.clip(np.searchsorted(br, pl[:, 0], side="right") - 1, 0, len(h) - 1)
             fb = val(jb, pl[:, 0] - br[jb])
@@ -233,8 +223,7 @@ def check(p, r):
     allow = 1e-9 * vrange + 1e-14 * vscale + 4 * EPS * np.abs(x).max() * np.abs(m0).max()
     if viol > allow:
         flags.append(f"bound violated {viol / vrange:.1e} of the value range ({viol / allow:.1f}x allowed)")
-    # every reported contact is one: f on its bound there (to the value allowance), and f' along
-    # the bound's slope where the bound is smooth (a touch is tangent; a subarc's ends too)
+    # every reported contact is one: f on its bound there (to the value allowance)
     for k in r["extra_knots"]:
         side = -1 if k["kind"].endswith("lower") else +1
         spec = p.get("lower" if side < 0 else "upper")
@@ -243,14 +232,12 @@ def check(p, r):
             continue
         x0 = k["t"]
         jk = int(np.clip(np.searchsorted(br, x0, side="right") - 1, 0, len(h) - 1))
-        i = int(np.clip(np.searchsorted(t, x0, side="right") - 1, 0, len(t) - 2))
-        gap = abs(val(jk, x0 - br[jk]) - bound_at_piece(spec, t, i, x0 - t[i]))
+        gap = abs(val(jk, x0 - br[jk]) - bound_at(spec, t, x0))
         if gap > allow:
             flags.append(f"{k['kind']} at {x0}: f is {gap / vrange:.1e} of the range off the bound")
-    a, b = 6 * co[:, 3], 2 * co[:, 2]
-    e = float(np.sum(b * b * h + a * b * h * h + a * a * h ** 3 / 3))
+    e = energy(co[:, 2], co[:, 3], h)
     # (each break's rounding moves ∫f''² by up to f''² there times that rounding)
-    f2at = np.maximum(np.abs(b), np.abs(b + a * h)) ** 2
+    f2at = np.maximum(np.abs(d2(np.arange(len(h)), 0)), np.abs(d2(np.arange(len(h)), h))) ** 2
     e_allow = 1e-9 * max(abs(e), 1e-300) + float(np.sum(f2at * 8 * EPS * np.maximum(np.abs(br[:-1]), np.abs(br[1:]))))
     if abs(e - r["energy"]) > e_allow:
         flags.append(f"energy {r['energy']:.6e} vs {e:.6e}")
@@ -272,18 +259,9 @@ def check(p, r):
     for spec, side in ((p.get("lower"), -1), (p.get("upper"), +1)):
         if spec is None:
             continue
-        if "pieces" in spec:
-            c = np.array(spec["pieces"])
-            st = np.clip(np.searchsorted(t, xs, side="right") - 1, 0, len(t) - 2)
-            u = xs - t[st]
-            bb = c[st, 0] + u * (c[st, 1] + u * (c[st, 2] + u * c[st, 3]))
-            # left limits at the sites too (a jumping bound)
-            stl = np.clip(np.searchsorted(t, xs, side="left") - 1, 0, len(t) - 2)
-            ul = xs - t[stl]
-            bl = c[stl, 0] + ul * (c[stl, 1] + ul * (c[stl, 2] + ul * c[stl, 3]))
-            room = min(room, float(np.min(-side * (fn - bb))), float(np.min(-side * (fn - bl))))
-        else:
-            room = min(room, float(np.min(-side * (fn - bound_at(spec, t, xs)))))
+        # both limits at the sites (a bound that jumps there)
+        for at in ("right", "left"):
+            room = min(room, float(np.min(-side * (fn - bound_at(spec, t, xs, at)))))
     if room > 1e-6 * vrange and abs(e - en) > 1e-9 * en + floor:
         flags.append(f"inside-spline energy {e:.12e} vs scipy {en:.12e}")
     return flags
