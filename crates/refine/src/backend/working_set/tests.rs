@@ -8,7 +8,7 @@ use proptest::prelude::*;
 
 use super::super::condensed::{Face, PointSet};
 use super::super::round_polish::POLISH_ROUNDS;
-use super::{solve, solve_from, Setting, WorkingSetOptions};
+use super::{solve, solve_from, turns_past_radii, Setting, WorkingSetOptions};
 use crate::certify::{certify, Certificate};
 use crate::conic_problem::{ConicProblem, ConvexSet};
 use crate::fast::{interpolate_condensed as interpolate, Condensation};
@@ -423,6 +423,103 @@ fn how_w_grows_changes_the_path_not_the_optimum() {
         iterations.iter().any(|&i| i != iterations[0]),
         "every setting took the same path: {iterations:?}"
     );
+}
+
+/// The turn forecast on points placed by hand: q_2 = (2, 1) sits 1 above the chord from (1, 0)
+/// to (3, 0); q_1 = (1, 0) sits 1/√5 from the chord from (0, 0) to (2, 1), and so does q_3; the
+/// ends of an open curve have no chord. A point past the end of its chord is measured from that
+/// end, not from the chord's line. A polytope leaves the forecast to the rounds.
+#[test]
+fn turns_past_radii_measures_from_the_neighbours_chord() {
+    let q = Points::new(2, vec![0., 0., 1., 0., 2., 1., 3., 0., 4., 0.]).unwrap();
+    let balls = |r: f64| vec![Some(PointSet::Ball(r)); 5];
+    let f = |r: f64| turns_past_radii(&q, &balls(r), false).unwrap();
+    assert_eq!(f(0.4), 1.0, "1 and 1/√5 ≈ 0.447 both exceed 0.4");
+    assert_eq!(f(0.5), 1.0 / 3.0, "only q_2 turns by more than 0.5");
+    assert_eq!(f(1.0 / 5f64.sqrt() - 1e-12), 1.0);
+    assert_eq!(f(1.0 / 5f64.sqrt() + 1e-12), 1.0 / 3.0);
+    assert_eq!(f(1.0), 0.0, "a turn of exactly the radius is not past it");
+    // Interpolated points are not counted. Closed, the ends count too: (0, 0) lies beyond the
+    // end (1, 0) of the chord from (4, 0), 1 from it, and (4, 0) beyond the end (3, 0) of the
+    // chord to (0, 0): with q_2, three of five turn by more than 0.5.
+    let mut sets = balls(0.5);
+    sets[2] = Some(PointSet::Fixed);
+    assert_eq!(turns_past_radii(&q, &sets, false), Some(0.0));
+    assert_eq!(turns_past_radii(&q, &balls(0.5), true), Some(3.0 / 5.0));
+    // (2, 0) between (0, 0) and (1, 0) lies beyond its chord's end, 1 from it.
+    let back = Points::new(2, vec![0., 0., 2., 0., 1., 0.]).unwrap();
+    let b3 = vec![Some(PointSet::Ball(0.9)); 3];
+    assert_eq!(turns_past_radii(&back, &b3, false), Some(1.0));
+    let face = Face {
+        normal: vec![0.0, 1.0],
+        offset: 1.0,
+        norm: 1.0,
+    };
+    let mut mixed = balls(0.5);
+    mixed[1] = Some(PointSet::Faces(vec![face]));
+    assert_eq!(turns_past_radii(&q, &mixed, false), None);
+}
+
+/// On data whose balls are mostly active (the noisy star, radii 0.2–0.7 of the spacing: 89 %
+/// turn past their radii), `solve` starts with every ball and takes one round: the iterations of
+/// a single round on all, not of the rounds from every 64th (the turn test switched off), and the
+/// same optimum as the rounds (energy to 1e-9 relative, both certified).
+#[test]
+fn data_turning_past_their_balls_start_with_every_ball() {
+    let (n, m, d) = (600, 4, 2);
+    let mut uniform = crate::par::uniform_stream(0x2545_F491_4F6C_DD1D);
+    let mut y = Vec::with_capacity(n * d);
+    for i in 0..n {
+        let a = std::f64::consts::TAU * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
+        let r = 1.0 + 0.35 * (i % 2) as f64 + 0.05 * (uniform() - 0.5);
+        y.extend([r * a.cos(), r * a.sin()]);
+    }
+    let q = Points::new(d, y).unwrap();
+    let u =
+        divdiff::parametrize(&q, Topology::Closed, divdiff::Parametrization::Centripetal).unwrap();
+    let kn = crate::algorithm::split_knots(&u, m - 1).unwrap();
+    let spacing = (0..n)
+        .map(|i| super::dot_dist(q.point(i), q.point((i + 1) % n)))
+        .sum::<f64>()
+        / n as f64;
+    let radii: Vec<f64> = (0..n).map(|_| (0.2 + 0.5 * uniform()) * spacing).collect();
+    let c = Constraint::Balls(radii.clone());
+    let sets = ball_sets(&radii);
+    let turning = turns_past_radii(&q, &sets, true).unwrap();
+    assert!(turning > 0.5, "the star turns past most balls: {turning}");
+    let stencil = Stencil::new(&kn);
+    let setting = Setting {
+        knots: &kn,
+        stencil: &stencil,
+        q: &q,
+        sets: &sets,
+        stride: m,
+        conic: &conic::Options::default(),
+    };
+    let solved = |options: &WorkingSetOptions| {
+        let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(&kn, &q, m, &c, p, mult);
+        let sol = solve(&setting, options, None, &mut judge, EXACT, EXACT, None).unwrap();
+        assert!(sol.certificate.kkt_residual <= EXACT);
+        (sol.certificate.energy, sol.iterations)
+    };
+    let (e, it) = solved(&WorkingSetOptions::default());
+    let (e_rounds, it_rounds) = solved(&WorkingSetOptions {
+        turn_start: 2.0,
+        ..WorkingSetOptions::default()
+    });
+    let (_, _, it_all) = run_with(
+        &kn,
+        &q,
+        &sets,
+        &c,
+        m,
+        1,
+        None,
+        &WorkingSetOptions::default(),
+    );
+    assert_eq!(it, it_all, "one round on every ball");
+    assert_ne!(it, it_rounds, "the rounds take another path");
+    assert!((e - e_rounds).abs() <= 1e-9 * e_rounds, "{e} vs {e_rounds}");
 }
 
 proptest! {
