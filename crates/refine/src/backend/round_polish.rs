@@ -272,20 +272,7 @@ impl ActivePolish<'_, '_> {
                 violated.is_empty() && judge(p)
             };
             // The certificate: W's multipliers, 0 on the points left out.
-            let mut certify_sub = |p: &Points, m: &[Vec<f64>]| {
-                let mut wm: Vec<Vec<f64>> = wsets
-                    .iter()
-                    .map(|set| match set {
-                        PointSet::Fixed => vec![0.0; d],
-                        PointSet::Ball(_) => vec![0.0],
-                        PointSet::Faces(f) => vec![0.0; f.len()],
-                    })
-                    .collect();
-                for (mm, &j) in m.iter().zip(&pos) {
-                    wm[j].clone_from(mm);
-                }
-                certify(p, &wm)
-            };
+            let mut certify_sub = |p: &Points, m: &[Vec<f64>]| certify(p, &on_w(m, &pos, wsets, d));
             let mut left = None;
             let polished = polish_rounds(
                 &mut sub,
@@ -301,7 +288,14 @@ impl ActivePolish<'_, '_> {
                 Some(&mut left),
             )?;
             if polished.is_some() || violated.is_empty() || attempt == SUBSET_ATTEMPTS {
-                return Ok(polished);
+                // The multipliers returned are W's, as on W's own backend: a knot update's warm
+                // start reads one per data point (`working_set::polish_from_warm`).
+                return Ok(polished.map(|mut p| {
+                    if let Some(b) = p.best.as_mut() {
+                        b.multipliers = on_w(&b.multipliers, &pos, wsets, d);
+                    }
+                    p
+                }));
             }
             // The next start: the polished point, and the violated points where its curve put
             // them (outside their balls: the polish takes them as active, with multiplier 0).
@@ -331,6 +325,23 @@ impl ActivePolish<'_, '_> {
         }
         Ok(None)
     }
+}
+
+/// The multipliers `m` of the points of W at positions `pos` (a subset's), spread over all of
+/// W: 0 (of each set's shape) on the points left out.
+fn on_w(m: &[Vec<f64>], pos: &[usize], wsets: &[PointSet], d: usize) -> Vec<Vec<f64>> {
+    let mut wm: Vec<Vec<f64>> = wsets
+        .iter()
+        .map(|set| match set {
+            PointSet::Fixed => vec![0.0; d],
+            PointSet::Ball(_) => vec![0.0],
+            PointSet::Faces(f) => vec![0.0; f.len()],
+        })
+        .collect();
+    for (mm, &j) in m.iter().zip(pos) {
+        wm[j].clone_from(mm);
+    }
+    wm
 }
 
 /// A variable's part of a start: its x, s and z.

@@ -619,3 +619,86 @@ fn a_warm_polish_finds_the_cold_answer_on_moved_knots() {
     let active = first.multipliers.iter().filter(|w| w[0] > 0.0).count();
     assert!(active > 5, "{active} balls active: a test of nothing");
 }
+
+/// Knot updates in a row: a warm polish that ran on the active points alone (a fifth or more of
+/// the balls inactive, `ActivePolish`) returns one multiplier per data point, as the next
+/// update's warm start reads them — it returned the subset's, so the next update's warm start
+/// was refused and the method ran cold (the wavy circle of `cargo xtask bench conic`, n = 10⁴,
+/// three updates: 126 iterations where 68 do). Each warm answer is the cold one on its knots.
+#[test]
+fn a_warm_polish_on_the_active_points_starts_the_next_update() {
+    let (n, m) = (80, 4);
+    let q = Points::new(
+        2,
+        (0..n)
+            .flat_map(|i| {
+                let t =
+                    std::f64::consts::TAU * (i as f64 + 0.3 * (i as f64 * 1.7).sin()) / n as f64;
+                let r = 1.0 + 0.3 * (5.0 * t).sin() + 0.03 * (i as f64 * 2.3).cos();
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect(),
+    )
+    .unwrap();
+    let spacing = std::f64::consts::TAU / n as f64;
+    let radii: Vec<f64> = (0..n)
+        .map(|i| spacing * (0.2 + 0.5 * (0.5 + 0.5 * (i as f64 * 0.9).sin())))
+        .collect();
+    let sets = ball_sets(&radii);
+    let constraint = Constraint::Balls(radii.clone());
+    let knots = |wobble: f64| {
+        let mut t = vec![0.0];
+        for j in 0..n * m {
+            let h = (1.0 + 0.2 * ((j / m) as f64 * 0.7).cos()) / m as f64;
+            t.push(t[j] + h * (1.0 + wobble * (j as f64 * 0.37).sin()));
+        }
+        Knots::new(Topology::Closed, t).unwrap()
+    };
+    let solve_on = |kn: &Knots, warm: Option<(&Points, &[Vec<f64>])>| {
+        let stencil = Stencil::new(kn);
+        let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, &q, m, &constraint, p, mult);
+        let setting = Setting {
+            knots: kn,
+            stencil: &stencil,
+            q: &q,
+            sets: &sets,
+            stride: m,
+            conic: &conic::Options::default(),
+        };
+        solve(
+            &setting,
+            &WorkingSetOptions::default(),
+            warm,
+            &mut judge,
+            1e-11,
+            EXACT,
+            None,
+        )
+        .unwrap()
+    };
+    let first = solve_on(&knots(0.0), None);
+    let active = first.multipliers.iter().filter(|w| w[0] > 0.0).count();
+    assert!(
+        active > 5 && active < n * 4 / 5,
+        "{active} of {n} balls active: the polish would not run on a subset"
+    );
+    let mut prev = first;
+    for wobble in [0.02, 0.03] {
+        let kn = knots(wobble);
+        let warm = solve_on(&kn, Some((&prev.points, &prev.multipliers)));
+        let cold = solve_on(&kn, None);
+        assert_eq!(warm.multipliers.len(), n, "one multiplier per data point");
+        assert!(
+            warm.iterations <= POLISH_ROUNDS,
+            "wobble {wobble}: {} iterations, not the warm polish",
+            warm.iterations
+        );
+        assert!(warm.certificate.kkt_residual <= EXACT);
+        let (ec, ew) = (cold.certificate.energy, warm.certificate.energy);
+        assert!(
+            (ec - ew).abs() <= 1e-9 * ec,
+            "energies {ec} (cold) vs {ew} (warm)"
+        );
+        prev = warm;
+    }
+}
