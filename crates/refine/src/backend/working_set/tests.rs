@@ -433,23 +433,33 @@ fn how_w_grows_changes_the_path_not_the_optimum() {
 fn turns_past_radii_measures_from_the_neighbours_chord() {
     let q = Points::new(2, vec![0., 0., 1., 0., 2., 1., 3., 0., 4., 0.]).unwrap();
     let balls = |r: f64| vec![Some(PointSet::Ball(r)); 5];
-    let f = |r: f64| turns_past_radii(&q, &balls(r), false).unwrap();
-    assert_eq!(f(0.4), 1.0, "1 and 1/√5 ≈ 0.447 both exceed 0.4");
-    assert_eq!(f(0.5), 1.0 / 3.0, "only q_2 turns by more than 0.5");
-    assert_eq!(f(1.0 / 5f64.sqrt() - 1e-12), 1.0);
-    assert_eq!(f(1.0 / 5f64.sqrt() + 1e-12), 1.0 / 3.0);
-    assert_eq!(f(1.0), 0.0, "a turn of exactly the radius is not past it");
+    // How many of `of` balls turn past their radii (the fraction is a count over `of`).
+    let past = |q: &Points, sets: &[Option<PointSet>], closed: bool, of: usize| {
+        let f = turns_past_radii(q, sets, closed).unwrap();
+        let count = (f * of as f64).round();
+        assert!(
+            (f * of as f64 - count).abs() < 1e-12,
+            "{f} is not a count of {of}"
+        );
+        count as usize
+    };
+    let open = |r: f64| past(&q, &balls(r), false, 3);
+    assert_eq!(open(0.4), 3, "1 and 1/√5 ≈ 0.447 both exceed 0.4");
+    assert_eq!(open(0.5), 1, "only q_2 turns by more than 0.5");
+    assert_eq!(open(1.0 / 5f64.sqrt() - 1e-12), 3);
+    assert_eq!(open(1.0 / 5f64.sqrt() + 1e-12), 1);
+    assert_eq!(open(1.0), 0, "a turn of exactly the radius is not past it");
     // Interpolated points are not counted. Closed, the ends count too: (0, 0) lies beyond the
     // end (1, 0) of the chord from (4, 0), 1 from it, and (4, 0) beyond the end (3, 0) of the
     // chord to (0, 0): with q_2, three of five turn by more than 0.5.
     let mut sets = balls(0.5);
     sets[2] = Some(PointSet::Fixed);
-    assert_eq!(turns_past_radii(&q, &sets, false), Some(0.0));
-    assert_eq!(turns_past_radii(&q, &balls(0.5), true), Some(3.0 / 5.0));
+    assert_eq!(past(&q, &sets, false, 2), 0);
+    assert_eq!(past(&q, &balls(0.5), true, 5), 3);
     // (2, 0) between (0, 0) and (1, 0) lies beyond its chord's end, 1 from it.
     let back = Points::new(2, vec![0., 0., 2., 0., 1., 0.]).unwrap();
     let b3 = vec![Some(PointSet::Ball(0.9)); 3];
-    assert_eq!(turns_past_radii(&back, &b3, false), Some(1.0));
+    assert_eq!(past(&back, &b3, false, 1), 1);
     let face = Face {
         normal: vec![0.0, 1.0],
         offset: 1.0,
