@@ -20,13 +20,13 @@
 //! curve and every [`WorkingSetOptions::start_step`]-th constraint (and, in Algorithm 4.1, the
 //! constraints active in the previous knot iteration) — or, when the data of a problem of balls
 //! turn more than their balls can straighten at many points ([`WorkingSetOptions::turn_start`],
-//! a sign that most balls end active), with every constraint in a single round. A round is judged as soon as its residual
-//! reaches [`WorkingSetOptions::round_tolerance`] (the method is stopped there and resumed from
-//! the same iterate if the round is accepted), and judged again at its end. An accepted round on
-//! a dense W ([`WorkingSetOptions::early_polish`]) is polished right at the round tolerance
-//! (Newton's method on the active set, on W's condensation or, when a fifth of W or more is
-//! inactive, on a condensation onto its active points), and the method resumes only when that
-//! polish does not get the caller's certificate to its aim. Each round's
+//! a sign that most balls end active), with every constraint in a single round. A round is
+//! judged as soon as its residual reaches [`WorkingSetOptions::round_tolerance`] (the method is
+//! stopped there and resumed from the same iterate if the round is accepted), and judged again
+//! at its end. An accepted round on a dense W ([`WorkingSetOptions::early_polish`]) is polished
+//! right at the round tolerance (Newton's method on the active set, on W's condensation or, when
+//! a fifth of W or more is inactive, on a condensation onto its active points), and the method
+//! resumes only when that polish does not get the caller's certificate to its aim. Each round's
 //! condensation reuses the spans of the previous one that no new point splits. The multipliers
 //! of the constraints outside W are 0.
 
@@ -108,7 +108,7 @@ pub struct WorkingSetOptions {
     /// radius (default 0.15; [`turns_past_radii`]): there the data turn more than the ball
     /// lets the curve straighten, and the energy presses the curve against it. Measured at
     /// n = 10⁴, closed unless said, k = 3, in process, rounds against one round on all: the
-    /// Python bench's noisy star (radii 0.2–0.7 of the mean spacing; 100 % of the balls turn past
+    /// Python bench's noisy star (radii 0.2–0.7 of the mean spacing; 98 % of the balls turn past
     /// their radii, 83 % end active) 54.5 → 48.2 ms, open 61.2 → 54.0, radii × 0.5 39.5 → 33.8,
     /// × 2 (52 % turn past, 17 % active) 59.6 → 48.2; a random walk with unit steps and radius 1
     /// (20 %, 43 % active) 78.6 → 56.6, radius 0.3 (73 %, 87 %) 48.4 → 46.7. Below it, where one

@@ -470,8 +470,8 @@ fn turns_past_radii_measures_from_the_neighbours_chord() {
     assert_eq!(turns_past_radii(&q, &mixed, false), None);
 }
 
-/// On data whose balls are mostly active (the noisy star, radii 0.2–0.7 of the spacing: 89 %
-/// turn past their radii), `solve` starts with every ball and takes one round: the iterations of
+/// On data whose balls are mostly active (the noisy star, radii 0.2–0.7 of the spacing, most of
+/// them turning past their radii), `solve` starts with every ball and takes one round: the iterations of
 /// a single round on all, not of the rounds from every 64th (the turn test switched off), and the
 /// same optimum as the rounds (energy to 1e-9 relative, both certified).
 #[test]
