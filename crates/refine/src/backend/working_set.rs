@@ -104,9 +104,10 @@ pub struct WorkingSetOptions {
     /// O(N).
     pub early_polish: f64,
     /// W starts with every constraint (one round) when more than this fraction of the balls
-    /// have their data point farther from the chord between its two neighbours than the ball's
-    /// radius (default 0.15; [`turns_past_radii`]): there the data turn more than the ball
-    /// lets the curve straighten, and the energy presses the curve against it. Measured at
+    /// have their data point farther from the segment between its two neighbours than the
+    /// ball's radius (default 0.15; a first solve of balls alone, not after a knot update):
+    /// there the data turn more than the ball lets the curve straighten, and the energy presses
+    /// the curve against it. Measured at
     /// n = 10⁴, closed unless said, k = 3, in process, rounds against one round on all: the
     /// Python bench's noisy star (radii 0.2–0.7 of the mean spacing; 98 % of the balls turn past
     /// their radii, 83 % end active) 54.5 → 48.2 ms, open 61.2 → 54.0, radii × 0.5 39.5 → 33.8,
