@@ -166,6 +166,13 @@ pub struct PolishOptions {
     /// a sweep of wedge problems each certified some the other refused (refine's full-vertex
     /// route polishes this way first and with fixed normals as its last attempt).
     pub fixed_normals: bool,
+    /// The polish gives up (returns no point) when its first Newton step, before any change of
+    /// the active set, leaves the certificate's relative residual above this (default `None`:
+    /// never). From a start near the optimum with the right active set, that step lands in
+    /// Newton's quadratic regime; a residual of 1e-2 after it says the start is far off, and the
+    /// steps and active-set changes that follow cost more than a fresh solve (refine's warm
+    /// starts after a knot update set it).
+    pub abandon_first: Option<f64>,
 }
 
 impl Default for PolishOptions {
@@ -182,6 +189,7 @@ impl Default for PolishOptions {
             skip_below: 1e-13,
             apex: false,
             fixed_normals: true,
+            abandon_first: None,
         }
     }
 }

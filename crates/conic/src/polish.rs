@@ -652,6 +652,15 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             .iter()
             .fold(0.0f64, |a, c| a.max(c.abs() / length));
         let (cert, s_out, objective) = certify(kkt, &x, &z, floors);
+        if taken == 1 && changes == 0 {
+            // (NaN gives up too.)
+            if po
+                .abandon_first
+                .is_some_and(|limit| cert.total > limit || cert.total.is_nan())
+            {
+                return None;
+            }
+        }
         let done = cert.total <= opts.tolerance && settled(&cert, opts.tolerance);
         let hopeless = inactive_violation > opts.tolerance
             && inactive_violation > po.abandon_ratio * cert.stationarity.max(active_violation);

@@ -317,7 +317,8 @@ pub(crate) fn turns_past_radii(q: &Points, sets: &[Option<PointSet>], closed: bo
 /// the active set read off its complementary s and z, with active-set changes) and returned when
 /// `certify` accepts it (≤ `accept`) — a few banded factorizations instead of an interior-point
 /// solve from the centre. Anything else (a polytope, a point without a set, a polish that does
-/// not get there) returns `None` and the method runs as usual.
+/// not get there, or whose first Newton step leaves its residual above [`WARM_ABANDON`]) returns
+/// `None` and the method runs as usual.
 fn polish_from_warm<C>(
     &Setting {
         knots,
@@ -371,6 +372,10 @@ fn polish_from_warm<C>(
     // runs on the points active in the previous answer when a fifth or more are not
     // (`ActivePolish`: a condensation onto them, joined by any point its curve leaves).
     let qw = q.coords().to_vec();
+    let mut opts = conic_opts.clone();
+    if let Some(po) = opts.polish.as_mut() {
+        po.abandon_first = Some(WARM_ABANDON);
+    }
     let polished = ActivePolish {
         be: &mut be,
         cond: &cond,
@@ -379,7 +384,7 @@ fn polish_from_warm<C>(
         qw: &qw,
         wsets: &wsets,
         d,
-        conic_opts,
+        conic_opts: &opts,
         margin: WorkingSetOptions::default().margin,
         target: accept,
     }
@@ -398,6 +403,16 @@ fn polish_from_warm<C>(
         _ => None,
     })
 }
+
+/// A knot update's warm polish gives up when its first Newton step leaves the method's relative
+/// residual above this ([`conic::PolishOptions::abandon_first`]): the start is too far off for
+/// Newton's quadratic regime, and the cold solve is cheaper than the steps and active-set changes
+/// it would take. Measured on fifteen data sets at n = 10⁴, k = 3, three updates each
+/// (ROBUSTNESS.md item 26): of the ten warm polishes that failed after 35–112 ms, seven had a
+/// first step above 1e-2 (1.2e-2 … 3.3e-2), the other three 1.3e-4 … 9.5e-3; of the 35 that
+/// succeeded, four had (1.3e-2 … 3.1e-2), three of them slower than a cold solve (52–97 ms
+/// against 44–52) and one faster (16 against 47 ms); the rest 1.6e-6 … 6.4e-3.
+const WARM_ABANDON: f64 = 1e-2;
 
 /// [`solve`] with W started from every `step`-th constraint (1: all, a single round) and the
 /// ones marked in `start`.
