@@ -3,8 +3,9 @@
 
 use conic::{Cone, Cones, DenseProblem, Options, PolishOptions};
 
-/// minimize ½|x − c|² s.t. (r, x − o) ∈ Q³ for three balls (x ∈ R², one block each, all
-/// active: c lies outside every ball). A = −[0 0; I] per block, b = (r, −o).
+/// minimize ½|x − c|² s.t. (r, x − o) ∈ Q³ for three balls (x ∈ R², one block each; c lies
+/// outside every ball, so the answer is on the boundary of their intersection).
+/// A = −[0 0; I] per block, b = (r, −o).
 fn balls() -> DenseProblem {
     let centres = [[0.0, 0.0], [0.3, 0.1], [0.1, 0.4]];
     let radii = [1.0, 1.1, 0.9];
