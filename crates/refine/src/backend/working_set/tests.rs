@@ -8,7 +8,7 @@ use proptest::prelude::*;
 
 use super::super::condensed::{Face, PointSet};
 use super::super::round_polish::POLISH_ROUNDS;
-use super::{solve, solve_from, turns_past_radii, Setting, WorkingSetOptions};
+use super::{solve, solve_from, turns_past_radii, Setting, WorkingSetOptions, WorkingSetSolution};
 use crate::certify::{certify, Certificate};
 use crate::conic_problem::{ConicProblem, ConvexSet};
 use crate::fast::{interpolate_condensed as interpolate, Condensation};
@@ -146,6 +146,108 @@ fn ball_sets(radii: &[f64]) -> Vec<Option<PointSet>> {
             })
         })
         .collect()
+}
+
+/// Data points `q` in balls (`sets`, `constraint`), attached every `m` vertices: what the tests
+/// below solve on one set of knots or on several.
+struct Balls {
+    q: Points,
+    m: usize,
+    sets: Vec<Option<PointSet>>,
+    constraint: Constraint,
+}
+
+impl Balls {
+    fn new(q: Points, m: usize, radii: Vec<f64>) -> Self {
+        Balls {
+            q,
+            m,
+            sets: ball_sets(&radii),
+            constraint: Constraint::Balls(radii),
+        }
+    }
+
+    /// [`solve`] on the knots `kn` (from `warm` when given), certified independently
+    /// ([`judged`]) and polished to `target`.
+    fn solve_on(
+        &self,
+        kn: &Knots,
+        options: &WorkingSetOptions,
+        warm: Option<(&Points, &[Vec<f64>])>,
+        target: f64,
+    ) -> WorkingSetSolution<Certificate> {
+        let stencil = Stencil::new(kn);
+        let mut judge =
+            |p: &Points, mult: &[Vec<f64>]| judged(kn, &self.q, self.m, &self.constraint, p, mult);
+        let setting = Setting {
+            knots: kn,
+            stencil: &stencil,
+            q: &self.q,
+            sets: &self.sets,
+            stride: self.m,
+            conic: &conic::Options::default(),
+        };
+        solve(&setting, options, warm, &mut judge, target, EXACT, None).unwrap()
+    }
+}
+
+/// A noisy closed star of 600 points (d = 2: radii alternating 1 and 1.35, jittered angles),
+/// from the stream `seed`, on its centripetal split knots with m = 4, in balls of
+/// (lo + span·u)·spacing (u uniform, the mean spacing).
+fn noisy_star(seed: u64, lo: f64, span: f64) -> (Knots, Balls) {
+    let (n, m, d) = (600, 4, 2);
+    let mut uniform = crate::par::uniform_stream(seed);
+    let mut y = Vec::with_capacity(n * d);
+    for i in 0..n {
+        let a = std::f64::consts::TAU * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
+        let r = 1.0 + 0.35 * (i % 2) as f64 + 0.05 * (uniform() - 0.5);
+        y.extend([r * a.cos(), r * a.sin()]);
+    }
+    let q = Points::new(d, y).unwrap();
+    let u =
+        divdiff::parametrize(&q, Topology::Closed, divdiff::Parametrization::Centripetal).unwrap();
+    let kn = crate::algorithm::split_knots(&u, m - 1).unwrap();
+    let spacing = (0..n)
+        .map(|i| super::dot_dist(q.point(i), q.point((i + 1) % n)))
+        .sum::<f64>()
+        / n as f64;
+    let radii: Vec<f64> = (0..n).map(|_| (lo + span * uniform()) * spacing).collect();
+    (kn, Balls::new(q, m, radii))
+}
+
+/// The knot updates' tests' data: n points of a closed curve at the angles
+/// t_i = 2π(i + 0.3 sin 1.7i)/n and radii `radius(i, t_i)`, in balls of 0.2–0.7 of the angular
+/// spacing, every m = 4 vertices.
+fn warm_curve(n: usize, radius: impl Fn(usize, f64) -> f64) -> Balls {
+    let q = Points::new(
+        2,
+        (0..n)
+            .flat_map(|i| {
+                let t =
+                    std::f64::consts::TAU * (i as f64 + 0.3 * (i as f64 * 1.7).sin()) / n as f64;
+                let r = radius(i, t);
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect(),
+    )
+    .unwrap();
+    let spacing = std::f64::consts::TAU / n as f64;
+    let radii: Vec<f64> = (0..n)
+        .map(|i| spacing * (0.2 + 0.5 * (0.5 + 0.5 * (i as f64 * 0.9).sin())))
+        .collect();
+    Balls::new(q, 4, radii)
+}
+
+/// Knots for [`warm_curve`]'s data: sub-spans of uneven data spans, each scaled by up to
+/// ±`wobble` (as a knot iteration moves them).
+fn wobbled_knots(b: &Balls, wobble: f64) -> Knots {
+    let (n, m) = (b.q.len(), b.m);
+    let mut t = vec![0.0];
+    for j in 0..n * m {
+        let h = (1.0 + 0.2 * ((j / m) as f64 * 0.7).cos()) / m as f64;
+        t.push(t[j] + h * (1.0 + wobble * (j as f64 * 0.37).sin()));
+    }
+    Knots::new(Topology::Closed, t).unwrap()
 }
 
 /// The full-vertex optimum of the same problem (the reference backend).
@@ -355,26 +457,15 @@ proptest! {
 /// paths (their iteration counts are not all equal: an option that was ignored would fail).
 #[test]
 fn how_w_grows_changes_the_path_not_the_optimum() {
-    let (n, m, d) = (600, 4, 2);
-    let mut uniform = crate::par::uniform_stream(0x9E37_79B9_7F4A_7C15);
-    let mut y = Vec::with_capacity(n * d);
-    for i in 0..n {
-        let a = std::f64::consts::TAU * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
-        let r = 1.0 + 0.35 * (i % 2) as f64 + 0.05 * (uniform() - 0.5);
-        y.extend([r * a.cos(), r * a.sin()]);
-    }
-    let q = Points::new(d, y).unwrap();
-    let u =
-        divdiff::parametrize(&q, Topology::Closed, divdiff::Parametrization::Centripetal).unwrap();
-    let kn = crate::algorithm::split_knots(&u, m - 1).unwrap();
-    let spacing = (0..n)
-        .map(|i| super::dot_dist(q.point(i), q.point((i + 1) % n)))
-        .sum::<f64>()
-        / n as f64;
-    let radii: Vec<f64> = (0..n).map(|_| (0.3 + 0.7 * uniform()) * spacing).collect();
-    let c = Constraint::Balls(radii.clone());
-    let sets = ball_sets(&radii);
-    let (_, all) = run(&kn, &q, &sets, &c, m, 1, None);
+    let (kn, balls) = noisy_star(0x9E37_79B9_7F4A_7C15, 0.3, 0.7);
+    let Balls {
+        q,
+        m,
+        sets,
+        constraint: c,
+    } = &balls;
+    let (n, m) = (q.len(), *m);
+    let (_, all) = run(&kn, q, sets, c, m, 1, None);
     assert!(all.kkt_residual <= EXACT, "all: kkt {:e}", all.kkt_residual);
     let active = all.active.iter().filter(|&&a| a).count();
     assert!(
@@ -405,7 +496,7 @@ fn how_w_grows_changes_the_path_not_the_optimum() {
     ];
     let mut iterations = Vec::new();
     for (s, options) in settings.iter().enumerate() {
-        let (_, cert, it) = run_with(&kn, &q, &sets, &c, m, 64, None, options);
+        let (_, cert, it) = run_with(&kn, q, sets, c, m, 64, None, options);
         assert!(
             cert.kkt_residual <= EXACT,
             "setting {s}: kkt {:e}",
@@ -476,39 +567,11 @@ fn turns_past_radii_measures_from_the_neighbours_chord() {
 /// same optimum as the rounds (energy to 1e-9 relative, both certified).
 #[test]
 fn data_turning_past_their_balls_start_with_every_ball() {
-    let (n, m, d) = (600, 4, 2);
-    let mut uniform = crate::par::uniform_stream(0x2545_F491_4F6C_DD1D);
-    let mut y = Vec::with_capacity(n * d);
-    for i in 0..n {
-        let a = std::f64::consts::TAU * (i as f64 + 0.8 * uniform() - 0.4) / n as f64;
-        let r = 1.0 + 0.35 * (i % 2) as f64 + 0.05 * (uniform() - 0.5);
-        y.extend([r * a.cos(), r * a.sin()]);
-    }
-    let q = Points::new(d, y).unwrap();
-    let u =
-        divdiff::parametrize(&q, Topology::Closed, divdiff::Parametrization::Centripetal).unwrap();
-    let kn = crate::algorithm::split_knots(&u, m - 1).unwrap();
-    let spacing = (0..n)
-        .map(|i| super::dot_dist(q.point(i), q.point((i + 1) % n)))
-        .sum::<f64>()
-        / n as f64;
-    let radii: Vec<f64> = (0..n).map(|_| (0.2 + 0.5 * uniform()) * spacing).collect();
-    let c = Constraint::Balls(radii.clone());
-    let sets = ball_sets(&radii);
-    let turning = turns_past_radii(&q, &sets, true).unwrap();
+    let (kn, balls) = noisy_star(0x2545_F491_4F6C_DD1D, 0.2, 0.5);
+    let turning = turns_past_radii(&balls.q, &balls.sets, true).unwrap();
     assert!(turning > 0.5, "the star turns past most balls: {turning}");
-    let stencil = Stencil::new(&kn);
-    let setting = Setting {
-        knots: &kn,
-        stencil: &stencil,
-        q: &q,
-        sets: &sets,
-        stride: m,
-        conic: &conic::Options::default(),
-    };
     let solved = |options: &WorkingSetOptions| {
-        let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(&kn, &q, m, &c, p, mult);
-        let sol = solve(&setting, options, None, &mut judge, EXACT, EXACT, None).unwrap();
+        let sol = balls.solve_on(&kn, options, None, EXACT);
         assert!(sol.certificate.kkt_residual <= EXACT);
         (sol.certificate.energy, sol.iterations)
     };
@@ -519,10 +582,10 @@ fn data_turning_past_their_balls_start_with_every_ball() {
     });
     let (_, _, it_all) = run_with(
         &kn,
-        &q,
-        &sets,
-        &c,
-        m,
+        &balls.q,
+        &balls.sets,
+        &balls.constraint,
+        balls.m,
         1,
         None,
         &WorkingSetOptions::default(),
@@ -561,56 +624,13 @@ proptest! {
 /// POLISH_ROUNDS calls, where the interior-point method takes tens of iterations).
 #[test]
 fn a_warm_polish_finds_the_cold_answer_on_moved_knots() {
-    let (n, m) = (60, 4);
-    let q = Points::new(
-        2,
-        (0..n)
-            .flat_map(|i| {
-                let t =
-                    std::f64::consts::TAU * (i as f64 + 0.3 * (i as f64 * 1.7).sin()) / n as f64;
-                let r = 1.0 + 0.3 * (i % 2) as f64 + 0.04 * (i as f64 * 2.3).cos();
-                [r * t.cos(), r * t.sin()]
-            })
-            .collect(),
-    )
-    .unwrap();
-    let spacing = std::f64::consts::TAU / n as f64;
-    let radii: Vec<f64> = (0..n)
-        .map(|i| spacing * (0.2 + 0.5 * (0.5 + 0.5 * (i as f64 * 0.9).sin())))
-        .collect();
-    let sets = ball_sets(&radii);
-    let constraint = Constraint::Balls(radii.clone());
-    let knots = |wobble: f64| {
-        let mut t = vec![0.0];
-        for j in 0..n * m {
-            let h = (1.0 + 0.2 * ((j / m) as f64 * 0.7).cos()) / m as f64;
-            t.push(t[j] + h * (1.0 + wobble * (j as f64 * 0.37).sin()));
-        }
-        Knots::new(Topology::Closed, t).unwrap()
-    };
+    let balls = warm_curve(60, |i, _| {
+        1.0 + 0.3 * (i % 2) as f64 + 0.04 * (i as f64 * 2.3).cos()
+    });
     let solve_on = |kn: &Knots, warm: Option<(&Points, &[Vec<f64>])>| {
-        let stencil = Stencil::new(kn);
-        let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, &q, m, &constraint, p, mult);
-        let setting = Setting {
-            knots: kn,
-            stencil: &stencil,
-            q: &q,
-            sets: &sets,
-            stride: m,
-            conic: &conic::Options::default(),
-        };
-        solve(
-            &setting,
-            &WorkingSetOptions::default(),
-            warm,
-            &mut judge,
-            1e-11,
-            EXACT,
-            None,
-        )
-        .unwrap()
+        balls.solve_on(kn, &WorkingSetOptions::default(), warm, 1e-11)
     };
-    let (a, b) = (knots(0.0), knots(0.04));
+    let (a, b) = (wobbled_knots(&balls, 0.0), wobbled_knots(&balls, 0.04));
     let first = solve_on(&a, None);
     let cold = solve_on(&b, None);
     let warm = solve_on(&b, Some((&first.points, &first.multipliers)));
@@ -637,56 +657,14 @@ fn a_warm_polish_finds_the_cold_answer_on_moved_knots() {
 /// three updates: 126 iterations where 68 do). Each warm answer is the cold one on its knots.
 #[test]
 fn a_warm_polish_on_the_active_points_starts_the_next_update() {
-    let (n, m) = (80, 4);
-    let q = Points::new(
-        2,
-        (0..n)
-            .flat_map(|i| {
-                let t =
-                    std::f64::consts::TAU * (i as f64 + 0.3 * (i as f64 * 1.7).sin()) / n as f64;
-                let r = 1.0 + 0.3 * (5.0 * t).sin() + 0.03 * (i as f64 * 2.3).cos();
-                [r * t.cos(), r * t.sin()]
-            })
-            .collect(),
-    )
-    .unwrap();
-    let spacing = std::f64::consts::TAU / n as f64;
-    let radii: Vec<f64> = (0..n)
-        .map(|i| spacing * (0.2 + 0.5 * (0.5 + 0.5 * (i as f64 * 0.9).sin())))
-        .collect();
-    let sets = ball_sets(&radii);
-    let constraint = Constraint::Balls(radii.clone());
-    let knots = |wobble: f64| {
-        let mut t = vec![0.0];
-        for j in 0..n * m {
-            let h = (1.0 + 0.2 * ((j / m) as f64 * 0.7).cos()) / m as f64;
-            t.push(t[j] + h * (1.0 + wobble * (j as f64 * 0.37).sin()));
-        }
-        Knots::new(Topology::Closed, t).unwrap()
-    };
+    let n = 80;
+    let balls = warm_curve(n, |i, t| {
+        1.0 + 0.3 * (5.0 * t).sin() + 0.03 * (i as f64 * 2.3).cos()
+    });
     let solve_on = |kn: &Knots, warm: Option<(&Points, &[Vec<f64>])>| {
-        let stencil = Stencil::new(kn);
-        let mut judge = |p: &Points, mult: &[Vec<f64>]| judged(kn, &q, m, &constraint, p, mult);
-        let setting = Setting {
-            knots: kn,
-            stencil: &stencil,
-            q: &q,
-            sets: &sets,
-            stride: m,
-            conic: &conic::Options::default(),
-        };
-        solve(
-            &setting,
-            &WorkingSetOptions::default(),
-            warm,
-            &mut judge,
-            1e-11,
-            EXACT,
-            None,
-        )
-        .unwrap()
+        balls.solve_on(kn, &WorkingSetOptions::default(), warm, 1e-11)
     };
-    let first = solve_on(&knots(0.0), None);
+    let first = solve_on(&wobbled_knots(&balls, 0.0), None);
     let active = first.multipliers.iter().filter(|w| w[0] > 0.0).count();
     assert!(
         active > 5 && active < n * 4 / 5,
@@ -694,7 +672,7 @@ fn a_warm_polish_on_the_active_points_starts_the_next_update() {
     );
     let mut prev = first;
     for wobble in [0.02, 0.03] {
-        let kn = knots(wobble);
+        let kn = wobbled_knots(&balls, wobble);
         let warm = solve_on(&kn, Some((&prev.points, &prev.multipliers)));
         let cold = solve_on(&kn, None);
         assert_eq!(warm.multipliers.len(), n, "one multiplier per data point");
