@@ -18,13 +18,9 @@ fn scale(p: &Problem) -> f64 {
 /// Every independent check of an answer; returns whether Clarabel could be compared.
 fn check(p: &Problem, s: &Solution, clarabel: bool) -> Result<bool, TestCaseError> {
     let v = scale(p);
-    let viol = strip_testkit::strip_violation(p, s);
-    prop_assert!(
-        viol.by <= 1e-9 * v,
-        "strip left by {:e} at {}",
-        viol.by,
-        viol.at
-    );
+    strip_testkit::strip_violation(p, s)
+        .at_most(1e-9 * v)
+        .map_err(TestCaseError::fail)?;
     let interp = strip_testkit::interpolation_error(p, s);
     prop_assert!(interp <= 1e-12 * v, "interpolation {interp:e}");
     let c2 = strip_testkit::c2_jump(s);

@@ -19,6 +19,18 @@ pub struct Violation {
     pub upper: bool,
 }
 
+impl Violation {
+    /// `Ok` when the strip is left by at most `tol` (NaN is not), else the message the tests
+    /// report: by how much and where.
+    pub fn at_most(&self, tol: f64) -> Result<(), String> {
+        if self.by <= tol {
+            Ok(())
+        } else {
+            Err(format!("strip left by {:e} at {}", self.by, self.at))
+        }
+    }
+}
+
 /// Taylor coefficients at s of the cubic c (in its own variable).
 fn taylor(c: &[f64; 4], s: f64) -> [f64; 4] {
     [
