@@ -1,0 +1,223 @@
+//! Interpolation and smoothing with clamped ends (Kersey §3.6) are a quadratic with linear
+//! equality constraints: the bordered solve (`refine::linear::clamped`, the exact solver's second
+//! entry) against an independent dense KKT solve of the same program (nalgebra's LU of
+//! [H + W  Cᵀ; C  0], C the interpolation rows and the two end stencils), and the size limit of
+//! the general interior-point method no longer applies to them.
+
+use divdiff::{DerivativeRule, Points, Topology};
+use nalgebra::{DMatrix, DVector};
+use refine::{Boundary, Constraint, Error, Problem, Refinement};
+
+/// Open, jittered, unequally spaced data in d dimensions (d = 1, 2, 3), n points.
+fn data(n: usize, d: usize, seed: u64) -> Points {
+    let mut s = seed;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64)
+    };
+    let mut a = 0.0;
+    let mut rows = Vec::with_capacity(n * d);
+    for _ in 0..n {
+        a += 0.2 + 1.3 * rnd();
+        let r = 1.0 + 0.3 * (rnd() - 0.5);
+        let p = [
+            r * a.cos(),
+            r * a.sin(),
+            0.4 * (2.0 * a).sin() + 0.1 * rnd(),
+        ];
+        rows.extend_from_slice(&p[..d]);
+    }
+    Points::new(d, rows).unwrap()
+}
+
+/// The minimizer of ½pᵀ(H ⊗ I)p + ½Σ w_i|p_{v_i} − q_i|² (interpolation when `weights` is
+/// `None`: p_{v_i} = q_i) subject to L_s p = start, L_e p = end, by a dense KKT solve per
+/// coordinate, on the knots and data vertices the library chose.
+fn dense_kkt(
+    r: &Refinement,
+    q: &Points,
+    weights: Option<&[f64]>,
+    rule: DerivativeRule,
+    start: &[f64],
+    end: &[f64],
+) -> Vec<f64> {
+    let (nv, d) = (r.points.len(), q.dim());
+    let h = energy::Hessian::new(&r.knots).to_dense();
+    let stencils = [0, nv - 1].map(|v| divdiff::derivative_stencil(&r.knots, v, rule).unwrap());
+    let fixed = if weights.is_none() { q.len() } else { 0 };
+    let m = fixed + 2;
+    let mut out = vec![0.0; nv * d];
+    for c in 0..d {
+        let mut k = DMatrix::zeros(nv + m, nv + m);
+        let mut b = DVector::zeros(nv + m);
+        k.view_mut((0, 0), (nv, nv)).copy_from(&h);
+        if let Some(w) = weights {
+            for (i, &v) in r.data_vertex.iter().enumerate() {
+                k[(v, v)] += w[i];
+                b[v] = w[i] * q.point(i)[c];
+            }
+        }
+        let mut row = nv;
+        if weights.is_none() {
+            for (i, &v) in r.data_vertex.iter().enumerate() {
+                k[(row, v)] = 1.0;
+                k[(v, row)] = 1.0;
+                b[row] = q.point(i)[c];
+                row += 1;
+            }
+        }
+        for (st, target) in stencils.iter().zip([start, end]) {
+            for &(u, coef) in st {
+                k[(row, u)] += coef;
+                k[(u, row)] += coef;
+            }
+            b[row] = target[c];
+            row += 1;
+        }
+        let x = k.lu().solve(&b).expect("the KKT matrix is nonsingular");
+        for v in 0..nv {
+            out[v * d + c] = x[v];
+        }
+    }
+    out
+}
+
+fn extent(q: &Points) -> f64 {
+    let c = q.coords();
+    let (lo, hi) = c
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    hi - lo
+}
+
+/// Every d, k, derivative rule, interpolation and smoothing: the library's answer is the dense
+/// KKT solution to 1e-9 of the data's extent, certified, with the prescribed end derivatives.
+#[test]
+fn clamped_ends_match_a_dense_kkt_solve() {
+    let (start3, end3) = ([0.7, -1.2, 0.3], [-0.4, 0.9, 1.1]);
+    let mut cases = 0;
+    for d in 1..=3 {
+        for k in 1..=3 {
+            for rule in [DerivativeRule::Bessel, DerivativeRule::Average] {
+                for smoothing in [false, true] {
+                    let n = 7;
+                    let q = data(n, d, (d * 100 + k * 10) as u64 + u64::from(smoothing));
+                    let weights: Vec<f64> =
+                        (0..n).map(|i| 0.5 * 10f64.powi(i as i32 % 4)).collect();
+                    let (start, end) = (&start3[..d], &end3[..d]);
+                    let mut p = Problem::new(q.clone())
+                        .with_topology(Topology::Open)
+                        .with_k(k)
+                        .with_knot_iterations(0)
+                        .with_derivative(rule)
+                        .with_boundary(Boundary::Clamped {
+                            start: start.to_vec(),
+                            end: end.to_vec(),
+                        });
+                    if smoothing {
+                        p = p.with_constraint(Constraint::Smoothing(weights.clone()));
+                    }
+                    let r = p.solve().unwrap();
+                    let what = format!("d {d} k {k} {rule:?} smoothing {smoothing}");
+                    assert!(r.kkt_residual <= 1e-9, "{what}: kkt {}", r.kkt_residual);
+                    // One linear solve, accepted: not the interior-point method after it.
+                    assert_eq!(r.iterations.solver, 1, "{what}");
+                    let want =
+                        dense_kkt(&r, &q, smoothing.then_some(&weights[..]), rule, start, end);
+                    let dist = r
+                        .points
+                        .coords()
+                        .iter()
+                        .zip(&want)
+                        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+                    assert!(
+                        dist <= 1e-9 * extent(&q),
+                        "{what}: {dist:e} from the dense solve"
+                    );
+                    let last = r.points.len() - 1;
+                    for (v, target) in [(0, start), (last, end)] {
+                        let st = divdiff::derivative_stencil(&r.knots, v, rule).unwrap();
+                        for (c, &t) in target.iter().enumerate() {
+                            let df: f64 = st.iter().map(|&(u, w)| w * r.points.point(u)[c]).sum();
+                            assert!(
+                                (df - t).abs() <= 1e-9 * (1.0 + t.abs()),
+                                "{what}: {df} vs {t}"
+                            );
+                        }
+                    }
+                    cases += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(cases, 36);
+}
+
+/// The knot updates of Algorithm 4.1 keep the ends clamped: each update solves the same
+/// program on new knots (the default three).
+#[test]
+fn knot_updates_keep_the_ends_clamped() {
+    let q = data(40, 2, 7);
+    let (start, end) = (vec![0.0, 2.0], vec![-1.5, 0.5]);
+    let r = Problem::new(q.clone())
+        .with_topology(Topology::Open)
+        .with_boundary(Boundary::Clamped {
+            start: start.clone(),
+            end: end.clone(),
+        })
+        .solve()
+        .unwrap();
+    assert_eq!(r.iterations.knot_updates, 3);
+    assert_eq!(
+        r.iterations.solver, 4,
+        "one linear solve per knot iteration"
+    );
+    assert!(r.kkt_residual <= 1e-9, "kkt {}", r.kkt_residual);
+    let want = dense_kkt(&r, &q, None, DerivativeRule::Bessel, &start, &end);
+    let dist = r
+        .points
+        .coords()
+        .iter()
+        .zip(&want)
+        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    assert!(
+        dist <= 1e-9 * extent(&q),
+        "{dist:e} from the dense solve on the final knots"
+    );
+}
+
+/// Beyond the general interior-point method's size limit (`MAX_CONIC_COORDS` refined
+/// coordinates), clamped interpolation is solved, and a problem that needs the interior-point
+/// method (clamped ends with balls) is still refused up front.
+#[test]
+fn clamped_interpolation_is_not_held_to_the_interior_point_limit() {
+    let n = 2_000;
+    let k = refine::MAX_CONIC_COORDS / (2 * (n - 1)) + 1;
+    let q = data(n, 2, 11);
+    let clamped = Boundary::Clamped {
+        start: vec![1.0, 0.0],
+        end: vec![0.0, 1.0],
+    };
+    let p = Problem::new(q.clone())
+        .with_topology(Topology::Open)
+        .with_k(k)
+        .with_knot_iterations(0)
+        .with_boundary(clamped.clone());
+    let r = p.solve().unwrap();
+    assert!(r.points.len() * 2 > refine::MAX_CONIC_COORDS);
+    assert!(r.kkt_residual <= 1e-9, "kkt {}", r.kkt_residual);
+    let balls = Problem::new(q)
+        .with_topology(Topology::Open)
+        .with_k(k)
+        .with_knot_iterations(0)
+        .with_boundary(clamped)
+        .with_constraint(Constraint::Balls(vec![0.01; n]));
+    assert!(matches!(
+        balls.solve(),
+        Err(Error::TooLarge { field: "k", .. })
+    ));
+}
