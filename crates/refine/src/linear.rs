@@ -26,11 +26,134 @@ pub(crate) fn stiff_weight(h: &Hessian) -> f64 {
 }
 
 /// Interpolation at the data vertices whose `fixed` flag is set, plus weights `w` (0 = none) at
-/// the others: (H + W)p = W q̃ with p_v = q_i at fixed data vertices (3.3), (3.5), (3.6).
+/// the others: (H + W)p = W q̃ with p_v = q_i at fixed data vertices (3.3), (3.5), (3.6). One
+/// banded solve and iterative refinement ([`Factored::refine`]).
 pub(crate) fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result<Points, Error> {
-    let (sys, mut rhs, _) = assemble(fp, fixed, w)?;
-    sys.factor()?.solve_flat(&mut rhs)?;
-    Ok(Points::new(fp.q.dim(), rhs)?)
+    let (sys, mut x) = Factored::new(fp, fixed, w)?;
+    let d = fp.q.dim();
+    sys.refine(
+        &mut x,
+        d,
+        |_| {},
+        |_, r| sys.factor.solve_flat(r).map_err(Error::from),
+    )?;
+    Ok(Points::new(d, x)?)
+}
+
+/// Refinement steps after a banded solve of [`Factored`], each while the residual falls by
+/// half (2).
+const REFINEMENT_STEPS: usize = 2;
+
+/// K = H ⊗ I_d + W factored, with what its iterative refinement needs: the rows of A
+/// (H = AᵀA), the weight at each vertex, the right-hand side b and the fixed vertices.
+struct Factored {
+    factor: energy::Factor,
+    alphas: Vec<[f64; 3]>,
+    weight: Vec<f64>,
+    b: Vec<f64>,
+    is_fixed: Vec<bool>,
+}
+
+impl Factored {
+    /// Assembles ([`assemble`]) and factors K, and solves K x = b.
+    fn new(
+        fp: &FixedProblem<'_>,
+        fixed: &[bool],
+        w: &[f64],
+    ) -> Result<(Factored, Vec<f64>), Error> {
+        let (sys, b, is_fixed) = assemble(fp, fixed, w)?;
+        let factor = sys.factor()?;
+        drop(sys);
+        let mut x = b.clone();
+        factor.solve_flat(&mut x)?;
+        let mut weight = vec![0.0; fp.knots.vertex_count()];
+        for (i, &v) in fp.data_vertex.iter().enumerate() {
+            if !is_fixed[v] {
+                weight[v] = w[i];
+            }
+        }
+        let sys = Factored {
+            factor,
+            alphas: energy::alphas(fp.knots),
+            weight,
+            b,
+            is_fixed,
+        };
+        Ok((sys, x))
+    }
+
+    /// K p = Aᵀ(Ap) + W p with (Ap)_i = α_{i,1}(p_{i−1} − p_i) + α_{i,3}(p_{i+1} − p_i) (the
+    /// middle coefficient is −α_{i,1} − α_{i,3}): in difference form, whose rounding is relative
+    /// to the differences. The band form Σ_j K_vj p_j cancels terms of size ‖H‖|p| (H
+    /// annihilates constants, and its entries grow as h⁻³ on short spans): on chordal spans
+    /// from 2e-5 to 3e-2 its rounding alone was a residual of 0.1, and refining with it did
+    /// not move the answer.
+    fn apply(&self, p: &[f64], d: usize) -> Vec<f64> {
+        let n = self.alphas.len();
+        let mut out = vec![0.0; n * d];
+        for (i, a) in self.alphas.iter().enumerate() {
+            if a.iter().all(|&x| x == 0.0) {
+                // (an open curve's end rows)
+                continue;
+            }
+            let (l, r) = ((i + n - 1) % n, (i + 1) % n);
+            for k in 0..d {
+                let m = p[i * d + k];
+                let ap = a[0] * (p[l * d + k] - m) + a[2] * (p[r * d + k] - m);
+                out[l * d + k] += a[0] * ap;
+                out[i * d + k] += a[1] * ap;
+                out[r * d + k] += a[2] * ap;
+            }
+        }
+        for ((o, pv), w) in out
+            .chunks_exact_mut(d)
+            .zip(p.chunks_exact(d))
+            .zip(&self.weight)
+        {
+            for (ok, pk) in o.iter_mut().zip(pv) {
+                *ok += w * pk;
+            }
+        }
+        out
+    }
+
+    /// Iterative refinement of x ≈ K⁻¹b, at most [`REFINEMENT_STEPS`] while the residual falls
+    /// by half: r = b − Kx − f at the free vertices (0 at the fixed ones; `forces` adds f to
+    /// Kx), `correct` turns r into the correction (a solve with K, or the bordered system's;
+    /// it also gets x), added to x.
+    fn refine(
+        &self,
+        x: &mut [f64],
+        d: usize,
+        mut forces: impl FnMut(&mut [f64]),
+        mut correct: impl FnMut(&[f64], &mut Vec<f64>) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        let mut last = f64::INFINITY;
+        for _ in 0..REFINEMENT_STEPS {
+            let mut r = self.apply(x, d);
+            forces(&mut r);
+            for ((rv, bv), &fixed) in r
+                .chunks_exact_mut(d)
+                .zip(self.b.chunks_exact(d))
+                .zip(&self.is_fixed)
+            {
+                for (rk, bk) in rv.iter_mut().zip(bv) {
+                    *rk = if fixed { 0.0 } else { bk - *rk };
+                }
+            }
+            let size = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            // (NaN stops too.)
+            if size.is_nan() || size >= 0.5 * last || size == 0.0 {
+                break;
+            }
+            last = size;
+            correct(x, &mut r)?;
+            for (xv, dv) in x.iter_mut().zip(&r) {
+                *xv += dv;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The system of [`linear`]: K = H ⊗ I_d + W with its fixed vertices, the right-hand side
@@ -72,14 +195,18 @@ fn assemble(
 /// [ L   0  ] [ λ ] = [ v ],   L = [L_s; L_e] ⊗ I_d,
 /// ```
 ///
-/// K and b of [`linear`], by one banded factorization of K and three solves: x₀ = K⁻¹b, the two
-/// columns of Y = K⁻¹L̃ᵀ (L̃: L with its fixed vertices' entries zeroed; one column per end,
-/// the same for every coordinate since K is H ⊗ I_d plus a diagonal), the 2 × 2 system
-/// S = L̃Y (positive definite when the two stencils' free parts are independent), then, per
-/// coordinate, λ = S⁻¹(L x₀ − v) and p = x₀ − Yλ. This is the equality-constrained minimizer of
-/// the energy (plus the smoothing term): stationarity Kp + Lᵀλ = b at the free vertices, the
-/// end conditions exact. λ_s, λ_e are the ends' forces (the certificate's derivative terms);
+/// K and b of [`linear`]. With x₀ = K⁻¹b (the answer without end conditions) and the two
+/// columns of Y = K⁻¹L̃ᵀ (L̃: L with its fixed vertices' entries zeroed; one column per end, the
+/// same for every coordinate since K is H ⊗ I_d plus a diagonal), S = L̃Y is 2 × 2 (positive
+/// definite when the two stencils' free parts are independent), and per coordinate
+/// λ = S⁻¹(L x₀ − v), p = x₀ − Yλ: stationarity Kp + Lᵀλ = b at the free vertices, the end
+/// conditions exact. λ_s, λ_e are the ends' forces (the certificate's derivative terms);
 /// interpolation's data multipliers are the reactions −(Hp)_v less those forces.
+///
+/// x₀ and Y come from one factorization of K and three solves ([`whole_curve`]); for
+/// interpolation on at least 4 × [`WINDOW_SPANS`] spans, x₀ is interpolation's own O(N) solve
+/// ([`interpolate`]) and Y's columns are solved on the [`WINDOW_SPANS`] spans at their end
+/// ([`end_windows`]), where they decay to rounding.
 ///
 /// # Errors
 /// [`Error::Unsupported`] when an end's stencil reaches no free vertex or S is singular to
@@ -90,48 +217,24 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
     let n = fp.q.len();
     let d = fp.q.dim();
     let n_vert = fp.knots.vertex_count();
-    let (fixed, w): (Vec<bool>, &[f64]) = match fp.constraint {
-        Constraint::Smoothing(w) => (vec![false; n], w),
-        _ => (vec![true; n], &[]),
-    };
-    let no_weights = vec![0.0; n];
-    let w = if w.is_empty() { &no_weights } else { w };
-    let (sys, rhs, is_fixed) = assemble(fp, &fixed, w)?;
-    let factor = sys.factor()?;
-    let mut x = rhs;
-    factor.solve_flat(&mut x)?;
     let rule = fp.problem.derivative;
-    let stencils = [0, n_vert - 1].map(|v| divdiff::derivative_stencil(fp.knots, v, rule));
-    let [ls, le] = stencils;
+    let [ls, le] = [0, n_vert - 1].map(|v| divdiff::derivative_stencil(fp.knots, v, rule));
     let stencils = [ls?, le?];
-    // Y's columns, each solved with its stencil in every coordinate (fixed rows 0).
-    let mut y = [vec![0.0; n_vert * d], vec![0.0; n_vert * d]];
-    for (col, st) in y.iter_mut().zip(&stencils) {
-        let mut free = false;
-        for &(u, c) in st {
-            if !is_fixed[u] && c != 0.0 {
-                free = true;
-                for k in 0..d {
-                    col[u * d + k] += c;
-                }
-            }
-        }
-        if !free {
-            return Err(Error::Unsupported {
-                field: "boundary",
-                reason: "an end's derivative stencil reaches no free vertex",
-            });
-        }
-        factor.solve_flat(col)?;
-    }
-    // S = L̃ Y (coordinate 0 of each column; every coordinate holds the same).
-    let apply = |st: &[(usize, f64); 3], v: &[f64], k: usize| -> f64 {
-        st.iter().map(|&(u, c)| c * v[u * d + k]).sum::<f64>()
+    let interpolation = !matches!(fp.constraint, Constraint::Smoothing(_));
+    let windowed = if interpolation && n > 4 * WINDOW_SPANS {
+        end_windows(fp, &stencils)?
+    } else {
+        None
     };
-    let s = [
-        [apply(&stencils[0], &y[0], 0), apply(&stencils[0], &y[1], 0)],
-        [apply(&stencils[1], &y[0], 0), apply(&stencils[1], &y[1], 0)],
-    ];
+    let (mut x, y, whole) = match windowed {
+        Some(y) => (interpolate(fp)?.points.into_coords(), y, None),
+        None => {
+            let (x, y, sys) = whole_curve(fp, &stencils)?;
+            (x, y, Some(sys))
+        }
+    };
+    // S = L̃ Y.
+    let s = [0, 1].map(|e| [0, 1].map(|f| y[f].dot(&stencils[e])));
     let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
     if !(det.is_finite() && det > 1e-12 * (s[0][0] * s[1][1]).abs()) {
         return Err(Error::Unsupported {
@@ -139,35 +242,85 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
             reason: "the two end conditions act on the same free vertices",
         });
     }
-    let mut lambda = [vec![0.0; d], vec![0.0; d]];
-    for k in 0..d {
-        let r0 = apply(&stencils[0], &x, k) - ends[0][k];
-        let r1 = apply(&stencils[1], &x, k) - ends[1][k];
-        lambda[0][k] = (s[1][1] * r0 - s[0][1] * r1) / det;
-        lambda[1][k] = (s[0][0] * r1 - s[1][0] * r0) / det;
-    }
-    for (col, l) in y.iter().zip(&lambda) {
-        for (i, (xv, yv)) in x.iter_mut().zip(col).enumerate() {
-            *xv -= yv * l[i % d];
+    let apply = |st: &[(usize, f64); 3], x: &[f64], k: usize| -> f64 {
+        st.iter().map(|&(u, c)| c * x[u * d + k]).sum::<f64>()
+    };
+    // From x = K⁻¹r to the bordered system's solution with right-hand side (r, targets):
+    // λ = S⁻¹(L x − targets), x −= Yλ; returns λ.
+    let border = |x: &mut [f64], targets: [&[f64]; 2]| -> [Vec<f64>; 2] {
+        let mut lambda = [vec![0.0; d], vec![0.0; d]];
+        for k in 0..d {
+            let r0 = apply(&stencils[0], x, k) - targets[0][k];
+            let r1 = apply(&stencils[1], x, k) - targets[1][k];
+            lambda[0][k] = (s[1][1] * r0 - s[0][1] * r1) / det;
+            lambda[1][k] = (s[0][0] * r1 - s[1][0] * r0) / det;
         }
+        for (col, l) in y.iter().zip(&lambda) {
+            for (j, yv) in col.values.iter().enumerate() {
+                let v = col.first + j;
+                for (xv, lk) in x[v * d..(v + 1) * d].iter_mut().zip(l) {
+                    *xv -= yv * lk;
+                }
+            }
+        }
+        lambda
+    };
+    let mut lambda = border(&mut x, ends);
+    if let Some(sys) = &whole {
+        // On the whole curve, iterative refinement of the bordered system: the residual
+        // (b − Kp − L̃ᵀλ at the free vertices, v − Lp) through the same solves, λ updated with
+        // the correction's.
+        let lambda_now = std::cell::RefCell::new(lambda);
+        sys.refine(
+            &mut x,
+            d,
+            |r| {
+                for (st, l) in stencils.iter().zip(lambda_now.borrow().iter()) {
+                    for &(u, c) in st {
+                        for k in 0..d {
+                            r[u * d + k] += c * l[k];
+                        }
+                    }
+                }
+            },
+            |x, r| {
+                let r2: [Vec<f64>; 2] = [0, 1].map(|e| {
+                    (0..d)
+                        .map(|k| ends[e][k] - apply(&stencils[e], x, k))
+                        .collect()
+                });
+                sys.factor.solve_flat(r)?;
+                let dl = border(r, [&r2[0], &r2[1]]);
+                for (l, dl) in lambda_now.borrow_mut().iter_mut().zip(&dl) {
+                    for (a, b) in l.iter_mut().zip(dl) {
+                        *a += b;
+                    }
+                }
+                Ok(())
+            },
+        )?;
+        lambda = lambda_now.into_inner();
     }
     let points = Points::new(d, x)?;
     let multipliers = match fp.constraint {
         Constraint::Smoothing(w) => w.iter().map(|&x| vec![x]).collect(),
         _ => {
-            // The reactions: −(Hp)_v less the ends' forces there (K is H ⊗ I_d here).
-            let mut hp = vec![0.0; n_vert * d];
-            sys.apply_flat(points.coords(), &mut hp)?;
-            let mut forces = vec![0.0; n_vert * d];
-            for (st, l) in stencils.iter().zip(&lambda) {
-                for &(u, c) in st {
-                    for k in 0..d {
-                        forces[u * d + k] += c * l[k];
-                    }
-                }
-            }
+            // The reactions: −(Hp)_v less the ends' forces there.
             (0..n)
-                .map(|i| crate::constraint::interpolate::reaction(fp, &forces, &hp, i))
+                .map(|i| {
+                    let v = fp.data_vertex[i];
+                    let mut r = vec![0.0; d];
+                    add_hp_at(fp.knots, &points, v, &mut r);
+                    for (st, l) in stencils.iter().zip(&lambda) {
+                        for &(_, c) in st.iter().filter(|&&(u, _)| u == v) {
+                            for (rk, lk) in r.iter_mut().zip(l) {
+                                *rk += c * lk;
+                            }
+                        }
+                    }
+                    r.iter_mut().for_each(|x| *x = -*x);
+                    r
+                })
                 .collect()
         }
     };
@@ -178,6 +331,167 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
         .map(|l| (l.iter().map(|v| -v).collect(), l))
         .collect();
     Ok(sol)
+}
+
+/// Spans at each end of a long clamped interpolation on which [`end_windows`] solves Y's
+/// columns (64). Interpolation fixes every (k+1)-th vertex, and a force at the end stencil's
+/// free vertices is felt across a fixed vertex only through the band's reach of two: its
+/// response falls by a factor per span (about 0.27 on uniform knots, as a cubic spline's; the
+/// check in [`end_windows`] measures it instead of assuming it).
+const WINDOW_SPANS: usize = 64;
+
+/// One column of Y: scalar values on the vertices `first ..`, zero elsewhere.
+struct Column {
+    first: usize,
+    values: Vec<f64>,
+}
+
+impl Column {
+    /// L̃ y for a stencil (its vertices outside the column read 0).
+    fn dot(&self, st: &[(usize, f64); 3]) -> f64 {
+        st.iter()
+            .filter_map(|&(u, c)| {
+                u.checked_sub(self.first)
+                    .and_then(|j| self.values.get(j))
+                    .map(|y| c * y)
+            })
+            .sum()
+    }
+}
+
+/// x₀, Y's columns and K's factorization, by one factorization and three solves.
+fn whole_curve(
+    fp: &FixedProblem<'_>,
+    stencils: &[[(usize, f64); 3]; 2],
+) -> Result<(Vec<f64>, [Column; 2], Factored), Error> {
+    use crate::constraint::Constraint;
+    let (n, d) = (fp.q.len(), fp.q.dim());
+    let n_vert = fp.knots.vertex_count();
+    let no_weights = vec![0.0; n];
+    let (fixed, w): (Vec<bool>, &[f64]) = match fp.constraint {
+        Constraint::Smoothing(w) => (vec![false; n], w),
+        _ => (vec![true; n], &no_weights),
+    };
+    let (sys, x) = Factored::new(fp, &fixed, w)?;
+    let mut cols = Vec::with_capacity(2);
+    for st in stencils {
+        let mut col = vec![0.0; n_vert * d];
+        free_stencil(
+            st,
+            |u| sys.is_fixed[u],
+            |u, c| {
+                for k in 0..d {
+                    col[u * d + k] += c;
+                }
+            },
+        )?;
+        sys.factor.solve_flat(&mut col)?;
+        cols.push(Column {
+            first: 0,
+            values: col.iter().step_by(d).copied().collect(),
+        });
+    }
+    let [cs, ce]: [Column; 2] = cols.try_into().map_err(|_| Error::Unsupported {
+        field: "boundary",
+        reason: "two end conditions",
+    })?;
+    Ok((x, [cs, ce], sys))
+}
+
+/// Calls `f(u, c)` for the stencil's entries on free vertices; [`Error::Unsupported`] when there
+/// is none (the data fix the end derivative: the conic solver decides whether it is met).
+fn free_stencil(
+    st: &[(usize, f64); 3],
+    is_fixed: impl Fn(usize) -> bool,
+    mut f: impl FnMut(usize, f64),
+) -> Result<(), Error> {
+    let mut free = false;
+    for &(u, c) in st {
+        if !is_fixed(u) && c != 0.0 {
+            free = true;
+            f(u, c);
+        }
+    }
+    if free {
+        Ok(())
+    } else {
+        Err(Error::Unsupported {
+            field: "boundary",
+            reason: "an end's derivative stencil reaches no free vertex",
+        })
+    }
+}
+
+/// Y's columns of a clamped interpolation solved on the [`WINDOW_SPANS`] spans at their end, Y
+/// taken as 0 beyond: the principal block of K on the window's vertices (the sub-curve's
+/// Hessian on the window's knots and one more, whose rows inside the window are K's own),
+/// every data vertex fixed and the vertex past the window too. `None` when a column has not
+/// decayed to rounding (1e-17 of its largest entry) at the window's far data span: the whole
+/// curve's solve is used instead.
+fn end_windows(
+    fp: &FixedProblem<'_>,
+    stencils: &[[(usize, f64); 3]; 2],
+) -> Result<Option<[Column; 2]>, Error> {
+    let stride = fp.stride;
+    let n_vert = fp.knots.vertex_count();
+    let w = WINDOW_SPANS * stride;
+    if stride < 2 || n_vert < 2 * w + 3 {
+        return Ok(None);
+    }
+    let t = fp.knots.values();
+    let mut out = Vec::with_capacity(2);
+    for (end, st) in stencils.iter().enumerate() {
+        // Global vertices first ..= first + w + 1; the data vertices are global multiples of
+        // the stride; the vertex past the window (the last at the start, the first at the end)
+        // is held at 0.
+        let first = if end == 0 { 0 } else { n_vert - w - 2 };
+        let sub = divdiff::Knots::open(t[first..first + w + 2].to_vec())?;
+        let mut sys = hessian_system(Hessian::new(&sub), 1)?;
+        let outside = if end == 0 { w + 1 } else { 0 };
+        let mut is_fixed = vec![false; w + 2];
+        for (j, f) in is_fixed.iter_mut().enumerate() {
+            *f = j == outside || (first + j) % stride == 0;
+        }
+        for (j, &f) in is_fixed.iter().enumerate() {
+            if f {
+                sys.fix(j)?;
+            }
+        }
+        let mut y = vec![0.0; w + 2];
+        let held = |v: usize| v < first || v >= first + w + 2 || is_fixed[v - first];
+        free_stencil(st, held, |u, c| y[u - first] += c)?;
+        sys.factor()?.solve_flat(&mut y)?;
+        // Decayed to rounding over the data span farthest from the stencil.
+        let peak = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let far = if end == 0 {
+            &y[w - stride..=w]
+        } else {
+            &y[1..=stride + 1]
+        };
+        if !(peak.is_finite() && far.iter().all(|v| v.abs() <= 1e-17 * peak)) {
+            return Ok(None);
+        }
+        out.push(Column { first, values: y });
+    }
+    let [cs, ce]: [Column; 2] = match out.try_into() {
+        Ok(c) => c,
+        Err(_) => return Ok(None),
+    };
+    Ok(Some([cs, ce]))
+}
+
+/// Adds (Hp)_v = Σ_i α_{i, v−i+2} (Ap)_i over the rows i = v − 1, v, v + 1 of A (an open
+/// curve's interior rows) to `out`, from the knots in O(1).
+fn add_hp_at(knots: &divdiff::Knots, p: &Points, v: usize, out: &mut [f64]) {
+    let n = p.len();
+    for i in v.saturating_sub(1).max(1)..=(v + 1).min(n.saturating_sub(2)) {
+        let a = energy::alpha(knots, i);
+        let coef = a[v + 1 - i];
+        let (l, m, r) = (p.point(i - 1), p.point(i), p.point(i + 1));
+        for (k, o) in out.iter_mut().enumerate() {
+            *o += coef * (a[0] * l[k] + a[1] * m[k] + a[2] * r[k]);
+        }
+    }
 }
 
 /// Interpolation (3.3) at every data vertex: the closed forms of [`crate::uniform`] on the knots

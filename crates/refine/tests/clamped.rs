@@ -94,6 +94,70 @@ fn extent(q: &Points) -> f64 {
     hi - lo
 }
 
+/// Solves and checks one case against the dense KKT solve: certified, one linear solve (not
+/// the interior-point method after a refused answer), the dense solution to 1e-9 of the data's
+/// extent, the prescribed end derivatives.
+fn check(q: &Points, k: usize, rule: DerivativeRule, weights: Option<&[f64]>, ends: [&[f64]; 2]) {
+    let [start, end] = ends;
+    let mut p = Problem::new(q.clone())
+        .with_topology(Topology::Open)
+        .with_k(k)
+        .with_knot_iterations(0)
+        .with_derivative(rule)
+        .with_boundary(Boundary::Clamped {
+            start: start.to_vec(),
+            end: end.to_vec(),
+        });
+    if let Some(w) = weights {
+        p = p.with_constraint(Constraint::Smoothing(w.to_vec()));
+    }
+    let r = p.solve().unwrap();
+    let what = format!(
+        "n {} d {} k {k} {rule:?} smoothing {}",
+        q.len(),
+        q.dim(),
+        weights.is_some()
+    );
+    assert!(r.kkt_residual <= 1e-9, "{what}: kkt {}", r.kkt_residual);
+    assert_eq!(r.iterations.solver, 1, "{what}");
+    let want = dense_kkt(&r, q, weights, rule, start, end);
+    let dist = r
+        .points
+        .coords()
+        .iter()
+        .zip(&want)
+        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    assert!(
+        dist <= 1e-9 * extent(q),
+        "{what}: {dist:e} from the dense solve"
+    );
+    let last = r.points.len() - 1;
+    for (v, target) in [(0, start), (last, end)] {
+        let st = divdiff::derivative_stencil(&r.knots, v, rule).unwrap();
+        for (c, &t) in target.iter().enumerate() {
+            let df: f64 = st.iter().map(|&(u, w)| w * r.points.point(u)[c]).sum();
+            assert!(
+                (df - t).abs() <= 1e-9 * (1.0 + t.abs()),
+                "{what}: {df} vs {t}"
+            );
+        }
+    }
+}
+
+/// Long interpolations (more than 4 × 64 spans) take Y's columns from windows at the ends
+/// (`linear::end_windows`): the same answer as the dense KKT solve of the whole curve.
+#[test]
+fn long_clamped_interpolation_matches_a_dense_kkt_solve() {
+    for (k, rule, seed) in [
+        (1, DerivativeRule::Bessel, 1),
+        (2, DerivativeRule::Average, 2),
+        (1, DerivativeRule::Average, 3),
+    ] {
+        let q = data(300, 2, seed);
+        check(&q, k, rule, None, [&[0.3, -2.0], &[1.5, 0.25]]);
+    }
+}
+
 /// Every d, k, derivative rule, interpolation and smoothing: the library's answer is the dense
 /// KKT solution to 1e-9 of the data's extent, certified, with the prescribed end derivatives.
 #[test]
@@ -108,47 +172,13 @@ fn clamped_ends_match_a_dense_kkt_solve() {
                     let q = data(n, d, (d * 100 + k * 10) as u64 + u64::from(smoothing));
                     let weights: Vec<f64> =
                         (0..n).map(|i| 0.5 * 10f64.powi(i as i32 % 4)).collect();
-                    let (start, end) = (&start3[..d], &end3[..d]);
-                    let mut p = Problem::new(q.clone())
-                        .with_topology(Topology::Open)
-                        .with_k(k)
-                        .with_knot_iterations(0)
-                        .with_derivative(rule)
-                        .with_boundary(Boundary::Clamped {
-                            start: start.to_vec(),
-                            end: end.to_vec(),
-                        });
-                    if smoothing {
-                        p = p.with_constraint(Constraint::Smoothing(weights.clone()));
-                    }
-                    let r = p.solve().unwrap();
-                    let what = format!("d {d} k {k} {rule:?} smoothing {smoothing}");
-                    assert!(r.kkt_residual <= 1e-9, "{what}: kkt {}", r.kkt_residual);
-                    // One linear solve, accepted: not the interior-point method after it.
-                    assert_eq!(r.iterations.solver, 1, "{what}");
-                    let want =
-                        dense_kkt(&r, &q, smoothing.then_some(&weights[..]), rule, start, end);
-                    let dist = r
-                        .points
-                        .coords()
-                        .iter()
-                        .zip(&want)
-                        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-                    assert!(
-                        dist <= 1e-9 * extent(&q),
-                        "{what}: {dist:e} from the dense solve"
+                    check(
+                        &q,
+                        k,
+                        rule,
+                        smoothing.then_some(&weights[..]),
+                        [&start3[..d], &end3[..d]],
                     );
-                    let last = r.points.len() - 1;
-                    for (v, target) in [(0, start), (last, end)] {
-                        let st = divdiff::derivative_stencil(&r.knots, v, rule).unwrap();
-                        for (c, &t) in target.iter().enumerate() {
-                            let df: f64 = st.iter().map(|&(u, w)| w * r.points.point(u)[c]).sum();
-                            assert!(
-                                (df - t).abs() <= 1e-9 * (1.0 + t.abs()),
-                                "{what}: {df} vs {t}"
-                            );
-                        }
-                    }
                     cases += 1;
                 }
             }
