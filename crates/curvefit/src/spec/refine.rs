@@ -440,7 +440,7 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
                 Some(field) => InputError::new(
                     field,
                     format!(
-                        "{solver} did not converge in {iterations} iterations (best residual {}, accepted at most {}): the derivative constraints put this problem on the general interior-point method, which does not always certify a narrow wedge where the optimal derivative vanishes (the wedge's apex) or derivative constraints on very unequal spacing; loosen them (a wider half_angle, a larger radius, a near_clamped end instead of a clamped one) or constrain fewer points",
+                        "{solver} did not converge in {iterations} iterations (best residual {}, accepted at most {}): derivative constraints are not always certified on very unequal spacing, nor a narrow wedge where the optimal derivative vanishes (the wedge's apex); loosen them (a wider half_angle, a larger radius, a near_clamped end instead of a clamped one) or constrain fewer points",
                         num(residual),
                         num(prob.options.accept_kkt)
                     ),
