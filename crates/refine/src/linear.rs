@@ -344,8 +344,8 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
 /// Spans at each end of a long clamped interpolation on which [`end_windows`] solves Y's
 /// columns (64). Interpolation fixes every (k+1)-th vertex, and a force at the end stencil's
 /// free vertices is felt across a fixed vertex only through the band's reach of two: its
-/// response falls by a factor per span (about 0.27 on uniform knots, as a cubic spline's; the
-/// check in [`end_windows`] measures it instead of assuming it).
+/// response falls geometrically from span to span, as a cubic spline's does (the check in
+/// [`end_windows`] measures that it reached rounding rather than assuming a rate).
 const WINDOW_SPANS: usize = 64;
 
 /// One column of Y: scalar values on the vertices `first ..`, zero elsewhere.
