@@ -33,30 +33,6 @@ pub fn alphas(knots: &Knots) -> Vec<[f64; 3]> {
     a
 }
 
-/// Row i of A alone (`alphas(knots)[i]`, in O(1)): for a caller that needs a few rows of a long
-/// curve, e.g. (Hp)_v = Σ_{i = v−1, v, v+1} α_{i, v−i+2} (Ap)_i at a handful of vertices.
-/// Zero for an open curve's end rows and for i ≥ N.
-///
-/// ```
-/// use divdiff::Knots;
-/// let knots = Knots::open(vec![0.0, 0.5, 2.0, 2.25, 3.0]).unwrap();
-/// let all = energy::alphas(&knots);
-/// for i in 0..5 {
-///     assert_eq!(energy::alpha(&knots, i), all[i]);
-/// }
-/// ```
-pub fn alpha(knots: &Knots, i: usize) -> [f64; 3] {
-    let t = knots.values();
-    let n = knots.vertex_count();
-    match knots.topology() {
-        Topology::Open if i == 0 || i + 1 >= n => [0.0; 3],
-        Topology::Open => alpha_row(t[i] - t[i - 1], t[i + 1] - t[i]),
-        Topology::Closed if i >= n => [0.0; 3],
-        Topology::Closed if i == 0 => alpha_row(t[n] - t[n - 1], t[1] - t[0]),
-        Topology::Closed => alpha_row(t[i] - t[i - 1], t[i + 1] - t[i]),
-    }
-}
-
 /// The row α of vertex i from the spans h_{i−1} (left) and h_i (right), as in [`alphas`].
 #[inline(always)]
 fn alpha_row(hl: f64, hr: f64) -> [f64; 3] {

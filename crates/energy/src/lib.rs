@@ -76,5 +76,5 @@ pub use functional::{
     energy, energy_by_jumps, knot_gradient, knot_gradient_printed, orthogonality_residuals,
     vertex_knot_gradient,
 };
-pub use hessian::{alpha, alphas, Hessian};
+pub use hessian::{alphas, Hessian};
 pub use system::{solve_interpolatory, Factor, System, PIVOT_RTOL};

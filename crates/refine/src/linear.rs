@@ -4,6 +4,7 @@
 use divdiff::Points;
 use energy::{Hessian, System};
 
+use crate::operator::Stencil;
 use crate::stage::{FixedProblem, FixedSolution};
 use crate::Error;
 
@@ -34,8 +35,9 @@ pub(crate) fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result
     sys.refine(
         &mut x,
         d,
-        |_| {},
-        |_, r| sys.factor.solve_flat(r).map_err(Error::from),
+        &mut (),
+        |_, _| {},
+        |_, _, r| sys.factor.solve_flat(r).map_err(Error::from),
     )?;
     Ok(Points::new(d, x)?)
 }
@@ -47,11 +49,11 @@ pub(crate) fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result
 const REFINEMENT_STEPS: usize = 1;
 
 /// K = H ⊗ I_d + W factored, with what its iterative refinement needs: the rows of A
-/// (H = AᵀA), the weight at each vertex, the right-hand side b and the fixed vertices.
+/// (H = AᵀA, [`Stencil`]), the weight at each vertex, the right-hand side b and the fixed
+/// vertices.
 struct Factored {
     factor: energy::Factor,
-    closed: bool,
-    alphas: Vec<[f64; 3]>,
+    stencil: Stencil,
     weight: Vec<f64>,
     b: Vec<f64>,
     is_fixed: Vec<bool>,
@@ -77,8 +79,7 @@ impl Factored {
         }
         let sys = Factored {
             factor,
-            closed: fp.knots.is_closed(),
-            alphas: energy::alphas(fp.knots),
+            stencil: Stencil::new(fp.knots),
             weight,
             b,
             is_fixed,
@@ -93,26 +94,8 @@ impl Factored {
     /// from 2e-5 to 3e-2 its rounding alone was a residual of 0.1, and refining with it did
     /// not move the answer.
     fn apply(&self, p: &[f64], d: usize) -> Vec<f64> {
-        let n = self.alphas.len();
-        let mut out = vec![0.0; n * d];
-        let mut row = |i: usize, l: usize, r: usize| {
-            let a = &self.alphas[i];
-            for k in 0..d {
-                let m = p[i * d + k];
-                let ap = a[0] * (p[l * d + k] - m) + a[2] * (p[r * d + k] - m);
-                out[l * d + k] += a[0] * ap;
-                out[i * d + k] += a[1] * ap;
-                out[r * d + k] += a[2] * ap;
-            }
-        };
-        // (An open curve's end rows are zero; a closed curve's wrap.)
-        for i in 1..n.saturating_sub(1) {
-            row(i, i - 1, i + 1);
-        }
-        if n >= 3 && self.closed {
-            row(0, n - 1, 1);
-            row(n - 1, n - 2, 0);
-        }
+        let mut out = vec![0.0; p.len()];
+        self.stencil.apply_h_flat(p, d, &mut out);
         for ((o, pv), w) in out
             .chunks_exact_mut(d)
             .zip(p.chunks_exact(d))
@@ -126,20 +109,21 @@ impl Factored {
     }
 
     /// Iterative refinement of x ≈ K⁻¹b, at most [`REFINEMENT_STEPS`] while the residual falls
-    /// by half: r = b − Kx − f at the free vertices (0 at the fixed ones; `forces` adds f to
-    /// Kx), `correct` turns r into the correction (a solve with K, or the bordered system's;
-    /// it also gets x), added to x.
-    fn refine(
+    /// by half: r = b − Kx − f at the free vertices (0 at the fixed ones; `forces` adds f, read
+    /// off `state`, to Kx), `correct` turns r into the correction (a solve with K, or the
+    /// bordered system's, which also updates `state` and reads x), added to x.
+    fn refine<S>(
         &self,
         x: &mut [f64],
         d: usize,
-        mut forces: impl FnMut(&mut [f64]),
-        mut correct: impl FnMut(&[f64], &mut Vec<f64>) -> Result<(), Error>,
+        state: &mut S,
+        forces: impl Fn(&S, &mut [f64]),
+        mut correct: impl FnMut(&mut S, &[f64], &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let mut last = f64::INFINITY;
         for _ in 0..REFINEMENT_STEPS {
             let mut r = self.apply(x, d);
-            forces(&mut r);
+            forces(state, &mut r);
             for ((rv, bv), &fixed) in r
                 .chunks_exact_mut(d)
                 .zip(self.b.chunks_exact(d))
@@ -155,7 +139,7 @@ impl Factored {
                 break;
             }
             last = size;
-            correct(x, &mut r)?;
+            correct(state, x, &mut r)?;
             for (xv, dv) in x.iter_mut().zip(&r) {
                 *xv += dv;
             }
@@ -217,19 +201,23 @@ fn assemble(
 /// ([`end_windows`]), where they decay to rounding.
 ///
 /// # Errors
-/// [`Error::Unsupported`] when an end's stencil reaches no free vertex or S is singular to
-/// rounding (the conic solver then decides, and reports an infeasible pair); errors of the
-/// factorization.
-pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedSolution, Error> {
-    use crate::constraint::Constraint;
+/// [`Error::Unsupported`] when the problem is not one of these
+/// ([`crate::Problem::linear_clamped_ends`]), an end's stencil reaches no free vertex or S is
+/// singular to rounding (the conic solver then decides, and reports an infeasible pair); errors
+/// of the factorization.
+pub(crate) fn clamped(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    let ends = fp.problem.linear_clamped_ends().ok_or(Error::Unsupported {
+        field: "boundary",
+        reason: "the bordered solve holds clamped ends of interpolation or smoothing",
+    })?;
     let n = fp.q.len();
     let d = fp.q.dim();
     let n_vert = fp.knots.vertex_count();
     let rule = fp.problem.derivative;
     let [ls, le] = [0, n_vert - 1].map(|v| divdiff::derivative_stencil(fp.knots, v, rule));
     let stencils = [ls?, le?];
-    let interpolation = !matches!(fp.constraint, Constraint::Smoothing(_));
-    let windowed = if interpolation && n > 4 * WINDOW_SPANS {
+    let (fixed, w) = data_terms(fp);
+    let windowed = if w.is_none() && n > 4 * WINDOW_SPANS {
         end_windows(fp, &stencils)?
     } else {
         None
@@ -237,7 +225,7 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
     let (mut x, y, whole) = match windowed {
         Some(y) => (interpolate(fp)?.points.into_coords(), y, None),
         None => {
-            let (x, y, sys) = whole_curve(fp, &stencils)?;
+            let (x, y, sys) = whole_curve(fp, &fixed, w, &stencils)?;
             (x, y, Some(sys))
         }
     };
@@ -278,12 +266,12 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
         // On the whole curve, iterative refinement of the bordered system: the residual
         // (b − Kp − L̃ᵀλ at the free vertices, v − Lp) through the same solves, λ updated with
         // the correction's.
-        let lambda_now = std::cell::RefCell::new(lambda);
         sys.refine(
             &mut x,
             d,
-            |r| {
-                for (st, l) in stencils.iter().zip(lambda_now.borrow().iter()) {
+            &mut lambda,
+            |lambda, r| {
+                for (st, l) in stencils.iter().zip(lambda) {
                     for &(u, c) in st {
                         for k in 0..d {
                             r[u * d + k] += c * l[k];
@@ -291,7 +279,7 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
                     }
                 }
             },
-            |x, r| {
+            |lambda, x, r| {
                 let r2: [Vec<f64>; 2] = [0, 1].map(|e| {
                     (0..d)
                         .map(|k| ends[e][k] - apply(&stencils[e], x, k))
@@ -299,7 +287,7 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
                 });
                 sys.factor.solve_flat(r)?;
                 let dl = border(r, [&r2[0], &r2[1]]);
-                for (l, dl) in lambda_now.borrow_mut().iter_mut().zip(&dl) {
+                for (l, dl) in lambda.iter_mut().zip(&dl) {
                     for (a, b) in l.iter_mut().zip(dl) {
                         *a += b;
                     }
@@ -307,18 +295,17 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>, ends: [&[f64]; 2]) -> Result<FixedS
                 Ok(())
             },
         )?;
-        lambda = lambda_now.into_inner();
     }
     let points = Points::new(d, x)?;
-    let multipliers = match fp.constraint {
-        Constraint::Smoothing(w) => w.iter().map(|&x| vec![x]).collect(),
-        _ => {
+    let multipliers = match w {
+        Some(w) => smoothing_multipliers(w),
+        None => {
             // The reactions: −(Hp)_v less the ends' forces there.
             (0..n)
                 .map(|i| {
                     let v = fp.data_vertex[i];
                     let mut r = vec![0.0; d];
-                    add_hp_at(fp.knots, &points, v, &mut r);
+                    crate::operator::add_hp_at(fp.knots, &points, v, &mut r);
                     for (st, l) in stencils.iter().zip(&lambda) {
                         for &(_, c) in st.iter().filter(|&&(u, _)| u == v) {
                             for (rk, lk) in r.iter_mut().zip(l) {
@@ -367,22 +354,19 @@ impl Column {
     }
 }
 
-/// x₀, Y's columns and K's factorization, by one factorization and three solves.
+/// x₀, Y's columns and K's factorization, by one factorization and three solves (`fixed`, `w`:
+/// [`data_terms`]).
 fn whole_curve(
     fp: &FixedProblem<'_>,
+    fixed: &[bool],
+    w: Option<&[f64]>,
     stencils: &[[(usize, f64); 3]; 2],
 ) -> Result<(Vec<f64>, [Column; 2], Factored), Error> {
-    use crate::constraint::Constraint;
-    let (n, d) = (fp.q.len(), fp.q.dim());
+    let d = fp.q.dim();
     let n_vert = fp.knots.vertex_count();
-    let no_weights = vec![0.0; n];
-    let (fixed, w): (Vec<bool>, &[f64]) = match fp.constraint {
-        Constraint::Smoothing(w) => (vec![false; n], w),
-        _ => (vec![true; n], &no_weights),
-    };
-    let (sys, x) = Factored::new(fp, &fixed, w)?;
-    let mut cols = Vec::with_capacity(2);
-    for st in stencils {
+    let no_weights = vec![0.0; fp.q.len()];
+    let (sys, x) = Factored::new(fp, fixed, w.unwrap_or(&no_weights))?;
+    let column = |st: &[(usize, f64); 3]| -> Result<Column, Error> {
         let mut col = vec![0.0; n_vert * d];
         free_stencil(
             st,
@@ -394,16 +378,13 @@ fn whole_curve(
             },
         )?;
         sys.factor.solve_flat(&mut col)?;
-        cols.push(Column {
+        Ok(Column {
             first: 0,
             values: col.iter().step_by(d).copied().collect(),
-        });
-    }
-    let [cs, ce]: [Column; 2] = cols.try_into().map_err(|_| Error::Unsupported {
-        field: "boundary",
-        reason: "two end conditions",
-    })?;
-    Ok((x, [cs, ce], sys))
+        })
+    };
+    let columns = [column(&stencils[0])?, column(&stencils[1])?];
+    Ok((x, columns, sys))
 }
 
 /// Calls `f(u, c)` for the stencil's entries on free vertices; [`Error::Unsupported`] when there
@@ -447,8 +428,7 @@ fn end_windows(
         return Ok(None);
     }
     let t = fp.knots.values();
-    let mut out = Vec::with_capacity(2);
-    for (end, st) in stencils.iter().enumerate() {
+    let window = |end: usize| -> Result<Option<Column>, Error> {
         // Global vertices first ..= first + w + 1; the data vertices are global multiples of
         // the stride; the vertex past the window (the last at the start, the first at the end)
         // is held at 0.
@@ -459,15 +439,13 @@ fn end_windows(
         let mut is_fixed = vec![false; w + 2];
         for (j, f) in is_fixed.iter_mut().enumerate() {
             *f = j == outside || (first + j) % stride == 0;
-        }
-        for (j, &f) in is_fixed.iter().enumerate() {
-            if f {
+            if *f {
                 sys.fix(j)?;
             }
         }
         let mut y = vec![0.0; w + 2];
         let held = |v: usize| v < first || v >= first + w + 2 || is_fixed[v - first];
-        free_stencil(st, held, |u, c| y[u - first] += c)?;
+        free_stencil(&stencils[end], held, |u, c| y[u - first] += c)?;
         sys.factor()?.solve_flat(&mut y)?;
         // Decayed to rounding over the data span farthest from the stencil.
         let peak = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -476,30 +454,13 @@ fn end_windows(
         } else {
             &y[1..=stride + 1]
         };
-        if !(peak.is_finite() && far.iter().all(|v| v.abs() <= 1e-17 * peak)) {
-            return Ok(None);
-        }
-        out.push(Column { first, values: y });
-    }
-    let [cs, ce]: [Column; 2] = match out.try_into() {
-        Ok(c) => c,
-        Err(_) => return Ok(None),
+        let decayed = peak.is_finite() && far.iter().all(|v| v.abs() <= 1e-17 * peak);
+        Ok(decayed.then_some(Column { first, values: y }))
     };
-    Ok(Some([cs, ce]))
-}
-
-/// Adds (Hp)_v = Σ_i α_{i, v−i+2} (Ap)_i over the rows i = v − 1, v, v + 1 of A (an open
-/// curve's interior rows) to `out`, from the knots in O(1).
-fn add_hp_at(knots: &divdiff::Knots, p: &Points, v: usize, out: &mut [f64]) {
-    let n = p.len();
-    for i in v.saturating_sub(1).max(1)..=(v + 1).min(n.saturating_sub(2)) {
-        let a = energy::alpha(knots, i);
-        let coef = a[v + 1 - i];
-        let (l, m, r) = (p.point(i - 1), p.point(i), p.point(i + 1));
-        for (k, o) in out.iter_mut().enumerate() {
-            *o += coef * (a[0] * l[k] + a[1] * m[k] + a[2] * r[k]);
-        }
-    }
+    let Some(start) = window(0)? else {
+        return Ok(None);
+    };
+    Ok(window(1)?.map(|end| [start, end]))
 }
 
 /// Interpolation (3.3) at every data vertex: the closed forms of [`crate::uniform`] on the knots
@@ -516,15 +477,30 @@ pub(crate) fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error>
     Ok(FixedSolution::new(p, None, 1))
 }
 
-/// The linear problems of [`crate::strategy`]: interpolation (also balls of radius 0 at every
-/// point) and smoothing, without derivative constraints.
-pub(crate) fn solve(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+/// The data terms of a linear problem: which data points are fixed and the smoothing weights —
+/// none fixed and its weights for smoothing; every point fixed and no weights (`None`) for
+/// interpolation and balls of radius 0.
+fn data_terms<'a>(fp: &FixedProblem<'a>) -> (Vec<bool>, Option<&'a [f64]>) {
     use crate::constraint::Constraint;
     let n = fp.q.len();
     match fp.constraint {
-        Constraint::Smoothing(w) => Ok(FixedSolution::new(
-            linear(fp, &vec![false; n], w)?,
-            Some(w.iter().map(|&x| vec![x]).collect()),
+        Constraint::Smoothing(w) => (vec![false; n], Some(w)),
+        _ => (vec![true; n], None),
+    }
+}
+
+/// Smoothing's multipliers in the convention of [`crate::Refinement::multipliers`]: its weights.
+fn smoothing_multipliers(w: &[f64]) -> Vec<Vec<f64>> {
+    w.iter().map(|&x| vec![x]).collect()
+}
+
+/// The linear problems of [`crate::strategy`]: interpolation (also balls of radius 0 at every
+/// point) and smoothing, without derivative constraints.
+pub(crate) fn solve(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
+    match data_terms(fp) {
+        (fixed, Some(w)) => Ok(FixedSolution::new(
+            linear(fp, &fixed, w)?,
+            Some(smoothing_multipliers(w)),
             1,
         )),
         _ => interpolate(fp),

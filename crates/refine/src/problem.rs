@@ -287,7 +287,7 @@ impl Problem {
         // one solve takes minutes (4 points, k = 10⁶, tangent wedges: 8 minutes), so it is
         // refused up front.
         let general = self.kinds().iter().any(|k| k.may_need_full_vertex())
-            && !self.linear_with_clamped_ends();
+            && self.linear_clamped_ends().is_none();
         if general && self.solver == Solver::Exact {
             let spans = if self.topology == Topology::Closed {
                 n
@@ -308,20 +308,23 @@ impl Problem {
         Ok(())
     }
 
-    /// Whether the first stage is a linear system with clamped ends, solved like interpolation in
-    /// O(N) ([`crate::linear::clamped`]'s bordered solve): interpolation or smoothing (balls of
-    /// radius 0 count as interpolation), [`Boundary::Clamped`] ends, no tangent set, the exact
-    /// solver, and for interpolation a new vertex in every span (k ≥ 1), so that each end's
-    /// derivative stencil reaches a vertex the data do not fix.
-    pub(crate) fn linear_with_clamped_ends(&self) -> bool {
-        matches!(self.boundary, Boundary::Clamped { .. })
-            && self
-                .tangents
-                .as_ref()
-                .is_none_or(|t| t.iter().all(Option::is_none))
+    /// The clamped ends (start, end) when the first stage is a linear system with them, solved
+    /// like interpolation in O(N) ([`crate::linear::clamped`]'s bordered solve): interpolation or
+    /// smoothing (balls of radius 0 count as interpolation), [`Boundary::Clamped`] ends, no
+    /// tangent set, the exact solver, and for interpolation a new vertex in every span (k ≥ 1),
+    /// so that each end's derivative stencil reaches a vertex the data do not fix.
+    pub(crate) fn linear_clamped_ends(&self) -> Option<[&[f64]; 2]> {
+        let Boundary::Clamped { start, end } = &self.boundary else {
+            return None;
+        };
+        let applies = self
+            .tangents
+            .as_ref()
+            .is_none_or(|t| t.iter().all(Option::is_none))
             && self.constraint.kind().linear()
             && (self.k >= 1 || matches!(self.constraint, Constraint::Smoothing(_)))
-            && self.solver == Solver::Exact
+            && self.solver == Solver::Exact;
+        applies.then_some([start, end])
     }
 
     /// Whether any tangent constraint or an end condition other than natural is present (the
