@@ -1,22 +1,18 @@
 //! Interpolation and smoothing with clamped ends (Kersey §3.6) are a quadratic with linear
 //! equality constraints: the bordered solve (`refine::linear::clamped`, the exact solver's second
-//! entry) against an independent dense KKT solve of the same program (nalgebra's LU of
-//! [H + W  Cᵀ; C  0], C the interpolation rows and the two end stencils), and the size limit of
-//! the general interior-point method no longer applies to them.
+//! entry) against an independent dense KKT solve of the same program (`linear_support`:
+//! nalgebra's LU of [H + W  Cᵀ; C  0], C the interpolation rows and the two end stencils), and
+//! the size limit of the general interior-point method no longer applies to them.
+
+mod linear_support;
 
 use divdiff::{DerivativeRule, Points, Topology};
-use nalgebra::{DMatrix, DVector};
-use refine::{Boundary, Constraint, Error, Problem, Refinement};
+use linear_support::{dense_optimum, max_dist, uniform};
+use refine::{Boundary, Constraint, Error, Problem};
 
 /// Open, jittered, unequally spaced data in d dimensions (d = 1, 2, 3), n points.
 fn data(n: usize, d: usize, seed: u64) -> Points {
-    let mut s = seed;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 11) as f64) / ((1u64 << 53) as f64)
-    };
+    let mut rnd = uniform(seed);
     let mut a = 0.0;
     let mut rows = Vec::with_capacity(n * d);
     for _ in 0..n {
@@ -30,58 +26,6 @@ fn data(n: usize, d: usize, seed: u64) -> Points {
         rows.extend_from_slice(&p[..d]);
     }
     Points::new(d, rows).unwrap()
-}
-
-/// The minimizer of ½pᵀ(H ⊗ I)p + ½Σ w_i|p_{v_i} − q_i|² (interpolation when `weights` is
-/// `None`: p_{v_i} = q_i) subject to L_s p = start, L_e p = end, by a dense KKT solve per
-/// coordinate, on the knots and data vertices the library chose.
-fn dense_kkt(
-    r: &Refinement,
-    q: &Points,
-    weights: Option<&[f64]>,
-    rule: DerivativeRule,
-    start: &[f64],
-    end: &[f64],
-) -> Vec<f64> {
-    let (nv, d) = (r.points.len(), q.dim());
-    let h = energy::Hessian::new(&r.knots).to_dense();
-    let stencils = [0, nv - 1].map(|v| divdiff::derivative_stencil(&r.knots, v, rule).unwrap());
-    let fixed = if weights.is_none() { q.len() } else { 0 };
-    let m = fixed + 2;
-    let mut out = vec![0.0; nv * d];
-    for c in 0..d {
-        let mut k = DMatrix::zeros(nv + m, nv + m);
-        let mut b = DVector::zeros(nv + m);
-        k.view_mut((0, 0), (nv, nv)).copy_from(&h);
-        if let Some(w) = weights {
-            for (i, &v) in r.data_vertex.iter().enumerate() {
-                k[(v, v)] += w[i];
-                b[v] = w[i] * q.point(i)[c];
-            }
-        }
-        let mut row = nv;
-        if weights.is_none() {
-            for (i, &v) in r.data_vertex.iter().enumerate() {
-                k[(row, v)] = 1.0;
-                k[(v, row)] = 1.0;
-                b[row] = q.point(i)[c];
-                row += 1;
-            }
-        }
-        for (st, target) in stencils.iter().zip([start, end]) {
-            for &(u, coef) in st {
-                k[(row, u)] += coef;
-                k[(u, row)] += coef;
-            }
-            b[row] = target[c];
-            row += 1;
-        }
-        let x = k.lu().solve(&b).expect("the KKT matrix is nonsingular");
-        for v in 0..nv {
-            out[v * d + c] = x[v];
-        }
-    }
-    out
 }
 
 fn extent(q: &Points) -> f64 {
@@ -120,13 +64,8 @@ fn check(q: &Points, k: usize, rule: DerivativeRule, weights: Option<&[f64]>, en
     );
     assert!(r.kkt_residual <= 1e-9, "{what}: kkt {}", r.kkt_residual);
     assert_eq!(r.iterations.solver, 1, "{what}");
-    let want = dense_kkt(&r, q, weights, rule, start, end);
-    let dist = r
-        .points
-        .coords()
-        .iter()
-        .zip(&want)
-        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    let want = dense_optimum(&r, q, weights, rule, Some(ends));
+    let dist = max_dist(r.points.coords(), &want);
     assert!(
         dist <= 1e-9 * extent(q),
         "{what}: {dist:e} from the dense solve"
@@ -207,13 +146,8 @@ fn knot_updates_keep_the_ends_clamped() {
         "one linear solve per knot iteration"
     );
     assert!(r.kkt_residual <= 1e-9, "kkt {}", r.kkt_residual);
-    let want = dense_kkt(&r, &q, None, DerivativeRule::Bessel, &start, &end);
-    let dist = r
-        .points
-        .coords()
-        .iter()
-        .zip(&want)
-        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    let want = dense_optimum(&r, &q, None, DerivativeRule::Bessel, Some([&start, &end]));
+    let dist = max_dist(r.points.coords(), &want);
     assert!(
         dist <= 1e-9 * extent(&q),
         "{dist:e} from the dense solve on the final knots"
