@@ -260,15 +260,28 @@ def smoothing(n, k, reps):
     def peer():
         return csaps.CubicSmoothingSpline(u, q.T, weights=w, smooth=0.5)(t).T
 
-    ts, tc, ratio, ys, r = paired_times(
-        peer, lambda: curvefit.refine(q, k=k, knot_iterations=0, weights=w), reps
+    return against_a_curve(
+        f"3. smoothing, open, n = {n}, k = {k}, weights in [50, 500]: {len(t)} points out",
+        ("csaps", "csaps CubicSmoothingSpline fit + eval", peer),
+        ("curvefit.refine(weights=...)", lambda: curvefit.refine(q, k=k, knot_iterations=0, weights=w)),
+        reps,
     )
+
+
+def against_a_curve(title, peer, ours, reps):
+    """Times a peer that returns points and curvefit in pairs (`paired_times`), prints the two
+    medians, the ratio and the largest distance between the two curves at the same parameters
+    (a sanity check: the peer solves the continuous problem the discrete one approximates), and
+    returns them. `peer` = (its key, its label, its call); `ours` = (label, call)."""
+    key, peer_label, peer_call = peer
+    ours_label, ours_call = ours
+    ts, tc, ratio, ys, r = paired_times(peer_call, ours_call, reps)
     gap = np.linalg.norm(r.points - ys, axis=1).max()
-    print(f"3. smoothing, open, n = {n}, k = {k}, weights in [50, 500]: {len(t)} points out")
-    print(f"   csaps CubicSmoothingSpline fit + eval        {ms(ts)} ms")
-    print(f"   curvefit.refine(weights=...)                 {ms(tc)} ms   ratio {ratio:5.2f}x  (kkt {r.kkt_residual:.1e})")
+    print(title)
+    print(f"   {peer_label:<45}{ms(ts)} ms")
+    print(f"   {ours_label:<45}{ms(tc)} ms   ratio {ratio:5.2f}x  (kkt {r.kkt_residual:.1e})")
     print(f"   largest distance between the two curves at the same parameters: {gap:.1e} (data spread ~1)")
-    return {"csaps": ts, "curvefit": tc, "ratio": ratio}
+    return {key: ts, "curvefit": tc, "ratio": ratio}
 
 
 def clamped(n, k, reps):
@@ -287,13 +300,12 @@ def clamped(n, k, reps):
     def ours():
         return curvefit.refine(q, closed=False, k=k, knot_iterations=0, boundary=ends)
 
-    ts, tc, ratio, ys, r = paired_times(peer, ours, reps)
-    gap = np.linalg.norm(r.points - ys, axis=1).max()
-    print(f"4. clamped interpolation, open, n = {n}, k = {k}: {len(t)} points out")
-    print(f"   scipy CubicSpline(clamped) fit + eval        {ms(ts)} ms")
-    print(f"   curvefit.refine(boundary=clamped)            {ms(tc)} ms   ratio {ratio:5.2f}x  (kkt {r.kkt_residual:.1e})")
-    print(f"   largest distance between the two curves at the same parameters: {gap:.1e} (data spread ~1)")
-    return {"scipy": ts, "curvefit": tc, "ratio": ratio}
+    return against_a_curve(
+        f"4. clamped interpolation, open, n = {n}, k = {k}: {len(t)} points out",
+        ("scipy", "scipy CubicSpline(clamped) fit + eval", peer),
+        ("curvefit.refine(boundary=clamped)", ours),
+        reps,
+    )
 
 
 def main():
