@@ -66,6 +66,49 @@ fn for_each_row(knots: &Knots, mut f: impl FnMut(usize, [f64; 3])) {
     }
 }
 
+/// The three bands of H = AᵀA summed row by row ([`Hessian::new`], [`Hessian::from_alphas`]).
+struct Bands {
+    diag: Vec<f64>,
+    off1: Vec<f64>,
+    off2: Vec<f64>,
+}
+
+impl Bands {
+    fn zeros(n: usize) -> Bands {
+        Bands {
+            diag: vec![0.0; n],
+            off1: vec![0.0; n],
+            off2: vec![0.0; n],
+        }
+    }
+
+    /// Adds row i = (a0, a1, a2) of A: it touches columns l = i − 1, i, r = i + 1 (mod N for
+    /// closed curves; an open curve's non-zero rows are interior, so no wrap is needed there).
+    /// Rows are added in increasing order, as `alphas` gives them: every entry sums its terms in
+    /// that order.
+    #[inline(always)]
+    fn add(&mut self, i: usize, [a0, a1, a2]: [f64; 3]) {
+        let n = self.diag.len();
+        let l = if i == 0 { n - 1 } else { i - 1 };
+        let r = if i + 1 == n { 0 } else { i + 1 };
+        self.diag[l] += a0 * a0;
+        self.diag[i] += a1 * a1;
+        self.diag[r] += a2 * a2;
+        self.off1[l] += a0 * a1; // entry (i − 1, i)
+        self.off1[i] += a1 * a2; // entry (i, i + 1)
+        self.off2[l] += a0 * a2; // entry (i − 1, i + 1)
+    }
+
+    fn into_hessian(self, topology: Topology) -> Hessian {
+        Hessian {
+            topology,
+            diag: self.diag,
+            off1: self.off1,
+            off2: self.off2,
+        }
+    }
+}
+
 /// The Hessian H = AᵀA of Kersey's energy E(f) = ½ pᵀHp (Kersey (2.1), §3.6), stored as three bands.
 ///
 /// H is symmetric positive semidefinite; pentadiagonal for open curves, cyclic pentadiagonal for
@@ -91,29 +134,31 @@ impl Hessian {
     /// assert!((d[2] - 6.0).abs() < 1e-12 && (o1[1] + 4.0).abs() < 1e-12 && (o2[0] - 1.0).abs() < 1e-12);
     /// ```
     pub fn new(knots: &Knots) -> Hessian {
-        let n = knots.vertex_count();
-        let mut diag = vec![0.0; n];
-        let mut off1 = vec![0.0; n];
-        let mut off2 = vec![0.0; n];
-        // Row i touches columns l = i − 1, i, r = i + 1 (mod N for closed curves; an open
-        // curve's non-zero rows are interior, so no wrap is needed there). The rows in
-        // increasing order, as `alphas` gives them: every entry sums its terms in that order.
-        for_each_row(knots, |i, [a0, a1, a2]| {
-            let l = if i == 0 { n - 1 } else { i - 1 };
-            let r = if i + 1 == n { 0 } else { i + 1 };
-            diag[l] += a0 * a0;
-            diag[i] += a1 * a1;
-            diag[r] += a2 * a2;
-            off1[l] += a0 * a1; // entry (i − 1, i)
-            off1[i] += a1 * a2; // entry (i, i + 1)
-            off2[l] += a0 * a2; // entry (i − 1, i + 1)
-        });
-        Hessian {
-            topology: knots.topology(),
-            diag,
-            off1,
-            off2,
+        let mut bands = Bands::zeros(knots.vertex_count());
+        for_each_row(knots, |i, row| bands.add(i, row));
+        bands.into_hessian(knots.topology())
+    }
+
+    /// H = AᵀA from the rows of A already formed, one per vertex as [`alphas`] gives them: the
+    /// bands of [`Hessian::new`] on the knots the rows came from, bit for bit (an open curve's
+    /// zero end rows are skipped, as there), without forming the rows again.
+    ///
+    /// ```
+    /// use divdiff::Knots;
+    /// use energy::{alphas, Hessian};
+    /// let knots = Knots::open(vec![0.0, 0.5, 2.0, 2.25, 4.0]).unwrap();
+    /// let h = Hessian::from_alphas(knots.topology(), &alphas(&knots));
+    /// assert_eq!(h, Hessian::new(&knots));
+    /// ```
+    pub fn from_alphas(topology: Topology, rows: &[[f64; 3]]) -> Hessian {
+        let n = rows.len();
+        let mut bands = Bands::zeros(n);
+        for (i, &row) in rows.iter().enumerate() {
+            if topology == Topology::Closed || (i > 0 && i + 1 < n) {
+                bands.add(i, row);
+            }
         }
+        bands.into_hessian(topology)
     }
 
     /// Open or closed.

@@ -42,12 +42,6 @@ pub(crate) fn linear(fp: &FixedProblem<'_>, fixed: &[bool], w: &[f64]) -> Result
     Ok(Points::new(d, x)?)
 }
 
-/// Refinement steps after a banded solve of [`Factored`] (1: on the badly scaled knots of
-/// `tests/linear_accuracy.rs` one step takes the answer from 4e-6 to 1e-8 … 1e-11 of the extent,
-/// and a second did not change that; each costs a residual and a solve: a smoothing solve at
-/// n = 10⁵, k = 7 took 46 ms in process without, 66 with one step, 82 with two).
-const REFINEMENT_STEPS: usize = 1;
-
 /// K = H ⊗ I_d + W factored, with what its iterative refinement needs: the rows of A
 /// (H = AᵀA, [`Stencil`]), the weight at each vertex, the right-hand side b and the fixed
 /// vertices.
@@ -60,13 +54,15 @@ struct Factored {
 }
 
 impl Factored {
-    /// Assembles ([`assemble`]) and factors K, and solves K x = b.
+    /// Assembles ([`assemble`], H from the stencil's rows of A) and factors K, and solves
+    /// K x = b.
     fn new(
         fp: &FixedProblem<'_>,
         fixed: &[bool],
         w: &[f64],
     ) -> Result<(Factored, Vec<f64>), Error> {
-        let (sys, b, is_fixed) = assemble(fp, fixed, w)?;
+        let stencil = Stencil::new(fp.knots);
+        let (sys, b, is_fixed) = assemble(fp, &stencil, fixed, w)?;
         let factor = sys.factor()?;
         drop(sys);
         let mut x = b.clone();
@@ -79,7 +75,7 @@ impl Factored {
         }
         let sys = Factored {
             factor,
-            stencil: Stencil::new(fp.knots),
+            stencil,
             weight,
             b,
             is_fixed,
@@ -108,41 +104,40 @@ impl Factored {
         out
     }
 
-    /// Iterative refinement of x ≈ K⁻¹b, at most [`REFINEMENT_STEPS`] while the residual falls
-    /// by half: r = b − Kx − f at the free vertices (0 at the fixed ones; `forces` adds f, read
-    /// off `state`, to Kx), `correct` turns r into the correction (a solve with K, or the
-    /// bordered system's, which also updates `state` and reads x), added to x.
+    /// One step of iterative refinement of x ≈ K⁻¹b: r = b − Kx − f at the free vertices (0 at
+    /// the fixed ones; `forces` adds f, read off `state`, to Kx), `correct` turns r into the
+    /// correction (a solve with K, or the bordered system's, which also updates `state` and
+    /// reads x), added to x; nothing when r is 0 or not finite. One step: on the badly scaled
+    /// knots of `tests/linear_accuracy.rs` it takes the answer from 4e-6 to 1e-8 … 1e-11 of the
+    /// extent and a second did not change that, while each costs a residual and a solve (a
+    /// smoothing solve at n = 10⁵, k = 7 took 46 ms in process without, 66 with one step, 82
+    /// with two).
     fn refine<S>(
         &self,
         x: &mut [f64],
         d: usize,
         state: &mut S,
         forces: impl Fn(&S, &mut [f64]),
-        mut correct: impl FnMut(&mut S, &[f64], &mut Vec<f64>) -> Result<(), Error>,
+        correct: impl FnOnce(&mut S, &[f64], &mut Vec<f64>) -> Result<(), Error>,
     ) -> Result<(), Error> {
-        let mut last = f64::INFINITY;
-        for _ in 0..REFINEMENT_STEPS {
-            let mut r = self.apply(x, d);
-            forces(state, &mut r);
-            for ((rv, bv), &fixed) in r
-                .chunks_exact_mut(d)
-                .zip(self.b.chunks_exact(d))
-                .zip(&self.is_fixed)
-            {
-                for (rk, bk) in rv.iter_mut().zip(bv) {
-                    *rk = if fixed { 0.0 } else { bk - *rk };
-                }
+        let mut r = self.apply(x, d);
+        forces(state, &mut r);
+        for ((rv, bv), &fixed) in r
+            .chunks_exact_mut(d)
+            .zip(self.b.chunks_exact(d))
+            .zip(&self.is_fixed)
+        {
+            for (rk, bk) in rv.iter_mut().zip(bv) {
+                *rk = if fixed { 0.0 } else { bk - *rk };
             }
-            let size = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            // (NaN stops too.)
-            if size.is_nan() || size >= 0.5 * last || size == 0.0 {
-                break;
-            }
-            last = size;
-            correct(state, x, &mut r)?;
-            for (xv, dv) in x.iter_mut().zip(&r) {
-                *xv += dv;
-            }
+        }
+        let size = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if !size.is_finite() || size == 0.0 {
+            return Ok(());
+        }
+        correct(state, x, &mut r)?;
+        for (xv, dv) in x.iter_mut().zip(&r) {
+            *xv += dv;
         }
         Ok(())
     }
@@ -152,12 +147,15 @@ impl Factored {
 /// (W q̃ at weighted vertices, q_i at fixed ones) and which vertices are fixed.
 fn assemble(
     fp: &FixedProblem<'_>,
+    stencil: &Stencil,
     fixed: &[bool],
     w: &[f64],
 ) -> Result<(System, Vec<f64>, Vec<bool>), Error> {
     let n_vert = fp.knots.vertex_count();
     let d = fp.q.dim();
-    let h = Hessian::new(fp.knots);
+    // (The rows the refinement's residual applies, summed once: `Hessian::new` would form them
+    // again.)
+    let h = Hessian::from_alphas(fp.knots.topology(), &stencil.rows);
     let stiff = stiff_weight(&h);
     let mut sys = hessian_system(h, d)?;
     let mut rhs = vec![0.0; n_vert * d];
