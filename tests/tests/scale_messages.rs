@@ -163,3 +163,27 @@ fn an_uncertified_solve_with_derivative_constraints_names_them() {
     v["tangents"][5]["half_angle"] = 0.05.into();
     solved(&v.to_string());
 }
+
+#[test]
+fn ball_radii_far_beyond_or_far_below_the_data() {
+    // A radius of 1e10 or 1e300 leaves its point free: solved and certified, as a radius of
+    // 100 (the optimum's ball there is inactive, so the energies are equal). A closed curve
+    // with one ball of 1e10 stopped uncertified; 1e300 (ε² overflows) made the certificate NaN.
+    let doc = |big: &str| {
+        format!(
+            r#"{{"points": [[0, 0], [1, 1], [2, 0], [3, 1], [4, 0], [5, 1]], "closed": true, "constraint": {{"type": "balls", "radii": [0.1, {big}, 0.1, 0.1, {big}, 0.1]}}}}"#
+        )
+    };
+    let reference = solved(&doc("100"))["energy"].as_f64().unwrap();
+    for big in ["1e10", "1e300"] {
+        let e = solved(&doc(big))["energy"].as_f64().unwrap();
+        assert!(
+            (e - reference).abs() <= 1e-9 * reference,
+            "{big}: {e} vs {reference}"
+        );
+    }
+    // Radii of 1e-260 on data of size 1e-100: refused naming the radius, where it was refused
+    // as "start.s[0] is invalid: not strictly inside its cone", a field the user never wrote.
+    let tiny = r#"{"points": [[0, 0], [1e-100, 1e-100], [2e-100, 0], [3e-100, 1e-100]], "constraint": {"type": "balls", "radii": [1e-260, 1e-260, 1e-101, 1e-260]}}"#;
+    assert_eq!(refused_field(tiny), "constraint.radii[0]");
+}

@@ -413,6 +413,96 @@ fn radii_from_zero_to_beyond_the_data() {
     }
 }
 
+/// A radius far beyond the data is a point left free ("don't care"): 1e10·L and 1e300 solve as
+/// a radius of 100·L does, where the optimum leaves that ball inactive — so both problems have
+/// the same optimum, reached on different numerical paths (the solvers see the huge radius
+/// capped, `RADIUS_CAP` in `constraint/balls.rs`, and the certificate the radius as given).
+/// Before the cap a closed curve with one ball of 1e10·L stopped without a certificate, and
+/// radii whose square overflows made the certificate NaN. Radii too small to represent against
+/// the data are refused naming the radius, not an internal start.
+#[test]
+fn free_points_by_huge_radii_solve_as_with_moderate_ones() {
+    for (name, q) in [
+        ("ellipse", data(8, true, 1.0, 0.0)),
+        ("noisy star", noisy_star(40)),
+    ] {
+        for topo in [Topology::Closed, Topology::Open] {
+            let l = extent(&q);
+            let n = q.len();
+            let free = [2, n / 2 + 1];
+            let balls = |big: f64| {
+                let r: Vec<f64> = (0..n)
+                    .map(|i| if free.contains(&i) { big } else { 0.02 * l })
+                    .collect();
+                Problem::new(q.clone())
+                    .with_topology(topo)
+                    .with_constraint(Constraint::Balls(r))
+            };
+            let label = format!("{name} {topo:?}");
+            let reference = balls(100.0 * l).solve().unwrap();
+            assert!(reference.kkt_residual <= KKT_GOOD, "{label}");
+            for &i in &free {
+                let v = reference.data_vertex[i];
+                let gap = reference
+                    .points
+                    .point(v)
+                    .iter()
+                    .zip(q.point(i))
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(
+                    gap < 50.0 * l,
+                    "{label}: the reference's ball {i} is not inactive"
+                );
+            }
+            for big in [1e10 * l, 1e300] {
+                let r = balls(big)
+                    .solve()
+                    .unwrap_or_else(|e| panic!("{label}, radius {big:e}: {e}"));
+                assert!(
+                    r.kkt_residual <= KKT_GOOD,
+                    "{label}, {big:e}: {}",
+                    r.kkt_residual
+                );
+                let rel = (r.energy - reference.energy).abs() / reference.energy;
+                assert!(
+                    rel <= 1e-9,
+                    "{label}, {big:e}: E {} vs {}",
+                    r.energy,
+                    reference.energy
+                );
+            }
+            // Every ball huge: a common point, the constant curve, and a finite certificate.
+            let all = Problem::new(q.clone())
+                .with_topology(topo)
+                .with_constraint(Constraint::Balls(vec![1e300; n]))
+                .solve()
+                .unwrap();
+            assert_eq!(all.energy, 0.0, "{label}");
+            assert!(
+                all.kkt_residual <= KKT_GOOD,
+                "{label}: {}",
+                all.kkt_residual
+            );
+        }
+    }
+    // Radii of 1e-260 on data of size 1e-100: refused naming the radii, not the start of the
+    // interior-point method (`Error::Conic`, "start.s[0] is invalid").
+    let q = data(8, true, 1e-100, 0.0);
+    let mut r = vec![1e-260; 8];
+    r[3] = 1e-101;
+    match Problem::new(q)
+        .with_topology(Topology::Closed)
+        .with_constraint(Constraint::Balls(r))
+        .solve()
+    {
+        Err(Error::Conic(e)) => panic!("an internal error: {e}"),
+        Err(_) => {}
+        Ok(r) => assert!(r.kkt_residual <= refine::EXACT_ACCEPT_KKT),
+    }
+}
+
 /// Iterations are bounded: the interior-point method with an absurdly low iteration limit
 /// returns [`Error::NotConverged`] carrying the best residual it reached (finite, positive).
 #[test]

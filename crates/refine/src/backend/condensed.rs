@@ -401,6 +401,14 @@ impl<'a> Condensed<'a> {
             s[r.start] = self.b[r.start];
             z[r.start] = f;
         }
+        // A cone's interior test squares its entries: a radius whose square underflows (ε of
+        // 1e-260 against data of size 1e-100) is no interior start; the method's own start is.
+        if s.iter()
+            .chain(&z)
+            .any(|&v| v != 0.0 && !(v * v).is_normal())
+        {
+            return None;
+        }
         Some(conic::Start {
             x,
             sz: Some((s, z)),

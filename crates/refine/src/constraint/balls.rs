@@ -11,6 +11,19 @@
 //! violation |p − q| − ε; complementarity |w(ε − |p − q|)|; duality gap ½ w(ε² − |p − q|²).
 //! Common point: projection onto each ball, with the necessary test that consecutive balls meet.
 //! Translation: the balls move with their centres, the data.
+//!
+//! # Radii far beyond the data
+//!
+//! A radius of 10¹⁰ times the data's extent (a user's "this point is free") left the
+//! interior-point method's slacks ten orders above everything else, and it stopped without a
+//! certificate (closed curves from ~10⁹·L). The solvers therefore see every radius capped at
+//! [`RADIUS_CAP`] times the data's extent L (the largest distance from `points[0]`, as
+//! validation measures it); the certificate ([`Kind::certify`]) keeps the radii as given. That is
+//! exact: a capped ball the optimum leaves clearly inactive carries no multiplier in the
+//! certificate, whose terms are then those of the given radius, term by term (the same force 0,
+//! violation, complementarity and gap 0). If a capped ball were active at the solution (a data
+//! vertex 10⁶·L from its point), the certificate, which reads the given radius as clearly
+//! inactive, would charge its force to stationarity and refuse the solve: never a wrong answer.
 
 use divdiff::Points;
 
@@ -24,6 +37,18 @@ use crate::Error;
 /// The radii.
 pub(crate) struct Balls<'a>(pub &'a [f64]);
 
+/// The solvers' radii are at most this multiple of the data's extent (module docs).
+pub(crate) const RADIUS_CAP: f64 = 1e6;
+
+impl Balls<'_> {
+    /// The radii the solvers see for data `q`: the given ones, each capped at [`RADIUS_CAP`]
+    /// times the data's extent (module docs).
+    fn solved_radii(&self, q: &Points) -> Vec<f64> {
+        let cap = RADIUS_CAP * banded::vector::max_dist_from(q.coords(), q.point(0));
+        self.0.iter().map(|&e| e.min(cap)).collect()
+    }
+}
+
 impl Kind for Balls<'_> {
     fn validate(&self, problem: &Problem) -> Result<(), Error> {
         super::check_len("radii", self.0.len(), problem.points.len())?;
@@ -35,9 +60,10 @@ impl Kind for Balls<'_> {
     }
 
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
+        let radii = self.solved_radii(stage.q);
         for (i, &v) in stage.data_vertex.iter().enumerate() {
             let qi = stage.q.point(i);
-            if self.0[i] == 0.0 {
+            if radii[i] == 0.0 {
                 rows.problem.fix(v, qi)?;
             } else {
                 rows.data(
@@ -46,7 +72,7 @@ impl Kind for Balls<'_> {
                     v,
                     ConvexSet::Ball {
                         center: qi.to_vec(),
-                        radius: self.0[i],
+                        radius: radii[i],
                     },
                 )?;
             }
@@ -54,11 +80,11 @@ impl Kind for Balls<'_> {
         Ok(())
     }
 
-    fn point_sets(&self, _: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
+    fn point_sets(&self, stage: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
         Some(
-            self.0
-                .iter()
-                .map(|&e| {
+            self.solved_radii(stage.q)
+                .into_iter()
+                .map(|e| {
                     Some(if e == 0.0 {
                         PointSet::Fixed
                     } else {
@@ -108,8 +134,12 @@ impl Kind for Balls<'_> {
             }
             terms.primal = terms.primal.max(gap - eps);
             terms.dual = terms.dual.max(-w * eps.max(gap));
-            terms.comp = terms.comp.max((w * (eps - gap)).abs());
-            terms.gap += (0.5 * w * (eps * eps - gap * gap)).abs();
+            // (A ball without a multiplier adds no gap: for radii near the top of the range,
+            // ε² overflows and 0·∞ would be NaN.)
+            if w != 0.0 {
+                terms.comp = terms.comp.max((w * (eps - gap)).abs());
+                terms.gap += (0.5 * w * (eps * eps - gap * gap)).abs();
+            }
             terms.stiffness = terms.stiffness.max(w.abs());
             terms.active[i] = gap >= (1.0 - at.active_tol) * eps;
         }
