@@ -187,3 +187,18 @@ fn ball_radii_far_beyond_or_far_below_the_data() {
     let tiny = r#"{"points": [[0, 0], [1e-100, 1e-100], [2e-100, 0], [3e-100, 1e-100]], "constraint": {"type": "balls", "radii": [1e-260, 1e-260, 1e-101, 1e-260]}}"#;
     assert_eq!(refused_field(tiny), "constraint.radii[0]");
 }
+
+#[test]
+fn end_derivatives_whose_energy_overflows_are_refused_naming_the_boundary() {
+    // A clamped end of 1e200 on data of size 1: the optimum's energy is ~1e400. It was written
+    // with `"energy": null` and exit code 0, as if certified; it is refused naming `boundary`.
+    // At 1e150 the energy (~3e299) is representable and the solve is certified.
+    let doc = |v: &str| {
+        format!(
+            r#"{{"points": [[0, 0], [1, 1], [2, 0], [3, 1], [4, 0]], "boundary": {{"type": "clamped", "start": [{v}, 0], "end": [0, {v}]}}}}"#
+        )
+    };
+    assert_eq!(refused_field(&doc("1e200")), "boundary");
+    let e = solved(&doc("1e150"))["energy"].as_f64().unwrap();
+    assert!(e.is_finite() && e > 1e290, "{e}");
+}

@@ -154,6 +154,23 @@ impl Problem {
     /// above [`crate::SolveOptions::accept_kkt`]: an answer that is not optimal is an error
     /// carrying the best residual reached, never a result.
     fn accept(&self, r: Refinement) -> Result<Refinement, crate::Error> {
+        // The data's extent is validated, so an energy that overflows comes from derivatives
+        // asked for far beyond the data's slopes (a clamped end of 1e200): no certificate can
+        // vouch for it, and it was written as `"energy": null` with exit code 0.
+        if !r.energy.is_finite() {
+            let field = if self.boundary != crate::Boundary::Natural {
+                "boundary"
+            } else if self.tangents.is_some() {
+                "tangents"
+            } else {
+                "points"
+            };
+            return Err(crate::Error::InvalidParameter {
+                field,
+                value: r.energy,
+                reason: "the optimal curve's energy overflows: the derivatives asked for are too large against the data's slopes; rescale them",
+            });
+        }
         let certified = r.kkt_residual <= self.options.accept_kkt; // false for NaN too
         if self.solver == Solver::Exact && !certified {
             return Err(crate::Error::NotConverged {
