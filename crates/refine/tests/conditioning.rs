@@ -416,7 +416,7 @@ fn radii_from_zero_to_beyond_the_data() {
 /// A radius far beyond the data is a point left free ("don't care"): 1e10·L and 1e300 solve as
 /// a radius of 100·L does, where the optimum leaves that ball inactive — so both problems have
 /// the same optimum, reached on different numerical paths (the solvers see the huge radius
-/// capped, `RADIUS_CAP` in `constraint/balls.rs`, and the certificate the radius as given).
+/// capped, `FAR_BOUND` in `constraint/mod.rs`, and the certificate the radius as given).
 /// Before the cap a closed curve with one ball of 1e10·L stopped without a certificate, and
 /// radii whose square overflows made the certificate NaN. Radii too small to represent against
 /// the data are refused naming the radius, not an internal start.
@@ -500,6 +500,62 @@ fn free_points_by_huge_radii_solve_as_with_moderate_ones() {
         Err(Error::Conic(e)) => panic!("an internal error: {e}"),
         Err(_) => {}
         Ok(r) => assert!(r.kkt_residual <= refine::EXACT_ACCEPT_KKT),
+    }
+}
+
+/// Half-space offsets far beyond the data are open sides ("no bound", 1e20 as other solvers
+/// spell infinity): a box with two such sides, and a point whose one half-space is 1e300 away,
+/// solve as the same problem with those sides removed (an empty set leaves a point free): the
+/// same optimum reached through other constraints. Before the solvers saw such offsets capped
+/// (`FAR_BOUND` in `constraint/mod.rs`) they stopped uncertified from 1e20 and were refused as
+/// "start.s[0] is invalid" from 1e200.
+#[test]
+fn open_sides_of_boxes_solve_as_removed_sides() {
+    for (name, q) in [
+        ("ellipse", data(8, true, 1.0, 0.0)),
+        ("noisy star", noisy_star(40)),
+    ] {
+        let l = extent(&q);
+        let Constraint::HalfSpaces(sets) = boxes(&q, 0.02 * l) else {
+            unreachable!()
+        };
+        for topo in [Topology::Closed, Topology::Open] {
+            let label = format!("{name} {topo:?}");
+            let solve = |sets: Vec<Vec<HalfSpace>>| {
+                Problem::new(q.clone())
+                    .with_topology(topo)
+                    .with_constraint(Constraint::HalfSpaces(sets))
+                    .solve()
+            };
+            let (a, b) = (2, q.len() / 2 + 1);
+            let mut removed = sets.clone();
+            removed[a].truncate(2); // the box's y sides gone
+            removed[b].clear();
+            let reference = solve(removed).unwrap_or_else(|e| panic!("{label}: {e}"));
+            assert!(reference.kkt_residual <= KKT_GOOD, "{label}");
+            for far in [1e20, 1e300] {
+                let mut open = sets.clone();
+                open[a][2].offset = far;
+                open[a][3].offset = far;
+                open[b] = vec![HalfSpace {
+                    normal: vec![1.0, 1.0],
+                    offset: far,
+                }];
+                let r = solve(open).unwrap_or_else(|e| panic!("{label}, {far:e}: {e}"));
+                assert!(
+                    r.kkt_residual <= KKT_GOOD,
+                    "{label}, {far:e}: {}",
+                    r.kkt_residual
+                );
+                let rel = (r.energy - reference.energy).abs() / reference.energy;
+                assert!(
+                    rel <= 1e-9,
+                    "{label}, {far:e}: E {} vs {}",
+                    r.energy,
+                    reference.energy
+                );
+            }
+        }
     }
 }
 

@@ -11,19 +11,8 @@
 //! violation |p − q| − ε; complementarity |w(ε − |p − q|)|; duality gap ½ w(ε² − |p − q|²).
 //! Common point: projection onto each ball, with the necessary test that consecutive balls meet.
 //! Translation: the balls move with their centres, the data.
-//!
-//! # Radii far beyond the data
-//!
-//! A radius of 10¹⁰ times the data's extent (a user's "this point is free") left the
-//! interior-point method's slacks ten orders above everything else, and it stopped without a
-//! certificate (closed curves from ~10⁹·L). The solvers therefore see every radius capped at
-//! [`RADIUS_CAP`] times the data's extent L (the largest distance from `points[0]`, as
-//! validation measures it); the certificate ([`Kind::certify`]) keeps the radii as given. That is
-//! exact: a capped ball the optimum leaves clearly inactive carries no multiplier in the
-//! certificate, whose terms are then those of the given radius, term by term (the same force 0,
-//! violation, complementarity and gap 0). If a capped ball were active at the solution (a data
-//! vertex 10⁶·L from its point), the certificate, which reads the given radius as clearly
-//! inactive, would charge its force to stationarity and refuse the solve: never a wrong answer.
+//! Radii beyond [`super::FAR_BOUND`] times the data's extent are capped there for the solvers
+//! (a point left free); the certificate keeps them as given.
 
 use divdiff::Points;
 
@@ -37,14 +26,10 @@ use crate::Error;
 /// The radii.
 pub(crate) struct Balls<'a>(pub &'a [f64]);
 
-/// The solvers' radii are at most this multiple of the data's extent (module docs).
-pub(crate) const RADIUS_CAP: f64 = 1e6;
-
 impl Balls<'_> {
-    /// The radii the solvers see for data `q`: the given ones, each capped at [`RADIUS_CAP`]
-    /// times the data's extent (module docs).
+    /// The radii the solvers see for data `q`: the given ones capped at [`super::far_cap`].
     fn solved_radii(&self, q: &Points) -> Vec<f64> {
-        let cap = RADIUS_CAP * banded::vector::max_dist_from(q.coords(), q.point(0));
+        let cap = super::far_cap(q);
         self.0.iter().map(|&e| e.min(cap)).collect()
     }
 }

@@ -9,6 +9,9 @@
 //! Certificate, per face (signed distance g = (n·p − c)/|n|): force w n (projected onto
 //! complementarity as for balls); violation g; complementarity and gap |w |n| g|.
 //! Common point: projection onto each half-space in turn. Translation by a: c ↦ c + n·a.
+//! Offsets beyond [`super::FAR_BOUND`] times the data's extent from a data point inside its set
+//! are capped there for the solvers (an open side of a box); the certificate keeps them as
+//! given. (A set its data point is outside of is left as given: capping could empty it.)
 
 use banded::vector::{dot, norm};
 use divdiff::Points;
@@ -22,6 +25,32 @@ use crate::{Constraint, Error};
 
 /// One set per data point.
 pub(crate) struct HalfSpaces<'a>(pub &'a [Vec<HalfSpace>]);
+
+impl HalfSpaces<'_> {
+    /// The sets the solvers see for data `q`: a set that contains its data point q_i with each
+    /// offset capped at n·q_i + [`super::far_cap`]·|n| (module docs), the others as given.
+    fn solved_sets(&self, q: &Points) -> Vec<Vec<HalfSpace>> {
+        let cap = super::far_cap(q);
+        self.0
+            .iter()
+            .enumerate()
+            .map(|(i, set)| {
+                let qi = q.point(i);
+                let inside = set.iter().all(|h| dot(&h.normal, qi) <= h.offset);
+                set.iter()
+                    .map(|h| HalfSpace {
+                        normal: h.normal.clone(),
+                        offset: if inside {
+                            h.offset.min(dot(&h.normal, qi) + cap * norm(&h.normal))
+                        } else {
+                            h.offset
+                        },
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
 
 impl Kind for HalfSpaces<'_> {
     fn validate(&self, problem: &Problem) -> Result<(), Error> {
@@ -41,17 +70,18 @@ impl Kind for HalfSpaces<'_> {
     }
 
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
+        let sets = self.solved_sets(stage.q);
         for (i, &v) in stage.data_vertex.iter().enumerate() {
-            if !self.0[i].is_empty() {
-                rows.data("sets", i, v, super::polytope(&self.0[i]))?;
+            if !sets[i].is_empty() {
+                rows.data("sets", i, v, super::polytope(&sets[i]))?;
             }
         }
         Ok(())
     }
 
-    fn point_sets(&self, _: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
+    fn point_sets(&self, stage: &FixedProblem<'_>) -> Option<Vec<Option<PointSet>>> {
         Some(
-            self.0
+            self.solved_sets(stage.q)
                 .iter()
                 .map(|set| {
                     (!set.is_empty()).then(|| {

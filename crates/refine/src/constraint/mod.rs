@@ -510,6 +510,28 @@ pub(crate) fn check_halfspaces(
 pub(crate) use banded::vector::dist;
 
 /// The half-spaces as the conic model's polytope.
+/// How far beyond the data, in multiples of the data's extent L (the largest distance from
+/// `points[0]`, as validation measures it), the solvers see a data constraint's bound: a ball's
+/// radius or a half-space's offset past this is capped there ([`far_cap`]).
+///
+/// Why: a bound far beyond the data is a user's "no bound" (a radius of 1e10 for a free point,
+/// an offset of 1e20 for an open side of a box, as other solvers spell infinity). It left the
+/// interior-point method's slacks ten or more orders above everything else: it stopped without
+/// a certificate (balls on closed curves from ~1e9·L, half-spaces from 1e20), or its start was
+/// refused as outside its cone (1e200). The certificate keeps the bounds as given, and that is
+/// exact: a capped bound the optimum leaves clearly inactive carries no multiplier there (both
+/// kinds project multipliers onto complementarity), so its certificate terms — force 0,
+/// violation, complementarity and gap 0 — are those of the bound as given. Were a capped bound
+/// active at a solution (a data vertex 10⁶·L from its point), the certificate, which reads the
+/// given bound as clearly inactive, would charge its force to stationarity and refuse the
+/// solve: never a wrong answer.
+pub(crate) const FAR_BOUND: f64 = 1e6;
+
+/// [`FAR_BOUND`] times the extent of the data `q`.
+pub(crate) fn far_cap(q: &Points) -> f64 {
+    FAR_BOUND * banded::vector::max_dist_from(q.coords(), q.point(0))
+}
+
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
     ConvexSet::HalfSpaces(set.iter().map(|h| (h.normal.clone(), h.offset)).collect())
 }
