@@ -10,7 +10,8 @@ mod noisy;
 use divdiff::{Parametrization, Points, Topology};
 use noisy::noisy_star;
 use refine::{
-    ConicOptions, ConicProblem, Constraint, ConvexSet, Error, HalfSpace, Problem, Refinement,
+    Boundary, ConicOptions, ConicProblem, Constraint, ConvexSet, Error, HalfSpace, Problem,
+    Refinement, Tangent,
 };
 
 /// Certified KKT residual met by well-scaled problems (the exact solver's acceptance level).
@@ -553,6 +554,68 @@ fn open_sides_of_boxes_solve_as_removed_sides() {
                     "{label}, {far:e}: E {} vs {}",
                     r.energy,
                     reference.energy
+                );
+            }
+        }
+    }
+}
+
+/// Derivative radii far beyond the data's slopes leave the derivative free: tension at every
+/// point on top of balls, a tangent ball and near-clamped ends of radius 1e10 or 1e300 solve as
+/// the problem without them. Before the solvers saw such radii capped (`far_derivative_cap` in
+/// `constraint/mod.rs`) tension of 1e10 with balls was refused uncertified with the advice to
+/// take "a larger radius", and 1e300 was refused as a singular system naming `points`.
+#[test]
+fn derivative_radii_far_beyond_the_slopes_leave_derivatives_free() {
+    let q = noisy_star(30);
+    let (l, n) = (extent(&q), q.len());
+    let balls = Constraint::Balls(vec![0.02 * l; n]);
+    for topo in [Topology::Closed, Topology::Open] {
+        let base = || Problem::new(q.clone()).with_topology(topo);
+        let certified = |p: Problem, label: &str| {
+            let r = p
+                .solve()
+                .unwrap_or_else(|e| panic!("{topo:?} {label}: {e}"));
+            assert!(
+                r.kkt_residual <= KKT_GOOD,
+                "{topo:?} {label}: {}",
+                r.kkt_residual
+            );
+            r.energy
+        };
+        let with_balls = certified(base().with_constraint(balls.clone()), "balls");
+        let natural = certified(base(), "natural");
+        for big in [1e10, 1e300] {
+            let label = format!("radius {big:e}");
+            let tension = vec![Some(Tangent::Tension { radius: big }); n];
+            let e = certified(
+                base().with_constraint(balls.clone()).with_tangents(tension),
+                &label,
+            );
+            assert!(
+                (e - with_balls).abs() <= 1e-9 * with_balls,
+                "{label}: {e} vs {with_balls}"
+            );
+            let mut one = vec![None; n];
+            one[5] = Some(Tangent::Ball {
+                center: vec![1.0, 0.0],
+                radius: big,
+            });
+            let e = certified(base().with_tangents(one), &label);
+            assert!(
+                (e - natural).abs() <= 1e-9 * natural,
+                "{label}: {e} vs {natural}"
+            );
+            if topo == Topology::Open {
+                let ends = Boundary::NearClamped {
+                    start: vec![1.0, 0.0],
+                    end: vec![0.0, 1.0],
+                    radius: big,
+                };
+                let e = certified(base().with_boundary(ends), &label);
+                assert!(
+                    (e - natural).abs() <= 1e-9 * natural,
+                    "{label}: {e} vs {natural}"
                 );
             }
         }

@@ -72,8 +72,10 @@ impl Kind for Ends<'_> {
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
         let rule = stage.problem.derivative;
         let last = stage.knots.vertex_count() - 1;
+        let cap = super::far_derivative_cap(stage);
         for (k, (v, set)) in [0, last].into_iter().zip(self.sets()).enumerate() {
             let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
+            let set = super::capped_derivative_set(set, cap);
             rows.derivative("boundary", k, stencil, set)?;
         }
         Ok(())

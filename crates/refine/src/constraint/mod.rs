@@ -532,6 +532,32 @@ pub(crate) fn far_cap(q: &Points) -> f64 {
     FAR_BOUND * banded::vector::max_dist_from(q.coords(), q.point(0))
 }
 
+/// [`FAR_BOUND`] times the data's largest slope on the stage's knots, max_i |q_{i+1} − q_i| /
+/// (t_{i_{k+1}} − t_{i_k}): where the solvers cap the radii of derivative balls (tension, a
+/// tangent ball's radius beyond its centre's length, near-clamped ends), as [`far_cap`] caps
+/// the data constraints' bounds, with the same argument (the certificate keeps the radii as
+/// given).
+pub(crate) fn far_derivative_cap(stage: &FixedProblem<'_>) -> f64 {
+    let (q, t, dv) = (stage.q, stage.knots.values(), stage.data_vertex);
+    let slope = (1..q.len()).fold(0.0f64, |a, i| {
+        let chord = banded::vector::dist(q.point(i), q.point(i - 1));
+        a.max(chord / (t[dv[i]] - t[dv[i - 1]]))
+    });
+    FAR_BOUND * slope
+}
+
+/// A derivative ball {|Df − c| ≤ r} with r capped at |c| + `cap` (it still holds every Df with
+/// |Df| ≤ cap); other sets unchanged.
+pub(crate) fn capped_derivative_set(set: ConvexSet, cap: f64) -> ConvexSet {
+    match set {
+        ConvexSet::Ball { center, radius } => {
+            let radius = radius.min(banded::vector::norm(&center) + cap);
+            ConvexSet::Ball { center, radius }
+        }
+        set => set,
+    }
+}
+
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
     ConvexSet::HalfSpaces(set.iter().map(|h| (h.normal.clone(), h.offset)).collect())
 }

@@ -110,9 +110,11 @@ impl Kind for Tangents<'_> {
 
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
         let rule = stage.problem.derivative;
+        let cap = super::far_derivative_cap(stage);
         for (i, set) in self.sets(stage.q.dim()) {
             let v = stage.data_vertex[i];
             let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
+            let set = super::capped_derivative_set(set, cap);
             rows.derivative("tangents", i, stencil, set)?;
         }
         Ok(())
