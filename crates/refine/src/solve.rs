@@ -49,7 +49,7 @@ impl Problem {
             }
         }
         if centroid.iter().all(|&c| c == 0.0) {
-            return self.accept(algorithm::run(self)?);
+            return self.accept(run_rescaled(self)?);
         }
         let mut centred = self.clone();
         for i in 0..n {
@@ -64,7 +64,7 @@ impl Problem {
         }
         // (Centring rounds: points distinct before may coincide after; refused, not solved.)
         centred.validate()?;
-        let mut r = algorithm::run(&centred)?;
+        let mut r = run_rescaled(&centred)?;
         for x in r.points.coords_mut().chunks_exact_mut(d) {
             for (x, c) in x.iter_mut().zip(&centroid) {
                 *x += c;
@@ -181,6 +181,105 @@ impl Problem {
         }
         Ok(r)
     }
+}
+
+/// Where [`run_rescaled`] rescales: a data extent or a mean data knot span outside
+/// 2^−64 … 2^64 (about 1e−19 … 1e19).
+const RESCALE_BEYOND: i32 = 64;
+
+/// [`algorithm::run`], for balls alone (no derivative constraints, the exact solver) on data or
+/// knots of extreme scale solved on points and radii scaled by 2^−e and knots by 2^−f, powers of
+/// two that bring the data's extent and the mean data span near 1, and mapped back.
+///
+/// Why: a ball's multiplier is its force over its radius, w ∝ 1/h³ on spans h, and the forces
+/// scale with the points: on centripetal knots of data at 1e80 (spans ~1e40) or 1e−80 the
+/// interior-point method's products of such numbers under- or overflowed, and it stopped in one
+/// or two iterations (the other data constraints were solved at every scale of the extent
+/// range). Balls without derivative constraints are homogeneous: the optimum on knots 2^−f·t
+/// for data 2^−e·q is 2^−e·p, and powers of two scale exactly, so the certificate — every part
+/// relative — is the original problem's. The data knots are computed from the data as given
+/// and passed scaled (knot updates map back onto their span); the result maps back as
+/// points 2^e·p, knots 2^f·t, E 2^(2e−3f)·E, ball weights 2^(−3f)·w, and the reactions of
+/// radius-0 points 2^(e−3f)·λ.
+fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
+    let crate::Constraint::Balls(radii) = &problem.constraint else {
+        return algorithm::run(problem);
+    };
+    let derivative_free = problem.boundary == crate::Boundary::Natural
+        && problem
+            .tangents
+            .as_ref()
+            .is_none_or(|t| t.iter().all(Option::is_none));
+    if !derivative_free || problem.solver != Solver::Exact {
+        return algorithm::run(problem);
+    }
+    let q = &problem.points;
+    let extent = banded::vector::max_dist_from(q.coords(), q.point(0));
+    let u = problem.data_knots_unvalidated()?;
+    let t = u.values();
+    let mean_span = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    // The power of two nearest x when x is beyond 2^±RESCALE_BEYOND, else 0 (nothing to do).
+    let beyond = |x: f64| {
+        let e = x.log2().round() as i32;
+        if e.abs() > RESCALE_BEYOND {
+            e
+        } else {
+            0
+        }
+    };
+    let (e, f) = (beyond(extent), beyond(mean_span));
+    if (e, f) == (0, 0) {
+        return algorithm::run(problem);
+    }
+    let mut scaled = problem.clone();
+    let down = |x: &f64| times_power_of_two(*x, -e);
+    scaled
+        .points
+        .coords_mut()
+        .iter_mut()
+        .for_each(|x| *x = down(x));
+    scaled.constraint = crate::Constraint::Balls(radii.iter().map(down).collect());
+    scaled.knots = Some(t.iter().map(|&x| times_power_of_two(x, -f)).collect());
+    let mut r = algorithm::run(&scaled)?;
+    r.points
+        .coords_mut()
+        .iter_mut()
+        .for_each(|x| *x = times_power_of_two(*x, e));
+    r.knots = divdiff::Knots::new(
+        r.knots.topology(),
+        r.knots
+            .values()
+            .iter()
+            .map(|&x| times_power_of_two(x, f))
+            .collect(),
+    )?;
+    r.energy = times_power_of_two(r.energy, 2 * e - 3 * f);
+    for s in &mut r.stages {
+        s.energy = times_power_of_two(s.energy, 2 * e - 3 * f);
+    }
+    r.multipliers = r
+        .multipliers
+        .to_vecs()
+        .into_iter()
+        .zip(radii)
+        .map(|(m, &radius)| {
+            let k = if radius == 0.0 { e - 3 * f } else { -3 * f };
+            m.into_iter().map(|x| times_power_of_two(x, k)).collect()
+        })
+        .collect::<Vec<Vec<f64>>>()
+        .into();
+    Ok(r)
+}
+
+/// x·2^k, exact unless the result over- or underflows (in steps: 2^k alone need not be
+/// representable, e.g. k = −3f for knots of 1e300).
+fn times_power_of_two(mut x: f64, mut k: i32) -> f64 {
+    while k != 0 {
+        let step = k.clamp(-1000, 1000);
+        x *= 2f64.powi(step);
+        k -= step;
+    }
+    x
 }
 
 /// One exact fixed-knot solve of stage 0 (the near-interpolatory k-level step) on the given

@@ -622,6 +622,72 @@ fn derivative_radii_far_beyond_the_slopes_leave_derivatives_free() {
     }
 }
 
+/// Balls at the ends of the extent range (1e±100, 1e±140) give the solution at scale 1,
+/// scaled: points ∝ s, knots ∝ s^{1/2} (centripetal), E ∝ s^{1/2}, ball weights (force over
+/// radius, ∝ 1/h³) ∝ s^{−3/2}, the reactions of radius-0 points ∝ s^{−1/2} — each compared
+/// with the scale-1 solve to 1e-9. Before the solve rescaled such problems by powers of two
+/// (`run_rescaled` in `solve.rs`) the interior-point method stopped after one or two iterations
+/// from 1e±80 (the other constraint kinds were solved at every scale).
+#[test]
+fn balls_at_the_ends_of_the_extent_range_scale_exactly() {
+    let base = noisy_star(40);
+    let n = base.len();
+    let radii = |s: f64| -> Vec<f64> {
+        (0..n)
+            .map(|i| match i % 5 {
+                0 => 0.0,
+                1 => 0.3 * s,
+                _ => 1e-3 * s,
+            })
+            .collect()
+    };
+    for topo in [Topology::Closed, Topology::Open] {
+        let solve = |s: f64| {
+            let q = Points::new(2, base.coords().iter().map(|x| x * s).collect()).unwrap();
+            Problem::new(q)
+                .with_topology(topo)
+                .with_constraint(Constraint::Balls(radii(s)))
+                .solve()
+                .unwrap_or_else(|e| panic!("{topo:?} scale {s:e}: {e}"))
+        };
+        let one = solve(1.0);
+        let l = extent(&base);
+        for s in [1e-140, 1e-100, 1e100, 1e140] {
+            let label = format!("{topo:?} scale {s:e}");
+            let r = solve(s);
+            assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
+            let close = |a: f64, b: f64, scale: f64, what: &str| {
+                assert!(
+                    (a - b).abs() <= 1e-9 * scale,
+                    "{label} {what}: {a:e} vs {b:e}"
+                )
+            };
+            for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
+                close(a / s, *b, l, "points");
+            }
+            let span = one.knots.values().last().unwrap() - one.knots.values()[0];
+            for (a, b) in r.knots.values().iter().zip(one.knots.values()) {
+                close(a / s.sqrt(), *b, span, "knots");
+            }
+            close(r.energy / s.sqrt(), one.energy, one.energy, "energy");
+            for (i, (a, b)) in r.multipliers.iter().zip(one.multipliers.iter()).enumerate() {
+                // (rows: [w] for a ball, the d reaction components at radius 0)
+                let k = if i % 5 == 0 { s.sqrt() } else { s * s.sqrt() };
+                let size = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                let big = one
+                    .multipliers
+                    .iter()
+                    .filter(|m| m.len() == b.len())
+                    .flatten()
+                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                for (x, y) in a.iter().zip(b) {
+                    close(x * k, *y, big.max(size), "multipliers");
+                }
+            }
+        }
+    }
+}
+
 /// Iterations are bounded: the interior-point method with an absurdly low iteration limit
 /// returns [`Error::NotConverged`] carrying the best residual it reached (finite, positive).
 #[test]
