@@ -182,3 +182,37 @@ fn messages_say_what_the_field_must_be() {
     let (code, _, err) = run_cli(&["refine", "-"], &balls("0"));
     assert_eq!(code, 0, "{err}");
 }
+
+#[test]
+fn a_polygon_whose_refinement_overflows_says_so() {
+    // Finite points near the f64 limit: the rule's weights > 1 overflow the refined polygon. The
+    // refusal said "polygon.points: points[11] is not finite" of a polygon of four finite points.
+    let dir = curvefit_tests::scratch_dir("overflow");
+    let poly = dir.join("poly.json");
+    std::fs::write(
+        &poly,
+        r#"{"points": [[0, 0], [1, 0], [1, 1.7e308], [0, 1]], "closed": true}"#,
+    )
+    .unwrap();
+    let p = poly.to_str().unwrap();
+    let args = [
+        "scheme",
+        "--stencil",
+        "4",
+        "--arity",
+        "2",
+        "--apply",
+        p,
+        "--levels",
+        "3",
+    ];
+    let (code, out, err) = run_cli(&args, "");
+    assert_eq!(code, 2, "{err}");
+    assert!(out.is_empty());
+    assert!(
+        err.starts_with(
+            "error: polygon.points: coordinates too large: the refined polygon overflows f64"
+        ),
+        "{err}"
+    );
+}

@@ -235,9 +235,17 @@ pub fn solve(problem: &SchemeProblem) -> Result<SchemeResult, InputError> {
             {
                 return Err(too_many());
             }
+            // (The points are validated finite: a non-finite refined point is an overflow of
+            // the affine combinations, weights > 1, near the f64 limit, as for surfaces.)
             let refined = scheme
                 .subdivide(&pts, topology, levels)
-                .map_err(|e| InputError::new("polygon.points", e))?;
+                .map_err(|e| match e {
+                    subdivision::Error::NonFinite { .. } => InputError::new(
+                        "polygon.points",
+                        format!("coordinates too large: the refined polygon overflows f64 ({e})"),
+                    ),
+                    e => InputError::new("polygon.points", e),
+                })?;
             Some(PolygonResult {
                 closed: poly.closed,
                 input: poly.points.clone(),
