@@ -167,14 +167,14 @@ fn an_uncertified_solve_with_derivative_constraints_names_them() {
 #[test]
 fn ball_radii_far_beyond_or_far_below_the_data() {
     // A radius of 1e10 or 1e300 leaves its point free: solved and certified, as a radius of
-    // 100 (the optimum's ball there is inactive, so the energies are equal). A closed curve
+    // 10 (the optimum's ball there is inactive, so the energies are equal). A closed curve
     // with one ball of 1e10 stopped uncertified; 1e300 (ε² overflows) made the certificate NaN.
     let doc = |big: &str| {
         format!(
             r#"{{"points": [[0, 0], [1, 1], [2, 0], [3, 1], [4, 0], [5, 1]], "closed": true, "constraint": {{"type": "balls", "radii": [0.1, {big}, 0.1, 0.1, {big}, 0.1]}}}}"#
         )
     };
-    let reference = solved(&doc("100"))["energy"].as_f64().unwrap();
+    let reference = solved(&doc("10"))["energy"].as_f64().unwrap();
     for big in ["1e10", "1e300"] {
         let e = solved(&doc(big))["energy"].as_f64().unwrap();
         assert!(
@@ -182,10 +182,24 @@ fn ball_radii_far_beyond_or_far_below_the_data() {
             "{big}: {e} vs {reference}"
         );
     }
-    // Radii of 1e-260 on data of size 1e-100: refused naming the radius, where it was refused
-    // as "start.s[0] is invalid: not strictly inside its cone", a field the user never wrote.
-    let tiny = r#"{"points": [[0, 0], [1e-100, 1e-100], [2e-100, 0], [3e-100, 1e-100]], "constraint": {"type": "balls", "radii": [1e-260, 1e-260, 1e-101, 1e-260]}}"#;
-    assert_eq!(refused_field(tiny), "constraint.radii[0]");
+    // Radii of 1e-310 (subnormal) on data of size 1: refused naming the radius, where radii of
+    // 1e-260 on data of size 1e-100 were refused as "start.s[0] is invalid: not strictly inside
+    // its cone", a field the user never wrote (those are now solved on rescaled data).
+    let tiny = |r: &str, s: &str| {
+        format!(
+            r#"{{"points": [[0, 0], [{s}, {s}], [2{s2}, 0], [3{s2}, {s}]], "constraint": {{"type": "balls", "radii": [{r}, {r}, {big}, {r}]}}}}"#,
+            s2 = if s == "1" { "" } else { "e-100" },
+            big = if s == "1" { "1e-1" } else { "1e-101" },
+        )
+    };
+    assert_eq!(refused_field(&tiny("1e-310", "1")), "constraint.radii[0]");
+    // On the rescaled data that solve is certified, but the balls' multipliers (force over
+    // radius, ~1e310) overflow: refused naming the first such radius, not written as null.
+    assert_eq!(
+        refused_field(&tiny("1e-260", "1e-100")),
+        "constraint.radii[0]"
+    );
+    solved(&tiny("1e-200", "1e-100"));
 }
 
 #[test]

@@ -7,7 +7,8 @@ Problems: n = 2 ... 5000, d = 1/2/3, open and closed; even, jittered, clustered,
 straight points at scales 1e-3 ... 1e4 and offsets up to 1e6; interpolation, balls, smoothing and
 half-space sets; random tangent sets (ball, wedge, tension, half-space) on 40 %, clamped or
 near-clamped ends, further levels, the "average" derivative, other parametrizations, given knots
-(spans 1e-3 ... 10), the paper's solver on small ones. Checks, independent of the solver: the exit
+(spans 1e-3 ... 10), the paper's solver on small ones; with FAR=1 also bounds far beyond the data ("no bound" as a
+huge radius or offset) and balls at data scales of 1e+-90 and 1e+-120. Checks, independent of the solver: the exit
 code is 0 or 2 (never a panic or a timeout), nothing is written on a refusal, the points are
 finite, an exact answer has kkt_residual <= 1e-9, and its data vertices keep to their constraint
 (interpolated, inside their balls, inside their half-spaces) to 1e-7 of the data's extent.
@@ -20,6 +21,8 @@ BIN = os.environ.get("BIN", os.path.join(ROOT, "target", "release", "curvefit"))
 rng = np.random.default_rng(int(sys.argv[1]) if len(sys.argv) > 1 else 1)
 COUNT = int(sys.argv[2]) if len(sys.argv) > 2 else 200
 OUT = os.environ.get("SWEEP_OUT", "/tmp/curvefit-sweep/refine"); os.makedirs(OUT, exist_ok=True)
+FAR = os.environ.get("FAR") == "1"
+far_rng = np.random.default_rng(1000 + (int(sys.argv[1]) if len(sys.argv) > 1 else 1))
 
 def points(n, d, closed):
     kind = rng.choice(["even", "jitter", "cluster", "noisy", "line"])
@@ -94,7 +97,30 @@ def make():
         kn = np.cumsum(np.concatenate([[0], 10.0 ** rng.uniform(-3, 1, n - (0 if closed else 1))]))
         prob["knots"] = kn.tolist()
     if rng.random() < 0.1 and n <= 100: prob["solver"] = "paper"
+    if FAR: far(prob)
     return prob, kind
+
+def far(prob):
+    """FAR=1: "no bound" spelled as a huge number on some of the bounds (ROBUSTNESS.md section 4,
+    item 29), and balls at the ends of the scale range, drawn from their own stream so that the
+    problems are otherwise those of the same seed without FAR."""
+    huge = lambda: float(10.0 ** far_rng.uniform(8, 300))
+    c = prob.get("constraint", {"type": "interpolate"})
+    if c["type"] == "balls":
+        r = c["radii"]
+        for i in range(len(r)):
+            if far_rng.random() < 0.2: r[i] = huge()
+        if far_rng.random() < 0.2 and "knots" not in prob and "tangents" not in prob and "boundary" not in prob:
+            s = 10.0 ** far_rng.choice([-120, -90, 90, 120])
+            prob["points"] = (np.array(prob["points"]) * s).tolist(); c["radii"] = [min(x * s, 1e300) for x in r]
+    if c["type"] == "halfspaces":
+        for hs in c["sets"]:
+            for h in hs:
+                if far_rng.random() < 0.3: h["offset"] = huge()
+    for t in prob.get("tangents") or []:
+        if t and "radius" in t and far_rng.random() < 0.5: t["radius"] = huge()
+    b = prob.get("boundary")
+    if b and b["type"] == "near_clamped" and far_rng.random() < 0.5: b["radius"] = huge()
 
 def check(prob, res):
     bad = []

@@ -171,6 +171,24 @@ impl Problem {
                 reason: "the optimal curve's energy overflows: the derivatives asked for are too large against the data's slopes; rescale them",
             });
         }
+        // A multiplier that overflows (a ball's force over a radius of 1e-260 against data of
+        // 1e-100: ~1e310) is no certificate either; it was written as null.
+        if let Some(index) =
+            (0..r.multipliers.len()).find(|&i| r.multipliers.row(i).iter().any(|x| !x.is_finite()))
+        {
+            let field = match &self.constraint {
+                crate::Constraint::Balls(_) => "radii",
+                crate::Constraint::HalfSpaces(_) => "sets",
+                crate::Constraint::Smoothing(_) => "weights",
+                crate::Constraint::Interpolate => "points",
+            };
+            return Err(crate::Error::InvalidValue {
+                field,
+                index,
+                value: f64::INFINITY,
+                reason: "the multiplier of this point's constraint overflows (a ball's force over a radius too small to tell from 0 against the data: give that point radius 0 to interpolate it exactly, or a larger radius)",
+            });
+        }
         let certified = r.kkt_residual <= self.options.accept_kkt; // false for NaN too
         if self.solver == Solver::Exact && !certified {
             return Err(crate::Error::NotConverged {

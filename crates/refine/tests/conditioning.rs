@@ -488,8 +488,9 @@ fn free_points_by_huge_radii_solve_as_with_moderate_ones() {
             );
         }
     }
-    // Radii of 1e-260 on data of size 1e-100: refused naming the radii, not the start of the
-    // interior-point method (`Error::Conic`, "start.s[0] is invalid").
+    // Radii of 1e-260 on data of size 1e-100: refused (their multipliers, force over radius,
+    // overflow), not as the start of the interior-point method (`Error::Conic`, "start.s[0] is
+    // invalid").
     let q = data(8, true, 1e-100, 0.0);
     let mut r = vec![1e-260; 8];
     r[3] = 1e-101;

@@ -83,8 +83,10 @@ impl Kind for Ends<'_> {
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
         let last = at.knots.vertex_count() - 1;
+        let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
         for (v, set) in [0, last].into_iter().zip(self.sets()) {
-            super::derivative_terms(at, terms, v, &set);
+            let solved = super::capped_derivative_set(set.clone(), cap);
+            super::capped_derivative_terms(at, terms, v, &set, &solved);
         }
     }
 }

@@ -516,34 +516,47 @@ pub(crate) use banded::vector::dist;
 ///
 /// Why: a bound far beyond the data is a user's "no bound" (a radius of 1e10 for a free point,
 /// an offset of 1e20 for an open side of a box, as other solvers spell infinity). It left the
-/// interior-point method's slacks ten or more orders above everything else: it stopped without
-/// a certificate (balls on closed curves from ~1e9·L, half-spaces from 1e20), or its start was
-/// refused as outside its cone (1e200). The certificate keeps the bounds as given, and that is
-/// exact: a capped bound the optimum leaves clearly inactive carries no multiplier there (both
-/// kinds project multipliers onto complementarity), so its certificate terms — force 0,
-/// violation, complementarity and gap 0 — are those of the bound as given. Were a capped bound
-/// active at a solution (a data vertex 10⁶·L from its point), the certificate, which reads the
-/// given bound as clearly inactive, would charge its force to stationarity and refuse the
-/// solve: never a wrong answer.
-pub(crate) const FAR_BOUND: f64 = 1e6;
+/// interior-point method's slacks many orders above everything else: it stopped without a
+/// certificate (balls on closed curves from ~1e9·L, half-spaces from 1e20), or its start was
+/// refused as outside its cone (1e200); on random hard problems a cap of 1e6·L still left one
+/// in ten such problems uncertified, 1e2·L none that bounded ones did not (ROBUSTNESS.md §4,
+/// 29). The certificate keeps the bounds as given, and that is exact: a capped bound the
+/// optimum leaves clearly inactive carries no multiplier there (both kinds project multipliers
+/// onto complementarity), so its certificate terms — force 0, violation, complementarity and
+/// gap 0 — are those of the bound as given. Were a capped bound active at a solution (a data
+/// vertex 100·L from its point), the certificate, which reads the given bound as clearly
+/// inactive, would charge its force to stationarity and refuse the solve: never a wrong answer.
+pub(crate) const FAR_BOUND: f64 = 1e2;
 
 /// [`FAR_BOUND`] times the extent of the data `q`.
 pub(crate) fn far_cap(q: &Points) -> f64 {
     FAR_BOUND * banded::vector::max_dist_from(q.coords(), q.point(0))
 }
 
-/// [`FAR_BOUND`] times the data's largest slope on the stage's knots, max_i |q_{i+1} − q_i| /
-/// (t_{i_{k+1}} − t_{i_k}): where the solvers cap the radii of derivative balls (tension, a
-/// tangent ball's radius beyond its centre's length, near-clamped ends), as [`far_cap`] caps
-/// the data constraints' bounds, with the same argument (the certificate keeps the radii as
-/// given).
+/// How far beyond the data's largest slope max_i |q_{i+1} − q_i| / (t_{i_{k+1}} − t_{i_k}) the
+/// solvers see a derivative ball's radius (tension, a tangent ball's radius beyond its centre's
+/// length, near-clamped ends): capped there ([`far_derivative_cap`]), for the reason of
+/// [`FAR_BOUND`] (tension of 1e10 with balls was refused uncertified, 1e300 as a singular
+/// system). Larger than `FAR_BOUND`: a derivative ball's dual is not projected onto
+/// complementarity (a leftover interior-point dual times the stencil's 1/h is a force the
+/// certificate must balance), so the certificate reads a capped ball as solved, capped, when
+/// Df keeps well inside it ([`capped_derivative_terms`]), and a cap this far leaves every
+/// derivative ball of ordinary size as given.
+pub(crate) const FAR_DERIVATIVE_BOUND: f64 = 1e6;
+
+/// [`FAR_DERIVATIVE_BOUND`] times the data's largest slope on the stage's knots.
 pub(crate) fn far_derivative_cap(stage: &FixedProblem<'_>) -> f64 {
-    let (q, t, dv) = (stage.q, stage.knots.values(), stage.data_vertex);
+    derivative_cap(stage.q, stage.knots, stage.data_vertex)
+}
+
+/// [`far_derivative_cap`] of data `q` at `data_vertex` on `knots`.
+pub(crate) fn derivative_cap(q: &Points, knots: &Knots, data_vertex: &[usize]) -> f64 {
+    let (t, dv) = (knots.values(), data_vertex);
     let slope = (1..q.len()).fold(0.0f64, |a, i| {
         let chord = banded::vector::dist(q.point(i), q.point(i - 1));
         a.max(chord / (t[dv[i]] - t[dv[i - 1]]))
     });
-    FAR_BOUND * slope
+    FAR_DERIVATIVE_BOUND * slope
 }
 
 /// A derivative ball {|Df − c| ≤ r} with r capped at |c| + `cap` (it still holds every Df with
@@ -556,6 +569,46 @@ pub(crate) fn capped_derivative_set(set: ConvexSet, cap: f64) -> ConvexSet {
         }
         set => set,
     }
+}
+
+/// [`derivative_terms`] of a constraint given as `set` that the solvers saw as `solved`
+/// ([`capped_derivative_set`]). Where the cap changed a ball and Df keeps well inside the capped
+/// ball (within half its radius of the centre), the terms of the capped ball: the problem solved
+/// has the given problem's optimum wherever that ball is inactive at it, so its certificate
+/// bounds the given problem's excess energy too, while the given radius (1e300) times the
+/// dual's leftover would read as a duality gap of 1e285. Otherwise the terms of the set as
+/// given (a capped ball the solution reaches is refused, never answered).
+pub(crate) fn capped_derivative_terms(
+    at: &At<'_>,
+    terms: &mut Terms,
+    v: usize,
+    set: &ConvexSet,
+    solved: &ConvexSet,
+) {
+    if let (
+        ConvexSet::Ball { radius, .. },
+        ConvexSet::Ball {
+            center,
+            radius: capped,
+        },
+    ) = (set, solved)
+    {
+        if capped < radius {
+            if let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) {
+                let (x, d) = (at.p.coords(), at.q.dim());
+                let mut y = vec![0.0; d];
+                for &(u, c) in stencil.iter() {
+                    for k in 0..d {
+                        y[k] += c * (x[u * d + k] - x[v * d + k]);
+                    }
+                }
+                if banded::vector::dist(&y, center) <= 0.5 * capped {
+                    return derivative_terms(at, terms, v, solved);
+                }
+            }
+        }
+    }
+    derivative_terms(at, terms, v, set);
 }
 
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {

@@ -121,9 +121,11 @@ impl Kind for Tangents<'_> {
     }
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
+        let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
         for (i, set) in self.sets(at.q.dim()) {
             let v = at.data_vertex[i];
-            super::derivative_terms(at, terms, v, &set);
+            let solved = super::capped_derivative_set(set.clone(), cap);
+            super::capped_derivative_terms(at, terms, v, &set, &solved);
         }
     }
 }
