@@ -480,7 +480,7 @@ fn free_points_by_huge_radii_solve_as_with_moderate_ones() {
                 .with_constraint(Constraint::Balls(vec![1e300; n]))
                 .solve()
                 .unwrap();
-            assert_eq!(all.energy, 0.0, "{label}");
+            assert!(all.energy.abs() <= 0.0, "{label}: E {}", all.energy);
             assert!(
                 all.kkt_residual <= KKT_GOOD,
                 "{label}: {}",
