@@ -509,7 +509,6 @@ pub(crate) fn check_halfspaces(
 /// The Euclidean distance |a − b| (scaled: no overflow or underflow of the squares).
 pub(crate) use banded::vector::dist;
 
-/// The half-spaces as the conic model's polytope.
 /// How far beyond the data, in multiples of the data's extent L (the largest distance from
 /// `points[0]`, as validation measures it), the solvers see a data constraint's bound: a ball's
 /// radius or a half-space's offset past this is capped there ([`far_cap`]).
@@ -611,6 +610,7 @@ pub(crate) fn capped_derivative_terms(
     derivative_terms(at, terms, v, set);
 }
 
+/// The half-spaces as the conic model's polytope.
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
     ConvexSet::HalfSpaces(set.iter().map(|h| (h.normal.clone(), h.offset)).collect())
 }
