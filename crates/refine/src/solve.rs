@@ -160,7 +160,11 @@ impl Problem {
         if !r.energy.is_finite() {
             let field = if self.boundary != crate::Boundary::Natural {
                 "boundary"
-            } else if self.tangents.is_some() {
+            } else if self
+                .tangents
+                .as_ref()
+                .is_some_and(|t| t.iter().any(Option::is_some))
+            {
                 "tangents"
             } else {
                 "points"
