@@ -262,7 +262,14 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .for_each(|x| *x = down(x));
     scaled.constraint = crate::Constraint::Balls(radii.iter().map(down).collect());
     scaled.knots = Some(t.iter().map(|&x| times_power_of_two(x, -f)).collect());
-    let mut r = algorithm::run(&scaled)?;
+    let mut r = match algorithm::run(&scaled) {
+        // The scaled problem's knots are given; the user's may not be: a failed split is
+        // reported as the problem given meets it (naming the points, not `knots[i]`).
+        Err(crate::Error::InvalidKnots { .. }) if problem.knots.is_none() => {
+            return algorithm::run(problem)
+        }
+        r => r?,
+    };
     r.points
         .coords_mut()
         .iter_mut()

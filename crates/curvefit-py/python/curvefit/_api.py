@@ -187,7 +187,8 @@ def refine(
         level_k: default ``1``. New vertices per span in each further step (≥ 1).
         constraint: default ``{"type": "interpolate"}``. What the data vertices p_{i_k} must
             satisfy: ``{"type": "interpolate"}`` (p_{i_k} = q_i), ``{"type": "balls",
-            "radii": r}`` (‖p_{i_k} − q_i‖ ≤ r_i, n radii ≥ 0), ``{"type": "smoothing",
+            "radii": r}`` (‖p_{i_k} − q_i‖ ≤ r_i, n radii ≥ 0; 0 interpolates the point, a
+            radius far beyond the data, e.g. 1e300, leaves it free), ``{"type": "smoothing",
             "weights": w}`` (minimize E + ½ Σ w_i ‖p_{i_k} − q_i‖², n weights ≥ 0) or
             ``{"type": "halfspaces", "sets": [[{"normal": a, "offset": c}, …], …]}``
             (p_{i_k} in every half-space a · x ≤ c of its set).
