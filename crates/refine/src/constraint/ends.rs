@@ -86,7 +86,7 @@ impl Kind for Ends<'_> {
         let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
         for (v, set) in [0, last].into_iter().zip(self.sets()) {
             let solved = super::capped_derivative_set(set.clone(), cap);
-            super::capped_derivative_terms(at, terms, v, &set, &solved);
+            super::derivative_terms(at, terms, v, &set, &solved);
         }
     }
 }

@@ -539,7 +539,7 @@ pub(crate) fn far_cap(q: &Points) -> f64 {
 /// system). Larger than `FAR_BOUND`: a derivative ball's dual is not projected onto
 /// complementarity (a leftover interior-point dual times the stencil's 1/h is a force the
 /// certificate must balance), so the certificate reads a capped ball as solved, capped, when
-/// Df keeps well inside it ([`capped_derivative_terms`]), and a cap this far leaves every
+/// Df keeps well inside it ([`derivative_terms`]), and a cap this far leaves every
 /// derivative ball of ordinary size as given.
 pub(crate) const FAR_DERIVATIVE_BOUND: f64 = 1e6;
 
@@ -570,46 +570,6 @@ pub(crate) fn capped_derivative_set(set: ConvexSet, cap: f64) -> ConvexSet {
     }
 }
 
-/// [`derivative_terms`] of a constraint given as `set` that the solvers saw as `solved`
-/// ([`capped_derivative_set`]). Where the cap changed a ball and Df keeps well inside the capped
-/// ball (within half its radius of the centre), the terms of the capped ball: the problem solved
-/// has the given problem's optimum wherever that ball is inactive at it, so its certificate
-/// bounds the given problem's excess energy too, while the given radius (1e300) times the
-/// dual's leftover would read as a duality gap of 1e285. Otherwise the terms of the set as
-/// given (a capped ball the solution reaches is refused, never answered).
-pub(crate) fn capped_derivative_terms(
-    at: &At<'_>,
-    terms: &mut Terms,
-    v: usize,
-    set: &ConvexSet,
-    solved: &ConvexSet,
-) {
-    if let (
-        ConvexSet::Ball { radius, .. },
-        ConvexSet::Ball {
-            center,
-            radius: capped,
-        },
-    ) = (set, solved)
-    {
-        if capped < radius {
-            if let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) {
-                let (x, d) = (at.p.coords(), at.q.dim());
-                let mut y = vec![0.0; d];
-                for &(u, c) in stencil.iter() {
-                    for k in 0..d {
-                        y[k] += c * (x[u * d + k] - x[v * d + k]);
-                    }
-                }
-                if banded::vector::dist(&y, center) <= 0.5 * capped {
-                    return derivative_terms(at, terms, v, solved);
-                }
-            }
-        }
-    }
-    derivative_terms(at, terms, v, set);
-}
-
 /// The half-spaces as the conic model's polytope.
 pub(crate) fn polytope(set: &[HalfSpace]) -> ConvexSet {
     ConvexSet::HalfSpaces(set.iter().map(|h| (h.normal.clone(), h.offset)).collect())
@@ -626,7 +586,21 @@ pub(crate) fn reaction(hp: &[f64], v: usize, d: usize) -> Vec<f64> {
 /// violation dist(L p, K) relative to max(|L p|, the set's scale), the dual-cone violation of ζ
 /// (as a force), and |sᵀζ| with s = g + F L p in the duality gap (the rows (F, g) of
 /// [`crate::backend::full`], recomputed here from the set).
-pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
+///
+/// `solved` is the set the solvers saw ([`capped_derivative_set`]). Where the cap changed a ball
+/// and Df keeps well inside the capped ball (within half its radius of the centre), the terms
+/// are the capped ball's: the problem solved has the given problem's optimum wherever that ball
+/// is inactive at it, so its certificate bounds the given problem's excess energy too, while
+/// the given radius (1e300) times the dual's leftover would read as a duality gap of 1e285.
+/// Otherwise they are the terms of the set as given (a capped ball the solution reaches is
+/// refused, never answered).
+pub(crate) fn derivative_terms(
+    at: &At<'_>,
+    terms: &mut Terms,
+    v: usize,
+    set: &ConvexSet,
+    solved: &ConvexSet,
+) {
     let d = at.q.dim();
     let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) else {
         terms.primal_rel = f64::INFINITY;
@@ -649,6 +623,16 @@ pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &C
         }
         rounding += c.abs() * step;
     }
+    let set = match (set, solved) {
+        (
+            ConvexSet::Ball { radius, .. },
+            ConvexSet::Ball {
+                center,
+                radius: capped,
+            },
+        ) if capped < radius && banded::vector::dist(&y, center) <= 0.5 * capped => solved,
+        _ => set,
+    };
     let (dist_y, scale) = crate::conic_problem::set_distance(set, &y);
     let den = scale
         .max(y.iter().map(|a| a * a).sum::<f64>().sqrt())

@@ -125,7 +125,7 @@ impl Kind for Tangents<'_> {
         for (i, set) in self.sets(at.q.dim()) {
             let v = at.data_vertex[i];
             let solved = super::capped_derivative_set(set.clone(), cap);
-            super::capped_derivative_terms(at, terms, v, &set, &solved);
+            super::derivative_terms(at, terms, v, &set, &solved);
         }
     }
 }
