@@ -86,8 +86,13 @@ fn dispatch(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
 
 /// Runs Algorithm 4.1 on a validated problem ([`Problem::solve`] validates it).
 pub(crate) fn run(problem: &Problem) -> Result<Refinement, Error> {
+    run_on(problem, problem.data_knots_unvalidated()?)
+}
+
+/// [`run`] from the data knots `u` (the problem's, [`Problem::data_knots_unvalidated`], formed
+/// once by a caller that needed them first).
+pub(crate) fn run_on(problem: &Problem, u: Knots) -> Result<Refinement, Error> {
     let q = &problem.points;
-    let u = problem.data_knots_unvalidated()?;
     let e = problem.parametrization;
     let mut iterations = Iterations::default();
     let mut stages = Vec::new();

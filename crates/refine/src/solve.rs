@@ -219,8 +219,8 @@ const RESCALE_BEYOND: i32 = 64;
 /// or two iterations (the other data constraints were solved at every scale of the extent
 /// range). Balls without derivative constraints are homogeneous: the optimum on knots 2^−f·t
 /// for data 2^−e·q is 2^−e·p, and powers of two scale exactly, so the certificate — every part
-/// relative — is the original problem's. The data knots are computed from the data as given
-/// and passed scaled (knot updates map back onto their span); the result maps back as
+/// relative — is the original problem's. The data knots are computed once, from the data as
+/// given, and passed scaled (knot updates map back onto their span); the result maps back as
 /// points 2^e·p, knots 2^f·t, E 2^(2e−3f)·E, ball weights 2^(−3f)·w, and the reactions of
 /// radius-0 points 2^(e−3f)·λ.
 fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
@@ -251,7 +251,7 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
     };
     let (e, f) = (beyond(extent), beyond(mean_span));
     if (e, f) == (0, 0) {
-        return algorithm::run(problem);
+        return algorithm::run_on(problem, u);
     }
     let mut scaled = problem.clone();
     let down = |x: &f64| times_power_of_two(*x, -e);
@@ -261,15 +261,10 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .iter_mut()
         .for_each(|x| *x = down(x));
     scaled.constraint = crate::Constraint::Balls(radii.iter().map(down).collect());
-    scaled.knots = Some(t.iter().map(|&x| times_power_of_two(x, -f)).collect());
-    let mut r = match algorithm::run(&scaled) {
-        // The scaled problem's knots are given; the user's may not be: a failed split is
-        // reported as the problem given meets it (naming the points, not `knots[i]`).
-        Err(crate::Error::InvalidKnots { .. }) if problem.knots.is_none() => {
-            return algorithm::run(problem)
-        }
-        r => r?,
-    };
+    let t_scaled: Vec<f64> = t.iter().map(|&x| times_power_of_two(x, -f)).collect();
+    // (Given knots stay given, scaled: a failed split then names them, else the points.)
+    scaled.knots = problem.knots.as_ref().map(|_| t_scaled.clone());
+    let mut r = algorithm::run_on(&scaled, divdiff::Knots::new(u.topology(), t_scaled)?)?;
     r.points
         .coords_mut()
         .iter_mut()
