@@ -9,8 +9,8 @@ half-space sets; random tangent sets (ball, wedge, tension, half-space) on 40 %,
 near-clamped ends, further levels, the "average" derivative, other parametrizations, given knots
 (spans 1e-3 ... 10), the paper's solver on small ones; with FAR=1 also bounds far beyond the data ("no bound" as a
 huge radius or offset) and balls at data scales of 1e+-90 and 1e+-120. Checks, independent of the solver: the exit
-code is 0 or 2 (never a panic or a timeout), nothing is written on a refusal, the points are
-finite, an exact answer has kkt_residual <= 1e-9, and its data vertices keep to their constraint
+code is 0 or 2 (never a panic or a timeout), nothing is written on a refusal, nothing in the
+result is null (non-finite), an exact answer has kkt_residual <= 1e-9, and its data vertices keep to their constraint
 (interpolated, inside their balls, inside their half-spaces) to 1e-7 of the data's extent.
 ROBUSTNESS.md section 4, item 18, reports a run.
 """
@@ -127,6 +127,8 @@ def check(prob, res):
     P = np.array(prob["points"], float); n, d = P.shape
     p = np.array(res["points"], float)
     if not np.all(np.isfinite(p)): bad.append("nonfinite points")
+    # (JSON has no inf or NaN: a non-finite number anywhere in the result is written as null.)
+    if "null" in json.dumps(res): bad.append("null in the result")
     scale = max(np.abs(P - P.mean(0)).max(), 1e-300) if n > 1 else 1
     if prob.get("solver", "exact") == "exact" and not res["kkt_residual"] <= 1e-9: bad.append(f"kkt {res['kkt_residual']}")
     if prob.get("levels", 0) == 0:
