@@ -594,6 +594,61 @@ fn derivative_radii_far_beyond_the_slopes_leave_derivatives_free() {
     }
 }
 
+/// Tangent half-spaces whose offsets lie far beyond the data's slopes leave the derivative free
+/// on that side: at every third point, a side of offset 1e10, 1e50 or 1e300 beside an active
+/// side solves as the active side alone, and a box of far sides alone as no tangent constraint.
+/// Before the solvers saw such offsets capped (`capped_derivative_set` in `constraint/mod.rs`)
+/// 1e50 was refused as not converged (best residual 1) and 1e200 as a singular system naming
+/// `points`.
+#[test]
+fn tangent_halfspaces_far_beyond_the_slopes_leave_derivatives_free() {
+    let q = noisy_star(30);
+    let n = q.len();
+    let side = |normal: [f64; 2], offset: f64| HalfSpace {
+        normal: normal.to_vec(),
+        offset,
+    };
+    let tangents = |sides: &dyn Fn() -> Vec<HalfSpace>| -> Vec<Option<Tangent>> {
+        (0..n)
+            .map(|i| (i % 3 == 0).then(|| Tangent::HalfSpaces(sides())))
+            .collect()
+    };
+    // Df · (0.3, 1) ≤ 0.2: active on the star's arms that run upward.
+    let active = || vec![side([0.3, 1.0], 0.2)];
+    for topo in [Topology::Closed, Topology::Open] {
+        let base = || Problem::new(q.clone()).with_topology(topo);
+        let solved = |p: Problem, label: &str| p.solve().unwrap_or_else(|e| panic!("{label}: {e}"));
+        let natural = solved(base(), &format!("{topo:?} natural"));
+        let pressed = solved(
+            base().with_tangents(tangents(&active)),
+            &format!("{topo:?} active side"),
+        );
+        assert!(pressed.kkt_residual <= KKT_GOOD, "{}", pressed.kkt_residual);
+        // The active side changes the curve: the comparison below can tell the two apart.
+        assert!(pressed.energy > natural.energy * (1.0 + 1e-6));
+        for far in [1e10, 1e50, 1e300] {
+            let label = format!("{topo:?} offset {far:e}");
+            let beside = || {
+                let mut s = active();
+                s.push(side([1.0, -0.2], far));
+                s
+            };
+            let r = solved(base().with_tangents(tangents(&beside)), &label);
+            assert_same_optimum(&label, &r, pressed.energy);
+            let boxed = || {
+                vec![
+                    side([1.0, 0.0], far),
+                    side([0.0, 1.0], far),
+                    side([-1.0, 0.0], far),
+                    side([0.0, -1.0], far),
+                ]
+            };
+            let r = solved(base().with_tangents(tangents(&boxed)), &label);
+            assert_same_optimum(&label, &r, natural.energy);
+        }
+    }
+}
+
 /// Balls at the ends of the extent range (1e±100, 1e±140) give the solution at scale 1,
 /// scaled: points ∝ s, knots ∝ s^{1/2} (centripetal), E ∝ s^{1/2}, ball weights (force over
 /// radius, ∝ 1/h³) ∝ s^{−3/2}, the reactions of radius-0 points ∝ s^{−1/2} — each compared

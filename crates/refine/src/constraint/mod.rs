@@ -534,9 +534,10 @@ pub(crate) fn far_cap(q: &Points) -> f64 {
 
 /// How far beyond the data's largest slope max_i |q_{i+1} − q_i| / (t_{i_{k+1}} − t_{i_k}) the
 /// solvers see a derivative ball's radius (tension, a tangent ball's radius beyond its centre's
-/// length, near-clamped ends): capped there ([`far_derivative_cap`]), for the reason of
-/// [`FAR_BOUND`] (tension of 1e10 with balls was refused uncertified, 1e300 as a singular
-/// system). Larger than `FAR_BOUND`: a derivative ball's dual is not projected onto
+/// length, near-clamped ends) or a tangent half-space's offset: capped there
+/// ([`far_derivative_cap`], [`capped_derivative_set`]), for the reason of [`FAR_BOUND`]
+/// (tension of 1e10 with balls was refused uncertified, 1e300 as a singular system; tangent
+/// half-spaces of offset 1e50 as not converged, 1e200 as a singular system). Larger than `FAR_BOUND`: a derivative ball's dual is not projected onto
 /// complementarity (a leftover interior-point dual times the stencil's 1/h is a force the
 /// certificate must balance), so the certificate reads a capped ball as solved, capped, when
 /// Df keeps well inside it ([`derivative_terms`]), and a cap this far leaves every
@@ -559,14 +560,54 @@ pub(crate) fn derivative_cap(q: &Points, knots: &Knots, data_vertex: &[usize]) -
 }
 
 /// A derivative ball {|Df − c| ≤ r} with r capped at |c| + `cap` (it still holds every Df with
-/// |Df| ≤ cap); other sets unchanged.
+/// |Df| ≤ cap); a derivative polytope that holds Df = 0 (every offset ≥ 0) with each offset
+/// capped at `cap` |normal| (it still holds every Df with |Df| ≤ cap that the polytope holds, 0
+/// among them, so the cap cannot empty it); other sets unchanged.
 pub(crate) fn capped_derivative_set(set: ConvexSet, cap: f64) -> ConvexSet {
     match set {
         ConvexSet::Ball { center, radius } => {
             let radius = radius.min(banded::vector::norm(&center) + cap);
             ConvexSet::Ball { center, radius }
         }
+        ConvexSet::HalfSpaces(hs) if hs.iter().all(|(_, offset)| *offset >= 0.0) => {
+            ConvexSet::HalfSpaces(
+                hs.into_iter()
+                    .map(|(normal, offset)| {
+                        let far = cap * banded::vector::norm(&normal);
+                        (normal, offset.min(far))
+                    })
+                    .collect(),
+            )
+        }
         set => set,
+    }
+}
+
+/// Whether Df = `y` keeps well inside every bound the cap changed ([`capped_derivative_set`]):
+/// within half the capped radius of a ball's centre, or at least half a capped offset away from
+/// each capped half-space. `false` when the cap changed nothing.
+fn well_inside_capped(set: &ConvexSet, solved: &ConvexSet, y: &[f64]) -> bool {
+    match (set, solved) {
+        (
+            ConvexSet::Ball { radius, .. },
+            ConvexSet::Ball {
+                center,
+                radius: capped,
+            },
+        ) => capped < radius && banded::vector::dist(y, center) <= 0.5 * capped,
+        (ConvexSet::HalfSpaces(given), ConvexSet::HalfSpaces(capped)) => {
+            let mut changed = false;
+            for ((_, offset), (normal, capped)) in given.iter().zip(capped) {
+                if capped < offset {
+                    changed = true;
+                    if banded::vector::dot(normal, y) > 0.5 * capped {
+                        return false;
+                    }
+                }
+            }
+            changed
+        }
+        _ => false,
     }
 }
 
@@ -588,12 +629,12 @@ pub(crate) fn reaction(hp: &[f64], v: usize, d: usize) -> Vec<f64> {
 /// [`crate::backend::full`], recomputed here from the set).
 ///
 /// `solved` is the set the solvers saw ([`capped_derivative_set`]). Where the cap changed a ball
-/// and Df keeps well inside the capped ball (within half its radius of the centre), the terms
-/// are the capped ball's: the problem solved has the given problem's optimum wherever that ball
-/// is inactive at it, so its certificate bounds the given problem's excess energy too, while
-/// the given radius (1e300) times the dual's leftover would read as a duality gap of 1e285.
-/// Otherwise they are the terms of the set as given (a capped ball the solution reaches is
-/// refused, never answered).
+/// or half-spaces and Df keeps well inside every capped bound ([`well_inside_capped`]), the
+/// terms are the capped set's: the problem solved has the given problem's optimum wherever the
+/// capped bounds are inactive at it, so its certificate bounds the given problem's excess energy
+/// too, while the given radius or offset (1e300) times the dual's leftover would read as a
+/// duality gap of 1e285. Otherwise they are the terms of the set as given (a capped bound the
+/// solution reaches is refused, never answered).
 pub(crate) fn derivative_terms(
     at: &At<'_>,
     terms: &mut Terms,
@@ -623,15 +664,10 @@ pub(crate) fn derivative_terms(
         }
         rounding += c.abs() * step;
     }
-    let set = match (set, solved) {
-        (
-            ConvexSet::Ball { radius, .. },
-            ConvexSet::Ball {
-                center,
-                radius: capped,
-            },
-        ) if capped < radius && banded::vector::dist(&y, center) <= 0.5 * capped => solved,
-        _ => set,
+    let set = if well_inside_capped(set, solved, &y) {
+        solved
+    } else {
+        set
     };
     let (dist_y, scale) = crate::conic_problem::set_distance(set, &y);
     let den = scale
