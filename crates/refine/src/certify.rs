@@ -23,8 +23,11 @@
 //!   |q_i|_∞, L) counts, the force one rounding of the vertex's coordinates exerts (stiff
 //!   weights, w ≫ ‖H‖);
 //! - **complementarity** (|multiplier × slack|) and **negative multipliers**, over F;
-//! - **primal violation** over the length scale L, the largest coordinate distance of a vertex
-//!   or a data point from the data's centroid; a derivative constraint's violation relative to
+//! - **primal violation** of the data constraints over the length scale L_data, the largest
+//!   coordinate distance of a data vertex or a data point from the data's centroid (L, the
+//!   length scale of the other terms, is the same over every vertex; measured against L, a
+//!   curve that runs off with its data vertices outside their sets would measure its violations
+//!   against its own run); a derivative constraint's violation relative to
 //!   its own scale (max(|L p|, the set's size, Σ_u |c_u||p_u − p_v|_∞ — the rounding scale of
 //!   the stencil, which a zero target lacks));
 //! - the **duality gap** Σ (multiplier × slack) over E (it bounds the relative excess E(p) − E*
@@ -586,6 +589,17 @@ pub(crate) fn certify(
             .flat_map(|&v| p.point(v).iter().copied())
             .collect();
     }
+    // L_data: the data vertices' and data points' largest coordinate distance from the
+    // centroid, the scale of the data constraints' violations. (L itself also counts the other
+    // vertices, which a curve running off with the constraints violated at its data vertices
+    // carries far away: measured against L, a violation of 3e53 at radius 0.9 once read as
+    // 1e-10.)
+    let mut data_length = q_extent;
+    let p_data = &pass.p_data;
+    for (c, &m) in centroid.iter().enumerate() {
+        raise_over(&mut data_length, n, |i| (p_data[i * d + c] - m).abs());
+    }
+    let data_length = data_length.max(f64::MIN_POSITIVE);
     let hp_data = &pass.hp_data;
     let multipliers = match multipliers {
         Some(m) => crate::Multipliers::from(m),
@@ -665,7 +679,7 @@ pub(crate) fn certify(
         stat / force,
         terms.comp / force,
         terms.dual / force,
-        terms.primal.max(0.0) / length,
+        terms.primal.max(0.0) / data_length,
         terms.primal_rel,
         gap_rel,
     ];
@@ -760,6 +774,75 @@ mod tests {
                 .collect();
             assert_eq!(compact.hp_data, kept);
         }
+    }
+
+    /// A curve whose data vertices miss the data, carried far away elsewhere, is refused: the
+    /// exact answer for eight points moved up by 0.05 (clamped ends of 1e12, which put its other
+    /// vertices ~1e11 away) is certified for the moved points and refused for the points as
+    /// given, its miss over the data's length scale (~0.05 / 4). Over the length scale of every
+    /// vertex, as before L_data, the miss read as ~1e-13 and the curve was certified: the FAR
+    /// sweep of `xtask/sweeps/refine.py` (seed 1, case 444) met such a curve, its data vertices
+    /// 1e53 outside their balls, certified at 5e-20.
+    #[test]
+    fn a_curve_running_off_with_its_data_vertices_off_the_data_is_refused() {
+        use crate::{Boundary, Constraint, Problem, SolveOptions};
+        let (n, k) = (8, 3);
+        let given: Vec<f64> = (0..n).flat_map(|i| [i as f64, (i as f64).sin()]).collect();
+        let moved: Vec<f64> = given
+            .iter()
+            .enumerate()
+            .map(|(j, x)| if j % 2 == 1 { x + 0.05 } else { *x })
+            .collect();
+        let (given, moved) = (
+            Points::new(2, given).unwrap(),
+            Points::new(2, moved).unwrap(),
+        );
+        let ends = Boundary::Clamped {
+            start: vec![1e12, 0.0],
+            end: vec![0.0, 1e12],
+        };
+        let problem = Problem::new(moved.clone())
+            .with_topology(Topology::Open)
+            .with_k(k)
+            .with_boundary(ends);
+        let (_, knots) = crate::split::split(&moved, &problem.data_knots().unwrap(), k).unwrap();
+        let dv: Vec<usize> = (0..n).map(|i| crate::split::data_vertex(i, k)).collect();
+        let options = SolveOptions::default();
+        let fp = crate::stage::FixedProblem {
+            knots: &knots,
+            q: &moved,
+            data_vertex: &dv,
+            constraint: &Constraint::Interpolate,
+            problem: &problem,
+            derivatives: true,
+            stride: k + 1,
+            uniform_spans: true,
+            warm: None,
+            options: &options,
+        };
+        let sol = crate::linear::clamped(&fp).unwrap();
+        let far = sol
+            .points
+            .iter()
+            .fold(0.0f64, |a, x| a.max(x[0].abs().max(x[1].abs())));
+        assert!(far > 1e10, "the curve runs {far} far");
+        let judged = |q: &Points| {
+            let (c, _) = super::certify(
+                &knots,
+                &sol.points,
+                q,
+                &dv,
+                &fp.kinds(),
+                sol.multipliers.clone(),
+                &sol.derivative,
+                problem.derivative,
+                options.active_rtol,
+            );
+            c.kkt_residual
+        };
+        let (own, other) = (judged(&moved), judged(&given));
+        assert!(own <= 1e-9, "certified for its own data: {own}");
+        assert!(other >= 1e-3, "refused for the data it misses: {other}");
     }
 
     proptest! {
