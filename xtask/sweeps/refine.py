@@ -23,6 +23,9 @@ COUNT = int(sys.argv[2]) if len(sys.argv) > 2 else 200
 OUT = os.environ.get("SWEEP_OUT", "/tmp/curvefit-sweep/refine"); os.makedirs(OUT, exist_ok=True)
 FAR = os.environ.get("FAR") == "1"
 far_rng = np.random.default_rng(1000 + (int(sys.argv[1]) if len(sys.argv) > 1 else 1))
+# (Tangent half-spaces' far offsets draw from a stream of their own, added later: the problems of
+# far_rng are those of the runs before it.)
+far_tangent_rng = np.random.default_rng(2000 + (int(sys.argv[1]) if len(sys.argv) > 1 else 1))
 
 def points(n, d, closed):
     kind = rng.choice(["even", "jitter", "cluster", "noisy", "line"])
@@ -119,6 +122,8 @@ def far(prob):
                 if far_rng.random() < 0.3: h["offset"] = huge()
     for t in prob.get("tangents") or []:
         if t and "radius" in t and far_rng.random() < 0.5: t["radius"] = huge()
+        if t and t["type"] == "halfspaces" and far_tangent_rng.random() < 0.5:
+            for h in t["halfspaces"]: h["offset"] = float(10.0 ** far_tangent_rng.uniform(8, 300))
     b = prob.get("boundary")
     if b and b["type"] == "near_clamped" and far_rng.random() < 0.5: b["radius"] = huge()
 
