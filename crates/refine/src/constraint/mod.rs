@@ -537,11 +537,12 @@ pub(crate) fn far_cap(q: &Points) -> f64 {
 /// length, near-clamped ends) or a tangent half-space's offset: capped there
 /// ([`far_derivative_cap`], [`capped_derivative_set`]), for the reason of [`FAR_BOUND`]
 /// (tension of 1e10 with balls was refused uncertified, 1e300 as a singular system; tangent
-/// half-spaces of offset 1e50 as not converged, 1e200 as a singular system). Larger than `FAR_BOUND`: a derivative ball's dual is not projected onto
-/// complementarity (a leftover interior-point dual times the stencil's 1/h is a force the
-/// certificate must balance), so the certificate reads a capped ball as solved, capped, when
-/// Df keeps well inside it ([`derivative_terms`]), and a cap this far leaves every
-/// derivative ball of ordinary size as given.
+/// half-spaces of offset 1e50 as not converged, 1e200 as a singular system). Larger than
+/// `FAR_BOUND`: a derivative set's dual is not projected onto complementarity (a leftover
+/// interior-point dual times the stencil's 1/h is a force the certificate must balance), so the
+/// certificate reads a capped set as solved, capped, when Df keeps well inside it
+/// ([`derivative_terms`]), and a cap this far leaves every derivative set of ordinary size as
+/// given.
 pub(crate) const FAR_DERIVATIVE_BOUND: f64 = 1e6;
 
 /// [`FAR_DERIVATIVE_BOUND`] times the data's largest slope on the stage's knots.
