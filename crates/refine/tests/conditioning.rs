@@ -547,9 +547,10 @@ fn open_sides_of_boxes_solve_as_removed_sides() {
 
 /// Derivative radii far beyond the data's slopes leave the derivative free: tension at every
 /// point on top of balls, a tangent ball and near-clamped ends of radius 1e10 or 1e300 solve as
-/// the problem without them. Before the solvers saw such radii capped (`far_derivative_cap` in
-/// `constraint/mod.rs`) tension of 1e10 with balls was refused uncertified with the advice to
-/// take "a larger radius", and 1e300 was refused as a singular system naming `points`.
+/// the problem without them. Before the solvers saw such radii capped, and then left them to the
+/// certificate (`split_far_derivative_set` in `constraint/mod.rs`), tension of 1e10 with balls
+/// was refused uncertified with the advice to take "a larger radius", and 1e300 was refused as
+/// a singular system naming `points`.
 #[test]
 fn derivative_radii_far_beyond_the_slopes_leave_derivatives_free() {
     let q = noisy_star(30);
@@ -597,9 +598,9 @@ fn derivative_radii_far_beyond_the_slopes_leave_derivatives_free() {
 /// Tangent half-spaces whose offsets lie far beyond the data's slopes leave the derivative free
 /// on that side: at every third point, a side of offset 1e10, 1e50 or 1e300 beside an active
 /// side solves as the active side alone, and a box of far sides alone as no tangent constraint.
-/// Before the solvers saw such offsets capped (`capped_derivative_set` in `constraint/mod.rs`)
-/// 1e50 was refused as not converged (best residual 1) and 1e200 as a singular system naming
-/// `points`.
+/// Before the solvers left such offsets to the certificate (`split_far_derivative_set` in
+/// `constraint/mod.rs`) 1e50 was refused as not converged (best residual 1) and 1e200 as a
+/// singular system naming `points`.
 #[test]
 fn tangent_halfspaces_far_beyond_the_slopes_leave_derivatives_free() {
     let q = noisy_star(30);
@@ -856,4 +857,58 @@ fn smoothing_weights_below_the_stiffness_name_the_weights() {
     }
     let r = p(1e-4).solve().expect("larger weights solve");
     assert!(r.kkt_residual <= KKT_GOOD, "{}", r.kkt_residual);
+}
+
+/// A far derivative bound that the optimum would cross is never answered crossed: with the
+/// start clamped to a derivative of 1e12, the curve without tension has |Df| ≈ 2e11 at the
+/// second data point; tension there of a tenth of that (far beyond the data's slopes, so the
+/// solvers leave it to the certificate, which reads its violation) is refused, or answered
+/// within it.
+#[test]
+fn a_far_derivative_bound_the_optimum_crosses_is_never_answered_crossed() {
+    let q = Points::new(
+        2,
+        (0..8).flat_map(|i| [i as f64, (i as f64).sin()]).collect(),
+    )
+    .unwrap();
+    let ends = Boundary::Clamped {
+        start: vec![1e12, 0.0],
+        end: vec![1.0, 0.0],
+    };
+    let base = || {
+        Problem::new(q.clone())
+            .with_topology(Topology::Open)
+            .with_boundary(ends.clone())
+            .with_knot_iterations(0)
+    };
+    let df = |r: &Refinement, i: usize| {
+        let v = r.data_vertex[i];
+        let st = divdiff::derivative_stencil(&r.knots, v, refine::DerivativeRule::Bessel).unwrap();
+        let mut y = [0.0; 2];
+        for (u, c) in st {
+            for k in 0..2 {
+                y[k] += c * r.points.point(u)[k];
+            }
+        }
+        (y[0] * y[0] + y[1] * y[1]).sqrt()
+    };
+    let free = base().solve().unwrap();
+    let crossed = df(&free, 1);
+    assert!(crossed > 1e11, "|Df| = {crossed:e} without the tension");
+    let mut tension = vec![None; q.len()];
+    tension[1] = Some(Tangent::Tension {
+        radius: 0.1 * crossed,
+    });
+    match base().with_tangents(tension).solve() {
+        Err(_) => {}
+        Ok(r) => {
+            assert!(r.kkt_residual <= KKT_GOOD, "{}", r.kkt_residual);
+            assert!(
+                df(&r, 1) <= 0.1 * crossed * (1.0 + 1e-9),
+                "answered with |Df| = {:e} beyond the tension {:e}",
+                df(&r, 1),
+                0.1 * crossed
+            );
+        }
+    }
 }

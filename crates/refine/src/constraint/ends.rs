@@ -74,9 +74,11 @@ impl Kind for Ends<'_> {
         let last = stage.knots.vertex_count() - 1;
         let cap = super::far_derivative_cap(stage);
         for (k, (v, set)) in [0, last].into_iter().zip(self.sets()).enumerate() {
-            let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
-            let set = super::capped_derivative_set(set, cap);
-            rows.derivative("boundary", k, stencil, set)?;
+            // (A far bound is left to the certificate: `split_far_derivative_set`.)
+            if let (Some(set), _) = super::split_far_derivative_set(set, cap) {
+                let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
+                rows.derivative("boundary", k, stencil, set)?;
+            }
         }
         Ok(())
     }
@@ -85,8 +87,13 @@ impl Kind for Ends<'_> {
         let last = at.knots.vertex_count() - 1;
         let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
         for (v, set) in [0, last].into_iter().zip(self.sets()) {
-            let solved = super::capped_derivative_set(set.clone(), cap);
-            super::derivative_terms(at, terms, v, &set, &solved);
+            let (solved, checked) = super::split_far_derivative_set(set, cap);
+            if let Some(set) = solved {
+                super::derivative_terms(at, terms, v, &set);
+            }
+            if let Some(set) = checked {
+                super::derivative_violation(at, terms, v, &set);
+            }
         }
     }
 }

@@ -532,20 +532,22 @@ pub(crate) fn far_cap(q: &Points) -> f64 {
     FAR_BOUND * banded::vector::max_dist_from(q.coords(), q.point(0))
 }
 
-/// How far beyond the data's largest slope max_i |q_{i+1} − q_i| / (t_{i_{k+1}} − t_{i_k}) the
-/// solvers see a derivative ball's radius (tension, a tangent ball's radius beyond its centre's
-/// length, near-clamped ends) or a tangent half-space's offset: capped there
-/// ([`far_derivative_cap`], [`capped_derivative_set`]), for the reason of [`FAR_BOUND`]
-/// (tension of 1e10 with balls was refused uncertified, 1e300 as a singular system; tangent
-/// half-spaces of offset 1e50 as not converged, 1e200 as a singular system). Larger than
-/// `FAR_BOUND`: a derivative set's dual is not projected onto complementarity (a leftover
-/// interior-point dual times the stencil's 1/h is a force the certificate must balance), so the
-/// certificate reads a capped set as solved, capped, when Df keeps well inside it
-/// ([`derivative_terms`]), and a cap this far leaves every derivative set of ordinary size as
-/// given.
+/// How far beyond the data's largest slope max_i |q_{i+1} − q_i| / (t_{i_{k+1}} − t_{i_k}) a
+/// derivative bound lies when the solvers leave it to the certificate
+/// ([`split_far_derivative_set`]): a ball (tension, a tangent ball, near-clamped ends) whose
+/// radius exceeds its centre's length by this, a side of a tangent polytope holding Df = 0
+/// whose offset exceeds this times its normal's length. Such a bound is "no bound" spelled as a
+/// number, and the solvers met its size as a scale: tension of 1e10 with balls was refused
+/// uncertified, 1e300 as a singular system; tangent half-spaces of offset 1e50 as not
+/// converged, 1e200 as a singular system (ROBUSTNESS.md §4, 29 and 30). Solved without it and
+/// certified with its violation ([`derivative_violation`]), the answer is exact. Larger than
+/// [`FAR_BOUND`]: a bound that the optimum reaches would be violated by the solution without
+/// it, which the certificate refuses, and a threshold this far leaves every derivative bound of
+/// ordinary size to the solvers.
 pub(crate) const FAR_DERIVATIVE_BOUND: f64 = 1e6;
 
-/// [`FAR_DERIVATIVE_BOUND`] times the data's largest slope on the stage's knots.
+/// [`FAR_DERIVATIVE_BOUND`] times the data's largest slope on the stage's knots: the threshold
+/// of [`split_far_derivative_set`].
 pub(crate) fn far_derivative_cap(stage: &FixedProblem<'_>) -> f64 {
     derivative_cap(stage.q, stage.knots, stage.data_vertex)
 }
@@ -560,55 +562,28 @@ pub(crate) fn derivative_cap(q: &Points, knots: &Knots, data_vertex: &[usize]) -
     FAR_DERIVATIVE_BOUND * slope
 }
 
-/// A derivative ball {|Df − c| ≤ r} with r capped at |c| + `cap` (it still holds every Df with
-/// |Df| ≤ cap); a derivative polytope that holds Df = 0 (every offset ≥ 0) with each offset
-/// capped at `cap` |normal| (it still holds every Df with |Df| ≤ cap that the polytope holds, 0
-/// among them, so the cap cannot empty it); other sets unchanged.
-pub(crate) fn capped_derivative_set(set: ConvexSet, cap: f64) -> ConvexSet {
+/// A derivative set split at `cap` into what the solvers see and what only the certificate
+/// checks: a ball {|Df − c| ≤ r} with r > |c| + `cap` (it holds every Df with |Df| ≤ cap) is
+/// left to the certificate whole; of a polytope that holds Df = 0 (every offset ≥ 0), the sides
+/// with offset > `cap` |normal| are; every other set goes to the solvers as given. Returns
+/// (solved, checked): either may be `None`.
+pub(crate) fn split_far_derivative_set(
+    set: ConvexSet,
+    cap: f64,
+) -> (Option<ConvexSet>, Option<ConvexSet>) {
     match set {
-        ConvexSet::Ball { center, radius } => {
-            let radius = radius.min(banded::vector::norm(&center) + cap);
-            ConvexSet::Ball { center, radius }
+        ConvexSet::Ball { center, radius } if radius > banded::vector::norm(&center) + cap => {
+            (None, Some(ConvexSet::Ball { center, radius }))
         }
         ConvexSet::HalfSpaces(hs) if hs.iter().all(|(_, offset)| *offset >= 0.0) => {
-            ConvexSet::HalfSpaces(
-                hs.into_iter()
-                    .map(|(normal, offset)| {
-                        let far = cap * banded::vector::norm(&normal);
-                        (normal, offset.min(far))
-                    })
-                    .collect(),
-            )
+            let (far, near): (Vec<_>, Vec<_>) = hs
+                .into_iter()
+                .partition(|(normal, offset)| *offset > cap * banded::vector::norm(normal));
+            let some =
+                |v: Vec<(Vec<f64>, f64)>| (!v.is_empty()).then_some(ConvexSet::HalfSpaces(v));
+            (some(near), some(far))
         }
-        set => set,
-    }
-}
-
-/// Whether Df = `y` keeps well inside every bound the cap changed ([`capped_derivative_set`]):
-/// within half the capped radius of a ball's centre, or at least half a capped offset away from
-/// each capped half-space. `false` when the cap changed nothing.
-fn well_inside_capped(set: &ConvexSet, solved: &ConvexSet, y: &[f64]) -> bool {
-    match (set, solved) {
-        (
-            ConvexSet::Ball { radius, .. },
-            ConvexSet::Ball {
-                center,
-                radius: capped,
-            },
-        ) => capped < radius && banded::vector::dist(y, center) <= 0.5 * capped,
-        (ConvexSet::HalfSpaces(given), ConvexSet::HalfSpaces(capped)) => {
-            let mut changed = false;
-            for ((_, offset), (normal, capped)) in given.iter().zip(capped) {
-                if capped < offset {
-                    changed = true;
-                    if banded::vector::dot(normal, y) > 0.5 * capped {
-                        return false;
-                    }
-                }
-            }
-            changed
-        }
-        _ => false,
+        set => (Some(set), None),
     }
 }
 
@@ -629,58 +604,14 @@ pub(crate) fn reaction(hp: &[f64], v: usize, d: usize) -> Vec<f64> {
 /// (as a force), and |sᵀζ| with s = g + F L p in the duality gap (the rows (F, g) of
 /// [`crate::backend::full`], recomputed here from the set).
 ///
-/// `solved` is the set the solvers saw ([`capped_derivative_set`]). Where the cap changed a ball
-/// or half-spaces and Df keeps well inside every capped bound ([`well_inside_capped`]), the
-/// terms are the capped set's: the problem solved has the given problem's optimum wherever the
-/// capped bounds are inactive at it, so its certificate bounds the given problem's excess energy
-/// too, while the given radius or offset (1e300) times the dual's leftover would read as a
-/// duality gap of 1e285. Otherwise they are the terms of the set as given (a capped bound the
-/// solution reaches is refused, never answered).
-pub(crate) fn derivative_terms(
-    at: &At<'_>,
-    terms: &mut Terms,
-    v: usize,
-    set: &ConvexSet,
-    solved: &ConvexSet,
-) {
+/// `set` is the part the solvers saw ([`split_far_derivative_set`]); the part left to the
+/// certificate adds its violation alone ([`derivative_violation`]).
+pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
     let d = at.q.dim();
-    let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) else {
-        terms.primal_rel = f64::INFINITY;
+    let Some((stencil, y)) = derivative_violation(at, terms, v, set) else {
         return;
     };
     let x = at.p.coords();
-    // L p in difference form, Σ_u c_u (p_u − p_v) (the coefficients sum to zero: a derivative
-    // of a constant vanishes), and its rounding scale Σ_u |c_u| |p_u − p_v|_∞: the size of the
-    // derivative the stencil sees. A zero or tiny target (clamped ends [0, 0], 1e-9) has no
-    // scale of its own, so the violation is measured against this one; relative to |L p|
-    // alone a curve that meets Df = 0 to rounding showed a relative violation of 1.
-    let mut y = vec![0.0; d];
-    let mut rounding: f64 = 0.0;
-    for &(u, c) in stencil.iter() {
-        let mut step: f64 = 0.0;
-        for k in 0..d {
-            let diff = x[u * d + k] - x[v * d + k];
-            y[k] += c * diff;
-            step = step.max(diff.abs());
-        }
-        rounding += c.abs() * step;
-    }
-    let set = if well_inside_capped(set, solved, &y) {
-        solved
-    } else {
-        set
-    };
-    let (dist_y, scale) = crate::conic_problem::set_distance(set, &y);
-    let den = scale
-        .max(y.iter().map(|a| a * a).sum::<f64>().sqrt())
-        .max(rounding);
-    if dist_y > 0.0 {
-        terms.primal_rel = terms.primal_rel.max(if den > 0.0 {
-            dist_y / den
-        } else {
-            f64::INFINITY
-        });
-    }
     let (zeta, force) = match at.duals.get(terms.next_dual) {
         Some(z) => z,
         None => {
@@ -726,4 +657,53 @@ pub(crate) fn derivative_terms(
         }
         off += mb;
     }
+}
+
+/// The violation of a derivative set at the stencil of vertex `v` (dist(L p, K) relative to
+/// max(|L p|, the set's scale, the stencil's rounding scale)) added to `terms`, and the stencil
+/// and L p; `None` (and an infinite violation) when the stencil cannot be formed. A far bound
+/// the solvers did not see ([`split_far_derivative_set`]) adds this alone: the solvers' problem
+/// without it is certified by the other terms, and a solution of that problem which keeps to
+/// the bound is the given problem's optimum (its feasible set lies inside the other's), with a
+/// zero multiplier for the bound.
+pub(crate) fn derivative_violation(
+    at: &At<'_>,
+    terms: &mut Terms,
+    v: usize,
+    set: &ConvexSet,
+) -> Option<([(usize, f64); 3], Vec<f64>)> {
+    let d = at.q.dim();
+    let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) else {
+        terms.primal_rel = f64::INFINITY;
+        return None;
+    };
+    let x = at.p.coords();
+    // L p in difference form, Σ_u c_u (p_u − p_v) (the coefficients sum to zero: a derivative
+    // of a constant vanishes), and its rounding scale Σ_u |c_u| |p_u − p_v|_∞: the size of the
+    // derivative the stencil sees. A zero or tiny target (clamped ends [0, 0], 1e-9) has no
+    // scale of its own, so the violation is measured against this one; relative to |L p|
+    // alone a curve that meets Df = 0 to rounding showed a relative violation of 1.
+    let mut y = vec![0.0; d];
+    let mut rounding: f64 = 0.0;
+    for &(u, c) in stencil.iter() {
+        let mut step: f64 = 0.0;
+        for k in 0..d {
+            let diff = x[u * d + k] - x[v * d + k];
+            y[k] += c * diff;
+            step = step.max(diff.abs());
+        }
+        rounding += c.abs() * step;
+    }
+    let (dist_y, scale) = crate::conic_problem::set_distance(set, &y);
+    let den = scale
+        .max(y.iter().map(|a| a * a).sum::<f64>().sqrt())
+        .max(rounding);
+    if dist_y > 0.0 {
+        terms.primal_rel = terms.primal_rel.max(if den > 0.0 {
+            dist_y / den
+        } else {
+            f64::INFINITY
+        });
+    }
+    Some((stencil, y))
 }

@@ -113,9 +113,11 @@ impl Kind for Tangents<'_> {
         let cap = super::far_derivative_cap(stage);
         for (i, set) in self.sets(stage.q.dim()) {
             let v = stage.data_vertex[i];
-            let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
-            let set = super::capped_derivative_set(set, cap);
-            rows.derivative("tangents", i, stencil, set)?;
+            // (A far bound is left to the certificate: `split_far_derivative_set`.)
+            if let (Some(set), _) = super::split_far_derivative_set(set, cap) {
+                let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
+                rows.derivative("tangents", i, stencil, set)?;
+            }
         }
         Ok(())
     }
@@ -124,8 +126,13 @@ impl Kind for Tangents<'_> {
         let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
         for (i, set) in self.sets(at.q.dim()) {
             let v = at.data_vertex[i];
-            let solved = super::capped_derivative_set(set.clone(), cap);
-            super::derivative_terms(at, terms, v, &set, &solved);
+            let (solved, checked) = super::split_far_derivative_set(set, cap);
+            if let Some(set) = solved {
+                super::derivative_terms(at, terms, v, &set);
+            }
+            if let Some(set) = checked {
+                super::derivative_violation(at, terms, v, &set);
+            }
         }
     }
 }
