@@ -886,8 +886,8 @@ fn a_far_derivative_bound_the_optimum_crosses_is_never_answered_crossed() {
         let st = divdiff::derivative_stencil(&r.knots, v, refine::DerivativeRule::Bessel).unwrap();
         let mut y = [0.0; 2];
         for (u, c) in st {
-            for k in 0..2 {
-                y[k] += c * r.points.point(u)[k];
+            for (yk, pk) in y.iter_mut().zip(r.points.point(u)) {
+                *yk += c * pk;
             }
         }
         (y[0] * y[0] + y[1] * y[1]).sqrt()

@@ -659,6 +659,9 @@ pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &C
     }
 }
 
+/// A derivative stencil [(vertex, coefficient)] and the derivative L p it gives.
+type DerivativeAt = ([(usize, f64); 3], Vec<f64>);
+
 /// The violation of a derivative set at the stencil of vertex `v` (dist(L p, K) relative to
 /// max(|L p|, the set's scale, the stencil's rounding scale)) added to `terms`, and the stencil
 /// and L p; `None` (and an infinite violation) when the stencil cannot be formed. A far bound
@@ -671,7 +674,7 @@ pub(crate) fn derivative_violation(
     terms: &mut Terms,
     v: usize,
     set: &ConvexSet,
-) -> Option<([(usize, f64); 3], Vec<f64>)> {
+) -> Option<DerivativeAt> {
     let d = at.q.dim();
     let Ok(stencil) = divdiff::derivative_stencil(at.knots, v, at.rule) else {
         terms.primal_rel = f64::INFINITY;
