@@ -70,30 +70,19 @@ impl Kind for Ends<'_> {
     }
 
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
-        let rule = stage.problem.derivative;
         let last = stage.knots.vertex_count() - 1;
-        let cap = super::far_derivative_cap(stage);
+        let far = super::far_derivative_threshold(stage.q, stage.knots, stage.data_vertex);
         for (k, (v, set)) in [0, last].into_iter().zip(self.sets()).enumerate() {
-            // (A far bound is left to the certificate: `split_far_derivative_set`.)
-            if let (Some(set), _) = super::split_far_derivative_set(set, cap) {
-                let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
-                rows.derivative("boundary", k, stencil, set)?;
-            }
+            super::derivative_rows(stage, rows, ("boundary", k), v, set, far)?;
         }
         Ok(())
     }
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
         let last = at.knots.vertex_count() - 1;
-        let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
+        let far = super::far_derivative_threshold(at.q, at.knots, at.data_vertex);
         for (v, set) in [0, last].into_iter().zip(self.sets()) {
-            let (solved, checked) = super::split_far_derivative_set(set, cap);
-            if let Some(set) = solved {
-                super::derivative_terms(at, terms, v, &set);
-            }
-            if let Some(set) = checked {
-                super::derivative_violation(at, terms, v, &set);
-            }
+            super::certify_derivative(at, terms, v, set, far);
         }
     }
 }

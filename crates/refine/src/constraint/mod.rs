@@ -546,14 +546,10 @@ pub(crate) fn far_cap(q: &Points) -> f64 {
 /// ordinary size to the solvers.
 pub(crate) const FAR_DERIVATIVE_BOUND: f64 = 1e6;
 
-/// [`FAR_DERIVATIVE_BOUND`] times the data's largest slope on the stage's knots: the threshold
-/// of [`split_far_derivative_set`].
-pub(crate) fn far_derivative_cap(stage: &FixedProblem<'_>) -> f64 {
-    derivative_cap(stage.q, stage.knots, stage.data_vertex)
-}
-
-/// [`far_derivative_cap`] of data `q` at `data_vertex` on `knots`.
-pub(crate) fn derivative_cap(q: &Points, knots: &Knots, data_vertex: &[usize]) -> f64 {
+/// [`FAR_DERIVATIVE_BOUND`] times the largest slope of data `q` at `data_vertex` on `knots`:
+/// the threshold of [`split_far_derivative_set`] (computed once per kind and pass, for
+/// [`derivative_rows`] and [`certify_derivative`]).
+pub(crate) fn far_derivative_threshold(q: &Points, knots: &Knots, data_vertex: &[usize]) -> f64 {
     let (t, dv) = (knots.values(), data_vertex);
     let slope = (1..q.len()).fold(0.0f64, |a, i| {
         let chord = banded::vector::dist(q.point(i), q.point(i - 1));
@@ -562,15 +558,49 @@ pub(crate) fn derivative_cap(q: &Points, knots: &Knots, data_vertex: &[usize]) -
     FAR_DERIVATIVE_BOUND * slope
 }
 
+/// The solver rows of the derivative constraint `set` on the stencil at vertex `v` (`field` and
+/// `index` name it in errors): none for a far bound, which only the certificate checks
+/// ([`split_far_derivative_set`] at `far`, [`far_derivative_threshold`]).
+pub(crate) fn derivative_rows(
+    stage: &FixedProblem<'_>,
+    rows: &mut Rows,
+    (field, index): (&'static str, usize),
+    v: usize,
+    set: ConvexSet,
+    far: f64,
+) -> Result<(), Error> {
+    if let (Some(set), _) = split_far_derivative_set(set, far) {
+        let stencil = divdiff::derivative_stencil(stage.knots, v, stage.problem.derivative)?;
+        rows.derivative(field, index, stencil.to_vec(), set)?;
+    }
+    Ok(())
+}
+
+/// The certificate terms of the derivative constraint `set` at vertex `v`: the full terms of
+/// the part the solvers saw ([`derivative_terms`]) and the violation alone of a far part
+/// ([`derivative_violation`]), split as [`derivative_rows`] split it.
+pub(crate) fn certify_derivative(
+    at: &At<'_>,
+    terms: &mut Terms,
+    v: usize,
+    set: ConvexSet,
+    far: f64,
+) {
+    let (solved, checked) = split_far_derivative_set(set, far);
+    if let Some(set) = solved {
+        derivative_terms(at, terms, v, &set);
+    }
+    if let Some(set) = checked {
+        derivative_violation(at, terms, v, &set);
+    }
+}
+
 /// A derivative set split at `cap` into what the solvers see and what only the certificate
 /// checks: a ball {|Df − c| ≤ r} with r > |c| + `cap` (it holds every Df with |Df| ≤ cap) is
 /// left to the certificate whole; of a polytope that holds Df = 0 (every offset ≥ 0), the sides
 /// with offset > `cap` |normal| are; every other set goes to the solvers as given. Returns
 /// (solved, checked): either may be `None`.
-pub(crate) fn split_far_derivative_set(
-    set: ConvexSet,
-    cap: f64,
-) -> (Option<ConvexSet>, Option<ConvexSet>) {
+fn split_far_derivative_set(set: ConvexSet, cap: f64) -> (Option<ConvexSet>, Option<ConvexSet>) {
     match set {
         ConvexSet::Ball { center, radius } if radius > banded::vector::norm(&center) + cap => {
             (None, Some(ConvexSet::Ball { center, radius }))
@@ -606,7 +636,7 @@ pub(crate) fn reaction(hp: &[f64], v: usize, d: usize) -> Vec<f64> {
 ///
 /// `set` is the part the solvers saw ([`split_far_derivative_set`]); the part left to the
 /// certificate adds its violation alone ([`derivative_violation`]).
-pub(crate) fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
+fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
     let d = at.q.dim();
     let Some((stencil, y)) = derivative_violation(at, terms, v, set) else {
         return;
@@ -669,7 +699,7 @@ type DerivativeAt = ([(usize, f64); 3], Vec<f64>);
 /// without it is certified by the other terms, and a solution of that problem which keeps to
 /// the bound is the given problem's optimum (its feasible set lies inside the other's), with a
 /// zero multiplier for the bound.
-pub(crate) fn derivative_violation(
+fn derivative_violation(
     at: &At<'_>,
     terms: &mut Terms,
     v: usize,

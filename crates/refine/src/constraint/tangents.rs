@@ -109,30 +109,18 @@ impl Kind for Tangents<'_> {
     }
 
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
-        let rule = stage.problem.derivative;
-        let cap = super::far_derivative_cap(stage);
+        let far = super::far_derivative_threshold(stage.q, stage.knots, stage.data_vertex);
         for (i, set) in self.sets(stage.q.dim()) {
             let v = stage.data_vertex[i];
-            // (A far bound is left to the certificate: `split_far_derivative_set`.)
-            if let (Some(set), _) = super::split_far_derivative_set(set, cap) {
-                let stencil = divdiff::derivative_stencil(stage.knots, v, rule)?.to_vec();
-                rows.derivative("tangents", i, stencil, set)?;
-            }
+            super::derivative_rows(stage, rows, ("tangents", i), v, set, far)?;
         }
         Ok(())
     }
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
-        let cap = super::derivative_cap(at.q, at.knots, at.data_vertex);
+        let far = super::far_derivative_threshold(at.q, at.knots, at.data_vertex);
         for (i, set) in self.sets(at.q.dim()) {
-            let v = at.data_vertex[i];
-            let (solved, checked) = super::split_far_derivative_set(set, cap);
-            if let Some(set) = solved {
-                super::derivative_terms(at, terms, v, &set);
-            }
-            if let Some(set) = checked {
-                super::derivative_violation(at, terms, v, &set);
-            }
+            super::certify_derivative(at, terms, at.data_vertex[i], set, far);
         }
     }
 }
