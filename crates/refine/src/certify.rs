@@ -574,10 +574,15 @@ pub(crate) fn certify(
         && data_vertex.windows(2).all(|w| w[0] < w[1])
         && data_vertex.last().is_none_or(|&v| v < nv);
     let mut pass = pass(knots, p, &centroid, compact.then_some(data_vertex));
-    let mut q_extent = 0.0f64;
-    for (c, &m) in centroid.iter().enumerate() {
-        raise_over(&mut q_extent, n, |i| (qc[i * d + c] - m).abs());
-    }
+    // The largest coordinate distance from the centroid of n points stored flat (d each).
+    let extent_of = |x: &[f64]| {
+        let mut e = 0.0f64;
+        for (c, &m) in centroid.iter().enumerate() {
+            raise_over(&mut e, n, |i| (x[i * d + c] - m).abs());
+        }
+        e
+    };
+    let q_extent = extent_of(qc);
     let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);
     if !compact {
         pass.hp_data = data_vertex
@@ -594,12 +599,7 @@ pub(crate) fn certify(
     // vertices, which a curve running off with the constraints violated at its data vertices
     // carries far away: measured against L, a violation of 3e53 at radius 0.9 once read as
     // 1e-10.)
-    let mut data_length = q_extent;
-    let p_data = &pass.p_data;
-    for (c, &m) in centroid.iter().enumerate() {
-        raise_over(&mut data_length, n, |i| (p_data[i * d + c] - m).abs());
-    }
-    let data_length = data_length.max(f64::MIN_POSITIVE);
+    let data_length = q_extent.max(extent_of(&pass.p_data)).max(f64::MIN_POSITIVE);
     let hp_data = &pass.hp_data;
     let multipliers = match multipliers {
         Some(m) => crate::Multipliers::from(m),
