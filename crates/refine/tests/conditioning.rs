@@ -7,6 +7,7 @@
 
 mod noisy;
 
+use banded::vector::dist;
 use divdiff::{Parametrization, Points, Topology};
 use noisy::noisy_star;
 use refine::{
@@ -34,15 +35,6 @@ fn extent(q: &Points) -> f64 {
                 .collect::<Vec<_>>()
         })
         .fold(0.0, f64::max)
-}
-
-/// The Euclidean distance |a − b|.
-fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt()
 }
 
 /// `r` is certified to [`KKT_GOOD`] with the energy `reference` to 1e-9 relative: the optimum
