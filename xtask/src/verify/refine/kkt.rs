@@ -20,7 +20,11 @@
 //!   reaction — much stricter than the solver's own certificate, which divides by
 //!   ‖H‖_∞ · max step. (Without w_max, `hard.rs`'s draws asked stiff constraints for less than
 //!   rounding leaves: ball multipliers of 10⁸ against ‖H‖_∞ = 1.8·10⁷ left a free vertex at
-//!   3·10⁻⁹ of the force scale, and weights of 10¹⁰ ‖H‖_∞ a data vertex at 8·10⁻²);
+//!   3·10⁻⁹ of the force scale, and weights of 10¹⁰ ‖H‖_∞ a data vertex at 8·10⁻²). The floor
+//!   is as wide as each vertex's own row: past 16 ε (r_j + w_max) max_j |p_j| at vertex j (r_j
+//!   row j's sum of |H|) the residual also counts against the largest reaction with no floor
+//!   (as in the certificate; a floor set by the stiffest row once passed a curve 1.6e7 times
+//!   above the optimal energy, `tests/tests/optimality.rs`);
 //! - **primal feasibility**: |p_{i_k} − q_i| ≤ ε_i, n_ij·p_{i_k} ≤ c_ij, p_{i_k} = q_i
 //!   (violation relative to L, the largest coordinate distance of a data point from the data's
 //!   centroid);
@@ -106,8 +110,13 @@ fn stiffness(problem: &Problem, r: &Refinement) -> f64 {
     }
 }
 
-/// ‖H‖_∞, the largest absolute row sum of H, from its bands.
+/// ‖H‖_∞, the largest absolute row sum of H.
 fn h_norm(knots: &divdiff::Knots) -> f64 {
+    worst(row_sums(knots))
+}
+
+/// The absolute row sums of H, from its bands.
+fn row_sums(knots: &divdiff::Knots) -> Vec<f64> {
     let h = energy::Hessian::new(knots);
     let (d0, d1, d2) = h.bands();
     let n = d0.len();
@@ -124,7 +133,7 @@ fn h_norm(knots: &divdiff::Knots) -> f64 {
             rows[k] += band[j].abs();
         }
     }
-    worst(rows)
+    rows
 }
 
 /// Recomputes the KKT conditions of stage 0 of `r` (no further levels, no derivative
@@ -146,9 +155,16 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
         .collect();
     let rounding = rounding_level(&r.knots, &r.points)
         + 16.0 * f64::EPSILON * stiffness(problem, r) * magnitude(&r.points);
-    let force = worst(hp.iter().flat_map(|v| v.iter().map(|x| x.abs())))
-        .max(rounding / KKT_SCALE)
-        .max(f64::MIN_POSITIVE);
+    let hp_max = worst(hp.iter().flat_map(|v| v.iter().map(|x| x.abs())));
+    let force = hp_max.max(rounding / KKT_SCALE).max(f64::MIN_POSITIVE);
+    // Past its own row's rounding level 16 ε (r_j + w_max) max|p| (r_j row j's sum of |H|), a
+    // vertex's residual counts against the largest reaction with no floor (module docs).
+    let rows = row_sums(&r.knots);
+    let (w_max, size) = (stiffness(problem, r), magnitude(&r.points));
+    let excess = |j: usize, residual: &[f64]| {
+        let level = 16.0 * f64::EPSILON * (rows[j] + w_max) * size;
+        worst(residual.iter().map(|x| (x.abs() - level).max(0.0))) / hp_max.max(f64::MIN_POSITIVE)
+    };
     let l = extent(q).max(f64::MIN_POSITIVE);
     let e = r.energy.max(f64::MIN_POSITIVE);
     let mut data = vec![false; r.points.len()];
@@ -164,6 +180,13 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
         ) / force,
         ..Kkt::default()
     };
+    k.stationarity = worst(
+        hp.iter()
+            .enumerate()
+            .filter(|&(j, _)| !data[j])
+            .map(|(j, v)| excess(j, v))
+            .chain([k.stationarity]),
+    );
     let mut gap = 0.0;
     for (i, &v) in r.data_vertex.iter().enumerate() {
         let (p, qi) = (r.points.point(v), q.point(i));
@@ -215,6 +238,7 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
         k.stationarity = worst([
             k.stationarity,
             worst(residual.iter().map(|x| x.abs())) / force,
+            excess(v, &residual),
         ]);
     }
     k.gap = gap.abs() / e;
