@@ -7,16 +7,20 @@
 cannot tell a feasible curve that is *not* the smoothest one from the optimum, because the
 certificate is the code under test. This script can. For every answered problem of a refine sweep
 whose program it can pose (fixed knots: `knot_iterations` 0, or the result's final knots, which the
-certificate is for; interpolation, balls, half-spaces or smoothing; no tangents, ends or further
-levels; the exact solver), it builds the conic program of docs/math.md §2 from the result's knots
+certificate is for; interpolation, balls, half-spaces or smoothing, with any tangents and ends
+(the derivative rules of docs/input.md written out here); no further levels; the exact solver;
+no bound beyond 1e100), it builds the conic program of docs/math.md §2 from the result's knots
 alone — its own A of E = ½‖Ap‖² (Kersey (2.1)), not the library's — solves it with Clarabel, and
 compares objectives:
-- the answer's objective recomputed here must agree with the result's `energy` (smoothing adds
-  ½ Σ w_i |p_i − q_i|²), and
-- Clarabel must not find a feasible point (violation ≤ 1e-9 of the data's extent) whose objective
-  is lower by more than 1e-7 relative: that would make the certified answer not optimal.
-Points are centred and scaled to unit extent and the knots to unit length before Clarabel sees
-them (the objective scales by a known factor), so data at 1e-3 or offset by 1e6 is posed well.
+- the answer's energy E recomputed here must agree with the result's `energy` (the objective is
+  E, plus ½ Σ w_i |p_i − q_i|² for smoothing), and
+- Clarabel must not find a feasible point (violation ≤ 1e-9 of the data's extent, derivatives
+  relative to the data's slopes) whose objective is lower by more than 1e-7 relative, plus what
+  its violation and the coordinates' rounding explain: that would make the certified answer not
+  optimal. Any status counts: a feasible point need not be optimal to show that ours is not.
+Points are centred and scaled to unit extent and the spans to unit total length before Clarabel
+sees them (the objective scales by a known factor), so data at 1e-3 or offset by 1e6 is posed
+well.
 """
 import glob, json, os, re, sys
 import numpy as np
@@ -28,10 +32,10 @@ MAX_VERTICES = int(os.environ.get("MAX_VERTICES", "20000"))
 REL = 1e-7
 
 
-def energy_rows(t, closed):
-    """A with E = ½‖A p‖² for knots t_1..t_N (open) or t_1..t_{N+1} (closed): math.md §1."""
-    h = np.diff(t)
-    nv = len(h) if closed else len(t)
+def energy_rows(h, closed):
+    """A with E = ½‖A p‖² for the spans h = diff(t) of knots t_1..t_N (open) or t_1..t_{N+1}
+    (closed): math.md §1."""
+    nv = len(h) if closed else len(h) + 1
     if closed:
         i = np.arange(nv)
         hm, hp = h[i - 1], h[i]
@@ -50,10 +54,55 @@ def energy_rows(t, closed):
 
 def poseable(prob, res):
     c = prob.get("constraint", {"type": "interpolate"})["type"]
+    # (Bounds far beyond the data, "no bound" written as 1e300, do not scale to a posed program.)
+    huge = max((abs(x) for x in numbers(prob.get("tangents"), prob.get("boundary"))), default=0.0)
     return (c in ("interpolate", "balls", "halfspaces", "smoothing")
-            and "tangents" not in prob and "boundary" not in prob
             and prob.get("levels", 0) == 0 and prob.get("solver", "exact") == "exact"
-            and len(res["points"]) <= MAX_VERTICES)
+            and len(res["points"]) <= MAX_VERTICES and huge < 1e100)
+
+
+def numbers(*xs):
+    for x in xs:
+        if isinstance(x, (int, float)) and not isinstance(x, bool):
+            yield float(x)
+        elif isinstance(x, dict):
+            yield from numbers(*x.values())
+        elif isinstance(x, list):
+            yield from numbers(*x)
+
+
+def derivative_rows(h, closed, j, rule):
+    """The weights of Df(t_j) on the vertices (index → weight), Df the derivative rule of
+    docs/input.md: "bessel", the derivative at t_j of the quadratic through p_{j−1}, p_j, p_{j+1}
+    (at an open end, of the end quadratic at t_1 resp. t_N), or "average", ½(s_{j−1} + s_j)
+    (one-sided at open ends); s_j = (p_{j+1} − p_j)/h_j; h the spans."""
+    nv = len(h) if closed else len(h) + 1
+    out = {}
+
+    def slope(i, w):  # w · s_i
+        a, b = i % nv, (i + 1) % nv
+        out[a] = out.get(a, 0.0) - w / h[i % len(h)]
+        out[b] = out.get(b, 0.0) + w / h[i % len(h)]
+
+    if not closed and j == 0:
+        if rule == "average" or nv < 3:
+            slope(0, 1.0)
+        else:
+            h1, h2 = h[0], h[1]
+            slope(0, (2 * h1 + h2) / (h1 + h2)); slope(1, -h1 / (h1 + h2))
+    elif not closed and j == nv - 1:
+        if rule == "average" or nv < 3:
+            slope(nv - 2, 1.0)
+        else:
+            h1, h2 = h[nv - 3], h[nv - 2]
+            slope(nv - 2, (2 * h2 + h1) / (h1 + h2)); slope(nv - 3, -h2 / (h1 + h2))
+    else:
+        hm, hp = h[(j - 1) % len(h)], h[j % len(h)]
+        if rule == "average":
+            slope(j - 1, 0.5); slope(j, 0.5)
+        else:
+            slope(j - 1, hp / (hm + hp)); slope(j, hm / (hm + hp))
+    return out
 
 
 def check(prob, res):
@@ -70,9 +119,11 @@ def check(prob, res):
     c0 = q.mean(axis=0)
     L = max(np.abs(q - c0).max(), 1e-300)
     tau = t[-1] - t[0]
-    qn, pn, tn = (q - c0) / L, (p - c0) / L, (t - t[0]) / tau
+    # (The spans scaled, not the knots shifted: spans of 1e-10 beside knots of 1e6 keep their
+    # digits.)
+    qn, pn, hn = (q - c0) / L, (p - c0) / L, np.diff(t) / tau
     # E(p/L, t/τ) = τ³ E(p, t) / L²; smoothing weights follow so the objective scales alike.
-    A = energy_rows(tn, closed)
+    A = energy_rows(hn, closed)
     w = None
     if kind == "smoothing":
         w = np.array(con["weights"], float) * tau**3
@@ -86,15 +137,17 @@ def check(prob, res):
     ours = objective(pn)
     scale = tau**3 / L**2
     reported = res["energy"] * scale
-    if kind == "smoothing":
-        # (The result's energy is E alone or E plus the penalty: accept either, say which.)
-        e_only = 0.5 * float(np.sum((A @ pn) ** 2))
-        agree = min(abs(reported - ours), abs(reported - e_only))
-    else:
-        agree = abs(reported - ours)
-    # The energy one rounding of the coordinates can carry (normalized units): below it two
-    # energies cannot be told apart.
-    floor = 100 * (np.finfo(float).eps * (np.abs(q).max() / L + 1)) ** 2 * float(A.multiply(A).sum()) * d
+    # (The result's `energy` is E of (2.1) alone, the smoothing penalty not included.)
+    agree = abs(reported - 0.5 * float(np.sum((A @ pn) ** 2)))
+    # The energy one rounding of the coordinates can carry (normalized units: a coordinate of
+    # size |q|/L rounds by ε|q|/L): to first order the forces Σ_j |(Hp)_j| times it, to second
+    # ‖A‖_F² times its square. Below it two energies cannot be told apart. (The solvers work about
+    # the data's centroid; the points written out are rounded at their own size, which at 1e6 ± 0.02
+    # moved E by 5.7e-7 of itself.)
+    g = np.asarray(A.T @ (A @ pn))
+    reactions = float(np.linalg.norm(g, axis=1).sum())
+    rounding = np.finfo(float).eps * (np.abs(q).max() / L + 1)
+    floor = 4 * reactions * rounding + 100 * rounding**2 * float(A.multiply(A).sum()) * d
     bad = []
     if agree > 1e-8 * max(abs(ours), 1e-300) and agree > floor:
         bad.append(f"energy {res['energy']:.6e} disagrees with the recomputed {ours / scale:.6e}")
@@ -137,13 +190,73 @@ def check(prob, res):
                 rows.append(sp.csr_matrix((nvec, (np.zeros(d, int), dv[i] * d + np.arange(d))), shape=(1, nx + nz)))
                 bs.append(np.array([off]))
                 cones.append(clarabel.NonnegativeConeT(1))
+    # Derivative constraints (tangents at data vertices, the ends of an open curve): Df' of the
+    # normalized curve is τ/L times Df, so their vectors and radii scale by τ/L.
+    rule = prob.get("derivative", "bessel")
+    dscale = tau / L
+    derivs = []  # (vertex, set)
+    for i, tg in enumerate(prob.get("tangents") or []):
+        if tg is not None:
+            derivs.append((int(dv[i]), tg))
+    bd = prob.get("boundary") or {"type": "natural"}
+    if bd["type"] == "clamped":
+        derivs += [(0, {"type": "equal", "value": bd["start"]}), (nv - 1, {"type": "equal", "value": bd["end"]})]
+    elif bd["type"] == "near_clamped":
+        derivs += [(0, {"type": "ball", "center": bd["start"], "radius": bd["radius"]}),
+                   (nv - 1, {"type": "ball", "center": bd["end"], "radius": bd["radius"]})]
+    dcheck = []  # (D as a d × (nx + nz) matrix, the set) for the violation of Clarabel's point
+    for j, st in derivs:
+        wts = derivative_rows(hn, closed, j, rule)
+        cols = np.array([v * d + c for v in wts for c in range(d)])
+        vals = np.array([wts[v] for v in wts for c in range(d)], float)
+        rws = np.array([c for v in wts for c in range(d)])
+        D = sp.csr_matrix((vals, (rws, cols)), shape=(d, nx + nz))
+        dcheck.append((D, st))
+        ty = st["type"]
+        if ty == "equal":
+            rows.append(D); bs.append(np.array(st["value"], float) * dscale); cones.append(clarabel.ZeroConeT(d))
+        elif ty in ("ball", "tension"):
+            v = np.array(st.get("center", [0.0] * d), float) * dscale
+            rows.append(sp.vstack([sp.csr_matrix((1, nx + nz)), D]))
+            bs.append(np.concatenate([[st["radius"] * dscale], v]))
+            cones.append(clarabel.SecondOrderConeT(d + 1))
+        elif ty == "wedge":
+            a = np.array(st["direction"], float); a /= np.linalg.norm(a)
+            ad = sp.csr_matrix(a[None, :]) @ D
+            perp = D - sp.csr_matrix(a[:, None]) @ ad
+            rows.append(-sp.vstack([np.tan(st["half_angle"]) * ad, perp]))
+            bs.append(np.zeros(d + 1)); cones.append(clarabel.SecondOrderConeT(d + 1))
+        elif ty == "halfspaces":
+            for h in st["halfspaces"]:
+                nvec = np.array(h["normal"], float)
+                rows.append(sp.csr_matrix(nvec[None, :]) @ D)
+                bs.append(np.array([h["offset"] * dscale])); cones.append(clarabel.NonnegativeConeT(1))
     Amat = sp.vstack(rows, format="csc")
     b = np.concatenate(bs)
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.time_limit = 120.0
     sol = clarabel.DefaultSolver(P, cvec, Amat, b, cones, settings).solve()
-    x = np.asarray(sol.x)[:nx].reshape(nv, d)
+    x = np.asarray(sol.x)[:nx].reshape(nv, d).copy()
+    # Clarabel's point put back onto the data constraints it grazes (its data vertices into their
+    # balls, onto their points; half-spaces one by one), so that its remaining violation, which
+    # the allowance below charges at ‖A‖_F² v² where spans are tiny, is that of the derivatives.
+    if kind == "interpolate":
+        x[dv] = qn
+    elif kind == "balls":
+        r = np.array(con["radii"], float) / L
+        for i in range(n):
+            gap_i = x[dv[i]] - qn[i]
+            dist = np.linalg.norm(gap_i)
+            if dist > r[i]:
+                x[dv[i]] = qn[i] + gap_i * (r[i] / dist if dist > 0 else 0.0)
+    elif kind == "halfspaces":
+        for i, hs in enumerate(con["sets"]):
+            for h in hs:
+                nvec = np.array(h["normal"], float)
+                over = nvec @ x[dv[i]] - (h["offset"] - nvec @ c0) / L
+                if over > 0:
+                    x[dv[i]] -= over * nvec / (nvec @ nvec)
     theirs = objective(x)
     # Clarabel's violation of the data constraints (normalized units: relative to the extent).
     viol = 0.0
@@ -156,18 +269,35 @@ def check(prob, res):
             for h in hs:
                 nvec = np.array(h["normal"], float)
                 viol = max(viol, float(nvec @ x[dv[i]] - (h["offset"] - nvec @ c0) / L) / np.linalg.norm(nvec))
+    # ... and of the derivative constraints, relative to the data's slopes (1 in normalized units).
+    xz = np.concatenate([x.ravel(), np.zeros(nz)])
+    for D, st in dcheck:
+        df = D @ xz
+        ty = st["type"]
+        if ty == "equal":
+            v = np.abs(df - np.array(st["value"], float) * dscale).max()
+        elif ty in ("ball", "tension"):
+            v = np.linalg.norm(df - np.array(st.get("center", [0.0] * d), float) * dscale) - st["radius"] * dscale
+        elif ty == "wedge":
+            a = np.array(st["direction"], float); a /= np.linalg.norm(a)
+            v = np.linalg.norm(df - (a @ df) * a) - np.tan(st["half_angle"]) * (a @ df)
+        else:
+            v = max((np.array(h["normal"]) @ df - h["offset"] * dscale) / np.linalg.norm(h["normal"]) for h in st["halfspaces"])
+        viol = max(viol, float(v))
     gap = (ours - theirs) / max(abs(ours), abs(theirs), 1e-300)
     status = str(sol.status)
     # A point that violates the constraints by v can lower the energy by about v times the
-    # reactions the constraints exert (Σ_i |(Hp)_{i_k}|, from the answer's own points).
-    g = np.asarray(A.T @ (A @ pn))
-    reactions = float(np.linalg.norm(g[dv], axis=1).sum())
-    allowance = 10 * viol * reactions + floor
+    # reactions the constraints exert (Σ_j |(Hp)_j|, from the answer's own points), and by up to
+    # ‖A‖_F² v² more (spans of 1e-8 make that term 1e3 at v = 5e-11).
+    # (Over every vertex: a derivative constraint's force acts on the vertices of its stencil, as
+    # its multiplier over a span of at most 1 in normalized units.)
+    allowance = 10 * (viol * reactions + viol**2 * float(A.multiply(A).sum()) * d) + floor
     # (Any feasible point of Clarabel's counts, whatever its status: it need not be optimal to
     # show that ours is not.)
     if viol <= 1e-9 and ours - theirs > REL * max(abs(ours), abs(theirs)) + allowance:
         bad.append(f"Clarabel found a feasible point {gap:.2e} lower ({theirs / scale:.9e} against {ours / scale:.9e}, its violation {viol:.1e})")
-    return bad, gap, status, viol, c0 + L * x
+    resolution = allowance / max(abs(ours), abs(theirs), 1e-300)
+    return bad, gap, status, viol, c0 + L * x, resolution
 
 
 def main():
@@ -185,16 +315,16 @@ def main():
             counts["skipped"] += 1
             continue
         counts["posed"] += 1
-        bad, gap, status, viol, _ = check(prob, res)
+        bad, gap, status, viol, _, resolution = check(prob, res)
         if status != "Solved" or viol > 1e-9:
             counts["clarabel unsolved"] += 1
-        elif gap > worst[0]:
+        elif resolution < REL and gap > worst[0]:
             worst = (gap, case)
         if bad:
             counts["flagged"] += 1
             c = prob.get("constraint", {"type": "interpolate"})["type"]
             print(f"BAD case {case} n={len(prob['points'])} d={len(prob['points'][0])} closed={prob['closed']} k={prob['k']} c={c}: {bad}", flush=True)
-    print(counts, f"largest (ours − Clarabel)/|ours| where Clarabel solved feasibly: {worst[0]:.1e} (case {worst[1]})")
+    print(counts, f"largest (ours − Clarabel)/|ours| where Clarabel solved feasibly and the energies resolve 1e-7: {worst[0]:.1e} (case {worst[1]})")
     return 1 if counts["flagged"] else 0
 
 
