@@ -252,6 +252,17 @@ pub enum Error {
         /// The best residual reached.
         residual: f64,
     },
+    /// The refined knots' spans are `ratio` times apart, beyond `limit` (see
+    /// [`crate::MAX_CERTIFIED_SPAN_RATIO`]): where balls, half-spaces or derivative constraints
+    /// leave vertices free to move, the certificate cannot tell such an answer from the optimum,
+    /// so none is returned.
+    #[error("the refined knots' spans are {ratio:.1e} times apart, beyond the {limit:.0e} up to which an answer with balls, half-spaces or derivative constraints can be certified (rows of the energy scale like 1/span³, so the forces on a cluster of very short spans hide under the rounding of its stiff rows)")]
+    SpansTooUnequal {
+        /// max span / min span of the result's knots.
+        ratio: f64,
+        /// [`crate::MAX_CERTIFIED_SPAN_RATIO`].
+        limit: f64,
+    },
     /// An iterative solver did not reach its tolerance within its iteration limit; `residual` is
     /// the best (relative KKT) residual it reached.
     #[error("{solver} did not converge in {iterations} iterations (best residual {residual:e})")]

@@ -154,6 +154,7 @@ pub use limit::{limit_curve, limit_curve_of, CubicSpline};
 pub use multipliers::Multipliers;
 pub use options::{
     CommonPointOptions, PaperOptions, SolveOptions, WorkingSetOptions, EXACT_ACCEPT_KKT,
+    MAX_CERTIFIED_SPAN_RATIO,
 };
 pub use problem::{
     Problem, Solver, DEFAULT_K, DEFAULT_KNOT_ITERATIONS, DEFAULT_PAPER_ITERATIONS, EXTENT_RANGE,

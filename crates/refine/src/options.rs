@@ -9,6 +9,18 @@ pub use crate::backend::working_set::WorkingSetOptions;
 /// [`SolveOptions::accept_kkt`].
 pub const EXACT_ACCEPT_KKT: f64 = 1e-9;
 
+/// The largest ratio of the refined knots' longest span to their shortest at which an exact
+/// answer with balls (of positive radius), half-spaces or derivative constraints is returned;
+/// beyond it [`crate::Error::SpansTooUnequal`]. Rows of the energy scale like 1/span³, so at a
+/// spread R a cluster of very short spans carries rounding ε R³ times the forces at the longest
+/// ones: past 1e7 that is 2·10⁵, and a net force on the cluster that moves the energy by 1 %
+/// hides under it (`xtask/sweeps/refine.py` seed 2 case 259, spans 2.3·10⁸ apart, certified at
+/// 4.8e-11 with an energy 1 % above a feasible point Clarabel found; ROBUSTNESS.md item 31). Up
+/// to 10⁶ every kind certifies and is right (`tests/conditioning.rs`, `span_ratios_up_to_1e6`).
+/// Interpolation and smoothing without derivative constraints are linear solves with no free
+/// cluster to hide a force and are not limited.
+pub const MAX_CERTIFIED_SPAN_RATIO: f64 = 1e7;
+
 /// Everything the solvers of a [`crate::Problem`] can be tuned by.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveOptions {

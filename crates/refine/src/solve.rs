@@ -193,6 +193,26 @@ impl Problem {
                 reason: "the multiplier of this point's constraint overflows (a ball's force over a radius too small to tell from 0 against the data: give that point radius 0 to interpolate it exactly, or a larger radius)",
             });
         }
+        // Knots too unequal for the certificate to vouch for a conic answer (balls with a
+        // positive radius, half-spaces, derivative constraints): refused, whatever it scored.
+        let conic = match &self.constraint {
+            crate::Constraint::Balls(r) => r.iter().any(|&r| r > 0.0),
+            crate::Constraint::HalfSpaces(_) => true,
+            crate::Constraint::Smoothing(_) | crate::Constraint::Interpolate => false,
+        } || self.boundary != crate::Boundary::Natural
+            || self
+                .tangents
+                .as_ref()
+                .is_some_and(|t| t.iter().any(Option::is_some));
+        if self.solver == Solver::Exact && conic {
+            let ratio = crate::certify::span_ratio(&r.knots);
+            if ratio > crate::MAX_CERTIFIED_SPAN_RATIO {
+                return Err(crate::Error::SpansTooUnequal {
+                    ratio,
+                    limit: crate::MAX_CERTIFIED_SPAN_RATIO,
+                });
+            }
+        }
         let certified = r.kkt_residual <= self.options.accept_kkt; // false for NaN too
         if self.solver == Solver::Exact && !certified {
             return Err(crate::Error::NotConverged {

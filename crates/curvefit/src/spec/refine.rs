@@ -448,6 +448,18 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
                 None => user_error(e),
             },
         },
+        // The spread of the spans comes from the knot updates, the given knots, or the points'
+        // spacing under the parametrization: the field the user can change.
+        e @ refine::Error::SpansTooUnequal { .. } => {
+            let (field, advice) = if prob.knot_iterations > 0 {
+                ("knot_iterations", "each knot update makes the spans more unequal where the points cluster or the curve nearly stops: use fewer knot updates")
+            } else if prob.knots.is_some() {
+                ("knots", "give knots whose spans are less unequal")
+            } else {
+                ("points", "points far closer together than their neighbours make such spans: thin the cluster, or use a parametrization with a smaller exponent (uniform)")
+            };
+            InputError::new(field, format!("{e}; {advice}"))
+        }
         e => user_error(e),
     })
 }
