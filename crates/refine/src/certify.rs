@@ -101,6 +101,11 @@ pub(crate) struct Pass {
     pub hp_data: Vec<f64>,
     /// The points at the data vertices (n × d) when the pass was given them; else empty.
     pub p_data: Vec<f64>,
+    /// Row j's sum of |H| at every vertex (N) when the pass was not given the data vertices;
+    /// else empty.
+    pub rows: Vec<f64>,
+    /// The same at the data vertices (n) when the pass was given them; else empty.
+    pub rows_data: Vec<f64>,
     /// max |Hp| over the vertices that are not data vertices, when the pass was given them.
     pub free_stat: f64,
     /// The largest part of |Hp| beyond its vertex's own rounding level over those vertices,
@@ -132,16 +137,22 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     let mut hp = vec![0.0; if data.is_some() { 0 } else { n * d }];
     let mut hp_data = vec![0.0; data.map_or(0, |v| v.len() * d)];
     let mut p_data = vec![0.0; hp_data.len()];
+    // Row sums of |H| where Hp is kept (every vertex, or the data vertices).
+    let mut rows = vec![0.0; if data.is_some() { 0 } else { n }];
+    let mut rows_data = vec![0.0; data.map_or(0, |v| v.len())];
     // Chunks of vertices in parallel (`crate::par`), each with the slices of Hp it writes: all
     // of its vertices', or its data vertices' (and their points).
     let mut chunks = Vec::new();
     let (mut hp_rest, mut data_rest) = (&mut hp[..], &mut hp_data[..]);
     let mut points_rest = &mut p_data[..];
+    let (mut rows_rest, mut rows_data_rest) = (&mut rows[..], &mut rows_data[..]);
     let mut first_data = 0;
     for range in crate::par::ranges(n, crate::par::CHUNK_VERTICES) {
         let own = if data.is_some() { 0 } else { range.len() * d };
         let (here, rest) = std::mem::take(&mut hp_rest).split_at_mut(own);
         hp_rest = rest;
+        let (rhere, rrest) = std::mem::take(&mut rows_rest).split_at_mut(own / d.max(1));
+        rows_rest = rrest;
         let end_data = data.map_or(0, |v| v.partition_point(|&x| x < range.end));
         let (dhere, drest) =
             std::mem::take(&mut data_rest).split_at_mut((end_data - first_data) * d);
@@ -149,7 +160,14 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
         let (phere, prest) =
             std::mem::take(&mut points_rest).split_at_mut((end_data - first_data) * d);
         points_rest = prest;
-        chunks.push((Chunk { range, first_data }, here, (dhere, phere)));
+        let (rdhere, rdrest) =
+            std::mem::take(&mut rows_data_rest).split_at_mut(end_data - first_data);
+        rows_data_rest = rdrest;
+        chunks.push((
+            Chunk { range, first_data },
+            (here, rhere),
+            (dhere, phere, rdhere),
+        ));
         first_data = end_data;
     }
     let input = Input {
@@ -172,6 +190,8 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     out.hp = hp;
     out.hp_data = hp_data;
     out.p_data = p_data;
+    out.rows = rows;
+    out.rows_data = rows_data;
     out
 }
 
@@ -258,7 +278,10 @@ fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
 
 /// Where a sweep writes Hp: every vertex's, or (given the data vertices) the data vertices' and
 /// their points.
-type HpOut<'a> = (&'a mut [f64], (&'a mut [f64], &'a mut [f64]));
+type HpOut<'a> = (
+    (&'a mut [f64], &'a mut [f64]),
+    (&'a mut [f64], &'a mut [f64], &'a mut [f64]),
+);
 
 /// A block's arrays, in local indices: local vertex `l` is global vertex `a − 2 + l` for the
 /// block's vertices `a .. b` (two vertices of halo each side), local span `l` the span from
@@ -364,23 +387,6 @@ fn row_sum(ih: [f64; 4], on: [f64; 3]) -> f64 {
         + on[2] * ih[2] * ih[3] * ih[2]
 }
 
-/// [`row_sum`] at vertex `g` of `knots`, read from the knots alone.
-fn vertex_row_sum(knots: &Knots, g: usize) -> f64 {
-    let (n, closed) = (knots.vertex_count(), knots.is_closed());
-    let t = knots.values();
-    let spans = knots.span_count();
-    let ih = |l: isize| {
-        wrap(g as isize + l, n, closed)
-            .filter(|&j| j < spans)
-            .map_or(0.0, |j| 1.0 / (t[j + 1] - t[j]))
-    };
-    let on = |l: isize| match wrap(g as isize + l, n, closed) {
-        Some(i) if closed || (i >= 1 && i + 1 < n) => 4.0,
-        _ => 0.0,
-    };
-    row_sum([ih(-2), ih(-1), ih(0), ih(1)], [on(-1), on(0), on(1)])
-}
-
 /// The rounding level of Hp at a vertex whose row of |H| sums to `row` and whose neighbourhood's
 /// coordinates are at most `magnitude`: what one rounding of those coordinates moves Hp there
 /// by, times [`ROUNDING_MULTIPLE`] (module docs, "the floor").
@@ -431,7 +437,7 @@ fn sweep(
         data,
     }: &Input<'_>,
     chunk: &Chunk,
-    (hp, (hp_data, p_data)): HpOut<'_>,
+    ((hp, rows_out), (hp_data, p_data, rows_data)): HpOut<'_>,
 ) -> Pass {
     let (n, d) = (p.len(), p.dim());
     let x = p.coords();
@@ -609,6 +615,18 @@ fn sweep(
                 }
             }
         }
+        // The row sums where Hp is kept, for the certificate's per-vertex rounding levels.
+        match data {
+            None => {
+                let at = a - chunk.range.start;
+                rows_out[at..at + m].copy_from_slice(&bl.rows[..m]);
+            }
+            Some(dv) => {
+                for (k, &i) in dv[next_data..data_end].iter().enumerate() {
+                    rows_data[next_data + k - chunk.first_data] = bl.rows[i - a];
+                }
+            }
+        }
         next_data = data_end;
         a = b;
     }
@@ -706,8 +724,15 @@ pub(crate) fn certify(
         .max(f64::MIN_POSITIVE);
     // Stationarity at every vertex: Hp + derivative forces + data forces at the data vertices;
     // and the part of it beyond each vertex's own rounding level (module docs, "the floor").
-    let vertex_rounding =
-        |g: usize| local_rounding(vertex_row_sum(knots, g) + terms.stiffness, pass.magnitude);
+    // (Row sums from the pass: at the data vertices (compact) or at every vertex.)
+    let row_at = |i: usize, g: usize| {
+        if compact {
+            pass.rows_data[i]
+        } else {
+            pass.rows[g]
+        }
+    };
+    let rounding_of = |row: f64| local_rounding(row + terms.stiffness, pass.magnitude);
     let mut excess = 0.0f64;
     let stat = if compact {
         let mut stat = pass.free_stat;
@@ -725,7 +750,7 @@ pub(crate) fn certify(
         });
         raise_over(&mut excess, rows, |i| {
             let (h, f) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
-            let level = r[i] + vertex_rounding(data_vertex[i]);
+            let level = r[i] + rounding_of(row_at(i, data_vertex[i]));
             let mut m = 0.0;
             for (h, f) in h.iter().zip(f) {
                 raise(&mut m, ((h + f).abs() - level).max(0.0));
@@ -755,7 +780,7 @@ pub(crate) fn certify(
             }
         }
         raise_over(&mut excess, nv, |j| {
-            let level = vertex_rounding(j);
+            let level = rounding_of(pass.rows[j]);
             r[j * d..(j + 1) * d]
                 .iter()
                 .fold(0.0f64, |m, x| m.max(x.abs() - level))
