@@ -395,20 +395,6 @@ fn local_rounding(row: f64, magnitude: f64) -> f64 {
     ROUNDING_MULTIPLE * f64::EPSILON * row * magnitude
 }
 
-/// The largest span of `knots` over the smallest (∞ when a span is 0).
-pub(crate) fn span_ratio(knots: &Knots) -> f64 {
-    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-    for w in knots.values().windows(2) {
-        lo = lo.min(w[1] - w[0]);
-        hi = hi.max(w[1] - w[0]);
-    }
-    if lo > 0.0 {
-        hi / lo
-    } else {
-        f64::INFINITY
-    }
-}
-
 /// One chunk's [`sweep`], as [`crate::par::vectorized`] runs it.
 struct Sweep<'a, 'b> {
     input: &'a Input<'b>,

@@ -195,17 +195,9 @@ impl Problem {
         }
         // Knots too unequal for the certificate to vouch for a conic answer (balls with a
         // positive radius, half-spaces, derivative constraints): refused, whatever it scored.
-        let conic = match &self.constraint {
-            crate::Constraint::Balls(r) => r.iter().any(|&r| r > 0.0),
-            crate::Constraint::HalfSpaces(_) => true,
-            crate::Constraint::Smoothing(_) | crate::Constraint::Interpolate => false,
-        } || self.boundary != crate::Boundary::Natural
-            || self
-                .tangents
-                .as_ref()
-                .is_some_and(|t| t.iter().any(Option::is_some));
+        let conic = !self.constraint.kind().linear() || self.has_derivative_constraints();
         if self.solver == Solver::Exact && conic {
-            let ratio = crate::certify::span_ratio(&r.knots);
+            let ratio = span_ratio(&r.knots);
             if ratio > crate::MAX_CERTIFIED_SPAN_RATIO {
                 return Err(crate::Error::SpansTooUnequal {
                     ratio,
@@ -222,6 +214,20 @@ impl Problem {
             });
         }
         Ok(r)
+    }
+}
+
+/// The largest span of `knots` over the smallest (∞ when a span is 0).
+fn span_ratio(knots: &divdiff::Knots) -> f64 {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for w in knots.values().windows(2) {
+        lo = lo.min(w[1] - w[0]);
+        hi = hi.max(w[1] - w[0]);
+    }
+    if lo > 0.0 {
+        hi / lo
+    } else {
+        f64::INFINITY
     }
 }
 
