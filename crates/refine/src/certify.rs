@@ -148,10 +148,10 @@ pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usi
     let (mut rows_rest, mut rows_data_rest) = (&mut rows[..], &mut rows_data[..]);
     let mut first_data = 0;
     for range in crate::par::ranges(n, crate::par::CHUNK_VERTICES) {
-        let own = if data.is_some() { 0 } else { range.len() * d };
-        let (here, rest) = std::mem::take(&mut hp_rest).split_at_mut(own);
+        let own = if data.is_some() { 0 } else { range.len() };
+        let (here, rest) = std::mem::take(&mut hp_rest).split_at_mut(own * d);
         hp_rest = rest;
-        let (rhere, rrest) = std::mem::take(&mut rows_rest).split_at_mut(own / d.max(1));
+        let (rhere, rrest) = std::mem::take(&mut rows_rest).split_at_mut(own);
         rows_rest = rrest;
         let end_data = data.map_or(0, |v| v.partition_point(|&x| x < range.end));
         let (dhere, drest) =
@@ -303,7 +303,7 @@ struct Block {
     s: Vec<f64>,
     /// Second differences c_i of the local vertices.
     c: Vec<f64>,
-    /// Hp of the block's own vertices for one coordinate; first the ‖H‖_∞ row sums.
+    /// Hp of the block's own vertices for one coordinate.
     v: Vec<f64>,
     /// The row sums of |H| at the block's own vertices.
     rows: Vec<f64>,
@@ -504,7 +504,7 @@ fn sweep(
                 &bl.ih[3..k + 3],
             );
             let (w1, w2, w3) = (&bl.w[1..k + 1], &bl.w[2..k + 2], &bl.w[3..k + 3]);
-            let sums = &mut bl.v[..k];
+            let sums = &mut bl.rows[..k];
             let on = |w: f64| if w > 0.0 { 4.0 } else { 0.0 };
             for j in 0..k {
                 // rows of own vertex j's neighbours (local j + 1, j + 3) and its own (j + 2)
@@ -514,7 +514,6 @@ fn sweep(
                 );
             }
             raise_abs(&mut out.h_norm, sums, 0.0);
-            bl.rows[..k].copy_from_slice(sums);
         }
         // The block's data vertices (when Hp is kept only there).
         // (At most m of them: the data vertices are strictly increasing.)
@@ -710,14 +709,6 @@ pub(crate) fn certify(
         .max(f64::MIN_POSITIVE);
     // Stationarity at every vertex: Hp + derivative forces + data forces at the data vertices;
     // and the part of it beyond each vertex's own rounding level (module docs, "the floor").
-    // (Row sums from the pass: at the data vertices (compact) or at every vertex.)
-    let row_at = |i: usize, g: usize| {
-        if compact {
-            pass.rows_data[i]
-        } else {
-            pass.rows[g]
-        }
-    };
     let rounding_of = |row: f64| local_rounding(row + terms.stiffness, pass.magnitude);
     let mut excess = 0.0f64;
     let stat = if compact {
@@ -736,7 +727,7 @@ pub(crate) fn certify(
         });
         raise_over(&mut excess, rows, |i| {
             let (h, f) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
-            let level = r[i] + rounding_of(row_at(i, data_vertex[i]));
+            let level = r[i] + rounding_of(pass.rows_data[i]);
             let mut m = 0.0;
             for (h, f) in h.iter().zip(f) {
                 raise(&mut m, ((h + f).abs() - level).max(0.0));
@@ -765,13 +756,16 @@ pub(crate) fn certify(
                 *rc = (rc.abs() - rounding).max(0.0);
             }
         }
-        raise_over(&mut excess, nv, |j| {
-            let level = rounding_of(pass.rows[j]);
-            r[j * d..(j + 1) * d]
-                .iter()
-                .fold(0.0f64, |m, x| m.max(x.abs() - level))
-        });
-        r.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+        // (the residual and its part beyond each vertex's level in one pass over it)
+        let mut stat = 0.0f64;
+        for (rj, &row) in r.chunks_exact(d).zip(&pass.rows) {
+            let level = rounding_of(row);
+            for x in rj {
+                stat = stat.max(x.abs());
+                excess = excess.max(x.abs() - level);
+            }
+        }
+        stat
     };
     // The duality gap bounds E(p) − E* for a feasible p; relative to E (or, for E ≈ 0, to the
     // rounding level of the force scale times the length scale).
