@@ -153,17 +153,22 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
         .iter()
         .map(|j| j.iter().map(|x| 2.0 * x).collect())
         .collect();
-    let rounding = rounding_level(&r.knots, &r.points)
-        + 16.0 * f64::EPSILON * stiffness(problem, r) * magnitude(&r.points);
-    let hp_max = worst(hp.iter().flat_map(|v| v.iter().map(|x| x.abs())));
-    let force = hp_max.max(rounding / KKT_SCALE).max(f64::MIN_POSITIVE);
-    // Past its own row's rounding level 16 ε (r_j + w_max) max|p| (r_j row j's sum of |H|), a
-    // vertex's residual counts against the largest reaction with no floor (module docs).
+    // R = 16 ε (‖H‖_∞ + w_max) max|p|, and each row's own level 16 ε (r_j + w_max) max|p|
+    // (r_j row j's sum of |H|; ‖H‖_∞ the largest).
     let rows = row_sums(&r.knots);
     let (w_max, size) = (stiffness(problem, r), magnitude(&r.points));
-    let excess = |j: usize, residual: &[f64]| {
-        let level = 16.0 * f64::EPSILON * (rows[j] + w_max) * size;
-        worst(residual.iter().map(|x| (x.abs() - level).max(0.0))) / hp_max.max(f64::MIN_POSITIVE)
+    let level = |row: f64| 16.0 * f64::EPSILON * (row + w_max) * size;
+    let rounding = level(worst(rows.iter().copied()));
+    let hp_max = worst(hp.iter().flat_map(|v| v.iter().map(|x| x.abs())));
+    let force = hp_max.max(rounding / KKT_SCALE).max(f64::MIN_POSITIVE);
+    // The stationarity of vertex j's residual: over the force scale, and past its own row's
+    // level over the largest reaction with no floor (module docs).
+    let stationarity = |j: usize, residual: &[f64]| {
+        let largest = worst(residual.iter().map(|x| x.abs()));
+        worst([
+            largest / force,
+            (largest - level(rows[j])).max(0.0) / hp_max.max(f64::MIN_POSITIVE),
+        ])
     };
     let l = extent(q).max(f64::MIN_POSITIVE);
     let e = r.energy.max(f64::MIN_POSITIVE);
@@ -174,19 +179,12 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
     let mut k = Kkt {
         stationarity: worst(
             hp.iter()
-                .zip(&data)
-                .filter(|(_, &is_data)| !is_data)
-                .flat_map(|(v, _)| v.iter().map(|x| x.abs())),
-        ) / force,
+                .enumerate()
+                .filter(|&(j, _)| !data[j])
+                .map(|(j, v)| stationarity(j, v)),
+        ),
         ..Kkt::default()
     };
-    k.stationarity = worst(
-        hp.iter()
-            .enumerate()
-            .filter(|&(j, _)| !data[j])
-            .map(|(j, v)| excess(j, v))
-            .chain([k.stationarity]),
-    );
     let mut gap = 0.0;
     for (i, &v) in r.data_vertex.iter().enumerate() {
         let (p, qi) = (r.points.point(v), q.point(i));
@@ -235,11 +233,7 @@ pub fn recompute(problem: &Problem, r: &Refinement) -> anyhow::Result<Kkt> {
                 }
             }
         }
-        k.stationarity = worst([
-            k.stationarity,
-            worst(residual.iter().map(|x| x.abs())) / force,
-            excess(v, &residual),
-        ]);
+        k.stationarity = worst([k.stationarity, stationarity(v, &residual)]);
     }
     k.gap = gap.abs() / e;
     Ok(k)
