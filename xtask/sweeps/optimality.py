@@ -34,7 +34,10 @@ REL = 1e-7
 
 def energy_rows(h, closed):
     """A with E = ½‖A p‖² for the spans h = diff(t) of knots t_1..t_N (open) or t_1..t_{N+1}
-    (closed): math.md §1."""
+    (closed): math.md §1. (The Python bench, crates/curvefit-py/bench/bench.py, builds the same
+    rows from the knots for its Clarabel peer; this one takes the spans, whose digits survive
+    where knots of 1e6 hold spans of 1e-10, and the sweep does not import the package's bench,
+    which imports the package.)"""
     nv = len(h) if closed else len(h) + 1
     if closed:
         i = np.arange(nv)
@@ -115,7 +118,7 @@ def check(prob, res):
     dv = np.array(res["data_vertex"])
     con = prob.get("constraint", {"type": "interpolate"})
     kind = con["type"]
-    # Normalize: points about the data's centroid to unit extent, knots to unit length.
+    # Normalize: points about the data's centroid to unit extent, spans to unit total length.
     c0 = q.mean(axis=0)
     L = max(np.abs(q - c0).max(), 1e-300)
     tau = t[-1] - t[0]
@@ -169,27 +172,29 @@ def check(prob, res):
     def pick(i):
         return sp.csr_matrix((np.ones(d), (np.arange(d), dv[i] * d + np.arange(d))), shape=(d, nx + nz))
 
+    # The data constraints in normalized units, one entry per set: (i, "point", q_i),
+    # (i, "ball", q_i, r_i) or (i, "half", n, c) for n·p_{i_k} ≤ c.
+    data_sets = []
     if kind == "interpolate":
-        rows += [pick(i) for i in range(n)]
-        bs += [qn[i] for i in range(n)]
-        cones.append(clarabel.ZeroConeT(n * d))
+        data_sets = [(i, "point", qn[i]) for i in range(n)]
     elif kind == "balls":
         r = np.array(con["radii"], float) / L
-        for i in range(n):
-            if r[i] == 0:
-                rows.append(pick(i)); bs.append(qn[i]); cones.append(clarabel.ZeroConeT(d))
-            else:
-                rows.append(sp.vstack([sp.csr_matrix((1, nx + nz)), pick(i)]))
-                bs.append(np.concatenate([[r[i]], qn[i]]))
-                cones.append(clarabel.SecondOrderConeT(d + 1))
+        data_sets = [(i, "point", qn[i]) if r[i] == 0 else (i, "ball", qn[i], r[i]) for i in range(n)]
     elif kind == "halfspaces":
         for i, hs in enumerate(con["sets"]):
             for h in hs:
                 nvec = np.array(h["normal"], float)
-                off = (h["offset"] - nvec @ c0) / L
-                rows.append(sp.csr_matrix((nvec, (np.zeros(d, int), dv[i] * d + np.arange(d))), shape=(1, nx + nz)))
-                bs.append(np.array([off]))
-                cones.append(clarabel.NonnegativeConeT(1))
+                data_sets.append((i, "half", nvec, (h["offset"] - nvec @ c0) / L))
+    for i, ty, *par in data_sets:
+        if ty == "point":
+            rows.append(pick(i)); bs.append(par[0]); cones.append(clarabel.ZeroConeT(d))
+        elif ty == "ball":
+            rows.append(sp.vstack([sp.csr_matrix((1, nx + nz)), pick(i)]))
+            bs.append(np.concatenate([[par[1]], par[0]]))
+            cones.append(clarabel.SecondOrderConeT(d + 1))
+        else:
+            rows.append(sp.csr_matrix(par[0][None, :]) @ pick(i))
+            bs.append(np.array([par[1]])); cones.append(clarabel.NonnegativeConeT(1))
     # Derivative constraints (tangents at data vertices, the ends of an open curve): Df' of the
     # normalized curve is τ/L times Df, so their vectors and radii scale by τ/L.
     rule = prob.get("derivative", "bessel")
@@ -241,34 +246,27 @@ def check(prob, res):
     # Clarabel's point put back onto the data constraints it grazes (its data vertices into their
     # balls, onto their points; half-spaces one by one), so that its remaining violation, which
     # the allowance below charges at ‖A‖_F² v² where spans are tiny, is that of the derivatives.
-    if kind == "interpolate":
-        x[dv] = qn
-    elif kind == "balls":
-        r = np.array(con["radii"], float) / L
-        for i in range(n):
-            gap_i = x[dv[i]] - qn[i]
-            dist = np.linalg.norm(gap_i)
-            if dist > r[i]:
-                x[dv[i]] = qn[i] + gap_i * (r[i] / dist if dist > 0 else 0.0)
-    elif kind == "halfspaces":
-        for i, hs in enumerate(con["sets"]):
-            for h in hs:
-                nvec = np.array(h["normal"], float)
-                over = nvec @ x[dv[i]] - (h["offset"] - nvec @ c0) / L
-                if over > 0:
-                    x[dv[i]] -= over * nvec / (nvec @ nvec)
+    def violation(i, ty, *par):
+        if ty == "point":
+            return float(np.abs(x[dv[i]] - par[0]).max())
+        if ty == "ball":
+            return float(np.linalg.norm(x[dv[i]] - par[0]) - par[1])
+        return float(par[0] @ x[dv[i]] - par[1]) / np.linalg.norm(par[0])
+
+    for i, ty, *par in data_sets:
+        over = violation(i, ty, *par)
+        if over <= 0:
+            continue
+        if ty == "point":
+            x[dv[i]] = par[0]
+        elif ty == "ball":
+            gap_i = x[dv[i]] - par[0]
+            x[dv[i]] = par[0] + gap_i * (par[1] / np.linalg.norm(gap_i))
+        else:
+            x[dv[i]] -= over * par[0] / np.linalg.norm(par[0])
     theirs = objective(x)
     # Clarabel's violation of the data constraints (normalized units: relative to the extent).
-    viol = 0.0
-    if kind == "interpolate":
-        viol = np.abs(x[dv] - qn).max()
-    elif kind == "balls":
-        viol = max(0.0, float((np.linalg.norm(x[dv] - qn, axis=1) - np.array(con["radii"]) / L).max()))
-    elif kind == "halfspaces":
-        for i, hs in enumerate(con["sets"]):
-            for h in hs:
-                nvec = np.array(h["normal"], float)
-                viol = max(viol, float(nvec @ x[dv[i]] - (h["offset"] - nvec @ c0) / L) / np.linalg.norm(nvec))
+    viol = max([0.0] + [violation(i, ty, *par) for i, ty, *par in data_sets])
     # ... and of the derivative constraints, relative to the data's slopes (1 in normalized units).
     xz = np.concatenate([x.ravel(), np.zeros(nz)])
     for D, st in dcheck:
