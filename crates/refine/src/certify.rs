@@ -716,24 +716,20 @@ pub(crate) fn certify(
         excess = pass.free_excess;
         let (h, f, r) = (hp_data, &terms.force_data, &terms.rounding_data);
         let rows = (h.len() / d).min(f.len() / d).min(r.len());
-        // (what one rounding of a stiffly weighted vertex exerts is not a residual)
-        raise_over(&mut stat, rows, |i| {
-            let (h, f) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
+        // (what one rounding of a stiffly weighted vertex exerts is not a residual; the
+        // residual past the vertex's own level too, from the same largest component)
+        for i in 0..rows {
+            let (hi, fi) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
             let mut m = 0.0;
-            for (h, f) in h.iter().zip(f) {
-                raise(&mut m, ((h + f).abs() - r[i]).max(0.0));
+            for (h, f) in hi.iter().zip(fi) {
+                raise(&mut m, (h + f).abs());
             }
-            m
-        });
-        raise_over(&mut excess, rows, |i| {
-            let (h, f) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
-            let level = r[i] + rounding_of(pass.rows_data[i]);
-            let mut m = 0.0;
-            for (h, f) in h.iter().zip(f) {
-                raise(&mut m, ((h + f).abs() - level).max(0.0));
-            }
-            m
-        });
+            raise(&mut stat, (m - r[i]).max(0.0));
+            raise(
+                &mut excess,
+                (m - r[i] - rounding_of(pass.rows_data[i])).max(0.0),
+            );
+        }
         stat
     } else {
         // Summed into Hp's own buffer (Hp is not needed after this).
