@@ -177,8 +177,19 @@ impl Problem {
         }
         // A multiplier that overflows (a ball's force over a radius of 1e-260 against data of
         // 1e-100: ~1e310) is no certificate either; it was written as null.
-        if let Some(index) =
-            (0..r.multipliers.len()).find(|&i| r.multipliers.row(i).iter().any(|x| !x.is_finite()))
+        // (A branch-free scan of the flat values first; the row is searched for only when one
+        // fails: row by row the scan was 0.3 ms of a 10⁵-point interpolation's 10.)
+        let finite = r
+            .multipliers
+            .values()
+            .iter()
+            .fold(true, |ok, x| ok & x.is_finite());
+        if let Some(index) = (!finite)
+            .then(|| {
+                (0..r.multipliers.len())
+                    .find(|&i| r.multipliers.row(i).iter().any(|x| !x.is_finite()))
+            })
+            .flatten()
         {
             let field = match &self.constraint {
                 crate::Constraint::Balls(_) => "radii",
