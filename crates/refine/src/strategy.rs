@@ -13,7 +13,7 @@
 //! |---|---|---|---|
 //! | 1 | linear solve | interpolation, smoothing, balls of radius 0; no derivative constraint | a linear system: one banded solve, exact to rounding (certified with the stage) |
 //! | 2 | linear solve with clamped ends | interpolation, smoothing, balls of radius 0 with clamped ends and no tangent set (`Problem::linear_clamped_ends`), first stage | an equality-constrained quadratic: a bordered system ([`crate::linear::clamped`]), one banded factorization and three solves refined in difference form, or for long interpolations interpolation's own solve and two on 64 spans at the ends — where the interior-point method took a solve per iteration and was held to its size limit |
-//! | 3 | condensed working set | data-vertex sets alone (balls, half-spaces): no derivative constraint, enough constrained points | only the constrained data vertices are variables (O(n) per iteration), on a working set of the active ones |
+//! | 3 | condensed working set | data-vertex sets alone (balls, half-spaces): no derivative constraint, enough constrained points | only the constrained data vertices are variables (O(n) per iteration), on a working set of the active ones; an answer not accepted goes on from its last iterate to the strict tolerance of 4 (starting 4 over took half of a solve with points in boxes of half-spaces) |
 //! | 4 | condensed working set (strict) | as 3 | an active set read off at the default tolerance is sometimes not settled enough for the polish |
 //! | 5 | full-vertex interior point | every kind, first stages up to [`crate::MAX_CONIC_COORDS`] coordinates | derivative stencils and end conditions act on free vertices; the fallback of 2–4; an answer refine's certificate refuses is polished once more, holding blocks at their apex (`ConicProblem::solve_judged`) |
 //! | 6 | full-vertex interior point (strict) | as 5 | the method's gap measure is relative to the energy: many small balls need a stricter target |
@@ -225,6 +225,7 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         sets: &sets,
         stride: fp.stride,
         conic: &opts,
+        strict: Some(fp.options.strict_tolerance),
     };
     let sol = working_set::solve(
         &setting,

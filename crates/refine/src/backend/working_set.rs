@@ -26,9 +26,11 @@
 //! at its end. An accepted round on a dense W ([`WorkingSetOptions::early_polish`]) is polished
 //! right at the round tolerance (Newton's method on the active set, on W's condensation or, when
 //! a fifth of W or more is inactive, on a condensation onto its active points), and the method
-//! resumes only when that polish does not get the caller's certificate to its aim. Each round's
-//! condensation reuses the spans of the previous one that no new point splits. The multipliers
-//! of the constraints outside W are 0.
+//! resumes only when that polish does not get the caller's certificate to its aim. An answer
+//! the judge accepts but the caller's certificate does not goes on from the round's last iterate
+//! to the stricter tolerance the caller gives ([`Setting::strict`]), and the better answer is
+//! kept. Each round's condensation reuses the spans of the previous one that no new point
+//! splits. The multipliers of the constraints outside W are 0.
 
 use banded::vector::dot;
 use conic::{Start, Status};
@@ -206,14 +208,19 @@ pub(crate) struct Setting<'a> {
     pub sets: &'a [Option<PointSet>],
     pub stride: usize,
     pub conic: &'a conic::Options,
+    /// A stricter tolerance of the method (below `conic`'s), to which a round whose answer the
+    /// caller's certificate does not accept goes on from its last iterate (`None`: it stops).
+    pub strict: Option<f64>,
 }
 
 /// What the caller's certificate is asked for: the level a round's curve is polished to
-/// (`target`) and the level at which a curve is accepted at all (`accept`).
+/// (`target`) and the level at which a curve is accepted at all (`accept`); and the method's
+/// stricter tolerance a round not accepted goes on to ([`Setting::strict`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Aim {
     pub target: f64,
     pub accept: f64,
+    pub strict: Option<f64>,
 }
 
 /// Solves the data-vertex problem (each data point i in `sets[i]`, `None` for no constraint)
@@ -259,7 +266,11 @@ pub(crate) fn solve<C>(
     } else {
         (n / options.start_points).clamp(1, options.start_step)
     };
-    let aim = Aim { target, accept };
+    let aim = Aim {
+        target,
+        accept,
+        strict: setting.strict,
+    };
     solve_from(setting, options, step, start, certify, aim, progress)
 }
 
@@ -327,6 +338,7 @@ fn polish_from_warm<C>(
         sets,
         stride,
         conic: conic_opts,
+        ..
     }: &Setting<'_>,
     (points, wmult): (&Points, &[Vec<f64>]),
     certify: Certify<'_, C>,
@@ -424,6 +436,7 @@ pub(crate) fn solve_from<C>(
         sets,
         stride,
         conic: conic_opts,
+        ..
     }: &Setting<'_>,
     options: &WorkingSetOptions,
     step: usize,
@@ -729,6 +742,85 @@ fn run_round<C>(
             sz: Some((sol.s, sol.z)),
         });
     };
+    // The round's answer from the method's last iterate (`None`: the judge refused a curve),
+    // at the method's tolerance `tol`.
+    let mut finish = |be: &mut Condensed<'_>,
+                      sol: conic::Solution,
+                      tol: &conic::Options,
+                      iterations: usize|
+     -> Result<Option<Certified<C>>, Error> {
+        finish_round(
+            be, cond, knots, stencil, &qw, &wsets, d, tol, options, judge, near, certify, aim, sol,
+            iterations,
+        )
+    };
+    // The iterate to go on from, when the round has a stricter tolerance to go on to.
+    let strict = aim.strict.filter(|&s| s < conic_opts.tolerance);
+    let resume = strict.map(|_| Start {
+        x: sol.x.clone(),
+        sz: Some((sol.s.clone(), sol.z.clone())),
+    });
+    let mut best = finish(&mut be, sol, conic_opts, iterations)?;
+    // An answer the caller's certificate does not accept goes on at the stricter tolerance
+    // from the same iterate (the strict entry of the strategy list would start over: on
+    // points in boxes of half-spaces, where the polish does not settle the active set, that
+    // was half of the solve), and the better answer is kept.
+    if let (Some(tol), Some(start), Some(b)) = (strict, resume, best.as_ref()) {
+        // (NaN is not accepted either.)
+        if b.k > aim.accept || b.k.is_nan() {
+            let strict_opts = conic_opts.clone().with_tolerance(tol);
+            let ipm_opts = conic::Options {
+                polish: None,
+                ..strict_opts.clone()
+            };
+            let mut monitor = |it: &conic::Iterate<'_>| {
+                crate::progress::report(
+                    progress,
+                    crate::Progress::Iteration {
+                        solver: "condensed working set",
+                        iteration: it.iteration,
+                        residual: it.residuals.total,
+                    },
+                );
+                true
+            };
+            if let Ok(sol) = conic::solve_with(&mut be, &ipm_opts, Some(start), &mut monitor) {
+                iterations += sol.iterations;
+                if let Ok(Some(c)) = finish(&mut be, sol, &strict_opts, iterations) {
+                    if best.as_ref().is_some_and(|b| c.k < b.k || b.k.is_nan()) {
+                        best = Some(c);
+                    }
+                }
+            }
+        }
+    }
+    Ok(Round {
+        accepted: best.map(|b| (b.points, b.certificate)),
+        iterations,
+    })
+}
+
+/// The end of a round ([`run_round`]) from the method's last iterate `sol`, after `iterations`
+/// of the round: its curve judged, certified, and polished to the aim. `None` when the judge
+/// refuses a curve.
+#[allow(clippy::too_many_arguments)]
+fn finish_round<C>(
+    be: &mut Condensed<'_>,
+    cond: &Condensation,
+    knots: &Knots,
+    stencil: &Stencil,
+    qw: &[f64],
+    wsets: &[PointSet],
+    d: usize,
+    conic_opts: &conic::Options,
+    options: &WorkingSetOptions,
+    judge: Judge<'_>,
+    near: &mut Vec<(usize, f64)>,
+    certify: Certify<'_, C>,
+    aim: Aim,
+    sol: conic::Solution,
+    iterations: usize,
+) -> Result<Option<Certified<C>>, Error> {
     // (NaN is not converged either.)
     if sol.residuals.total.is_nan() || sol.residuals.total > 1e-6 {
         return Err(Error::NotConverged {
@@ -739,12 +831,9 @@ fn run_round<C>(
     }
     let (points, g) = be.curve(&sol.x, stencil)?;
     if !judge(&points, near) {
-        return Ok(Round {
-            accepted: None,
-            iterations,
-        });
+        return Ok(None);
     }
-    let mult = multipliers(&be, &wsets, &sol.z, &g, d);
+    let mult = multipliers(be, wsets, &sol.z, &g, d);
     let (k, certificate) = certify(&points, &mult);
     let certified = Certified {
         k,
@@ -764,12 +853,12 @@ fn run_round<C>(
     // W it dropped.
     if certified.k > aim.target && conic_opts.polish.is_some() {
         let mut on_active = ActivePolish {
-            be: &mut be,
+            be,
             cond,
             knots,
             stencil,
-            qw: &qw,
-            wsets: &wsets,
+            qw,
+            wsets,
             d,
             conic_opts,
             margin: options.margin,
@@ -777,21 +866,17 @@ fn run_round<C>(
         };
         if on_active.prefers_subset(&sol) {
             if let Some(p) = on_active.run(&sol, &mut |p| judge(p, near), certify)? {
-                let best = match p.best {
+                return Ok(Some(match p.best {
                     Some(b) if b.k < certified.k => b,
                     _ => certified,
-                };
-                return Ok(Round {
-                    accepted: Some((best.points, best.certificate)),
-                    iterations,
-                });
+                }));
             }
         }
     }
     let polished = polish_rounds(
-        &mut be,
+        be,
         stencil,
-        &wsets,
+        wsets,
         d,
         conic_opts,
         sol,
@@ -801,12 +886,7 @@ fn run_round<C>(
         certify,
         None,
     )?;
-    Ok(Round {
-        accepted: polished
-            .and_then(|p| p.best)
-            .map(|b| (b.points, b.certificate)),
-        iterations,
-    })
+    Ok(polished.and_then(|p| p.best))
 }
 
 #[cfg(test)]

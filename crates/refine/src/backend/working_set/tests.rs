@@ -118,6 +118,7 @@ fn run_with(
         sets,
         stride: m,
         conic: &conic::Options::default(),
+        strict: None,
     };
     let sol = solve_from(
         &setting,
@@ -128,6 +129,7 @@ fn run_with(
         super::Aim {
             target: EXACT,
             accept: EXACT,
+            strict: None,
         },
         None,
     )
@@ -186,6 +188,7 @@ impl Balls {
             sets: &self.sets,
             stride: self.m,
             conic: &conic::Options::default(),
+            strict: None,
         };
         solve(&setting, options, warm, &mut judge, target, EXACT, None).unwrap()
     }
