@@ -682,14 +682,7 @@ fn run_round<C>(
     let sol = loop {
         let tol = options.round_tolerance;
         let mut monitor = |it: &conic::Iterate<'_>| {
-            crate::progress::report(
-                progress,
-                crate::Progress::Iteration {
-                    solver: "condensed working set",
-                    iteration: it.iteration,
-                    residual: it.residuals.total,
-                },
-            );
+            report_iteration(progress, it);
             judged || it.residuals.total > tol
         };
         let sol = conic::solve_with(&mut be, &ipm_opts, start.take(), &mut monitor)?;
@@ -774,25 +767,22 @@ fn run_round<C>(
                 ..strict_opts.clone()
             };
             let mut monitor = |it: &conic::Iterate<'_>| {
-                crate::progress::report(
-                    progress,
-                    crate::Progress::Iteration {
-                        solver: "condensed working set",
-                        iteration: it.iteration,
-                        residual: it.residuals.total,
-                    },
-                );
+                report_iteration(progress, it);
                 true
             };
             // On a new backend: the polish leaves this one factoring more exactly
             // (`KktSystem::escalate`), which is slower and, at n = 10^5, stopped short of the
-            // certificate a fresh start at the strict tolerance reaches.
-            let mut fresh = Condensed::new(cond, knots, qw.clone(), wsets.clone(), d)?;
-            if let Ok(sol) = conic::solve_with(&mut fresh, &ipm_opts, Some(start), &mut monitor) {
-                iterations += sol.iterations;
-                if let Ok(Some(c)) = finish(&mut fresh, sol, &strict_opts, iterations) {
-                    if best.as_ref().is_some_and(|b| c.k < b.k || b.k.is_nan()) {
-                        best = Some(c);
+            // certificate a fresh start at the strict tolerance reaches. (Any failure here
+            // keeps the answer the round has.)
+            let fresh = Condensed::new(cond, knots, qw.clone(), wsets.clone(), d).ok();
+            if let Some(mut fresh) = fresh {
+                let sol = conic::solve_with(&mut fresh, &ipm_opts, Some(start), &mut monitor);
+                if let Ok(sol) = sol {
+                    iterations += sol.iterations;
+                    if let Ok(Some(c)) = finish(&mut fresh, sol, &strict_opts, iterations) {
+                        if best.as_ref().is_some_and(|b| c.k < b.k || b.k.is_nan()) {
+                            best = Some(c);
+                        }
                     }
                 }
             }
@@ -802,6 +792,18 @@ fn run_round<C>(
         accepted: best.map(|b| (b.points, b.certificate)),
         iterations,
     })
+}
+
+/// Reports one iteration of the method on the condensed working set to the progress observer.
+fn report_iteration(progress: Option<&crate::Observer>, it: &conic::Iterate<'_>) {
+    crate::progress::report(
+        progress,
+        crate::Progress::Iteration {
+            solver: "condensed working set",
+            iteration: it.iteration,
+            residual: it.residuals.total,
+        },
+    );
 }
 
 /// The end of a round ([`run_round`]) from the method's last iterate `sol`, after `iterations`
