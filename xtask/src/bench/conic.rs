@@ -154,13 +154,16 @@ fn table_row(
 /// Balls beyond the plane noisy star of the class table: the star in space (d = 3, dense active
 /// set), the plane star with radii four times larger (about half active) and the bench's smooth
 /// wavy circle with radii of 0.2–0.7 of the spacing (a sparse active set), closed and open,
-/// k = 3; Clarabel on the same program up to n = 10⁴ (10⁵ gives the scaling of ours).
+/// k = 3; and the plane star in axis-aligned boxes of half-width 0.3 of the local chord (a
+/// tolerance per coordinate, every box active: the class ROBUSTNESS.md item 32 found ten times
+/// slower than balls); Clarabel on the same program up to n = 10⁴ (10⁵ gives the scaling of
+/// ours).
 fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
     println!(
-        "## conic — balls in space, half active and with a sparse active set, ours vs Clarabel"
+        "## conic — balls in space, half active and with a sparse active set, and boxes, ours vs Clarabel"
     );
     println!();
-    println!("k = 3, knot_iterations = 0; noisy star d = 3 (radii 0.05–0.25 of the local chord), the plane star with radii 0.2–1.0 of the local chord (about half active: the working set's rounds), wavy circle d = 2 (radii 0.2–0.7 of the mean spacing)");
+    println!("k = 3, knot_iterations = 0; noisy star d = 3 (radii 0.05–0.25 of the local chord), the plane star with radii 0.2–1.0 of the local chord (about half active: the working set's rounds), wavy circle d = 2 (radii 0.2–0.7 of the mean spacing), the plane star in axis-aligned boxes of half-width 0.3 of the local chord");
     println!();
     println!("| data | topology | n | N | ours | ns/vertex | iterations | active | certificate | Clarabel | status | its certificate | energy rel. diff | Clarabel / ours |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|");
@@ -174,10 +177,12 @@ fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
             let star = problem(Class::Balls, n, 3, topology, 3, 7);
             let mid = wider_balls(problem(Class::Balls, n, 2, topology, 3, 7), 4.0);
             let wavy = wavy_balls(n, topology);
+            let boxes = axis_boxes(problem(Class::Balls, n, 2, topology, 3, 7), 0.3);
             for (name, p) in [
                 ("noisy star, d = 3", star),
                 ("noisy star, radii × 4", mid),
                 ("wavy circle", wavy),
+                ("noisy star, axis-aligned boxes", boxes),
             ] {
                 table_row(name, topology, n, &p, n <= 10_000)?;
             }
@@ -196,6 +201,32 @@ fn wider_balls(p: refine::Problem, factor: f64) -> refine::Problem {
         _ => return p,
     };
     p.with_constraint(refine::Constraint::Balls(radii))
+}
+
+/// `p`'s points each in an axis-aligned box of half-width `ratio` times its local chord (the
+/// mean distance to its neighbours), in place of `p`'s constraint.
+fn axis_boxes(p: refine::Problem, ratio: f64) -> refine::Problem {
+    let chords = kersey_support::cases::local_chords(&p.points, p.topology);
+    let sets = p
+        .points
+        .iter()
+        .zip(&chords)
+        .map(|(x, c)| {
+            let mut set = Vec::new();
+            for (j, &xj) in x.iter().enumerate() {
+                for sign in [1.0, -1.0] {
+                    let mut normal = vec![0.0; x.len()];
+                    normal[j] = sign;
+                    set.push(refine::HalfSpace {
+                        offset: sign * xj + ratio * c,
+                        normal,
+                    });
+                }
+            }
+            set
+        })
+        .collect();
+    p.with_constraint(refine::Constraint::HalfSpaces(sets))
 }
 
 /// The bench's smooth wavy circle with balls of radii 0.2–0.7 of the spacing (a sparse active
