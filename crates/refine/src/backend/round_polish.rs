@@ -125,7 +125,24 @@ pub(super) struct ActivePolish<'e, 'c> {
 /// At most this fraction of W's variables inactive: the polish runs on W's own backend.
 const POLISH_ON_W: f64 = 0.2;
 
-impl ActivePolish<'_, '_> {
+impl<'c> ActivePolish<'_, 'c> {
+    /// The same polish borrowing this one's backend for a shorter while ([`ActivePolish::run`]
+    /// consumes it; the caller goes on with the backend afterwards).
+    pub(super) fn reborrow(&mut self) -> ActivePolish<'_, 'c> {
+        ActivePolish {
+            be: &mut *self.be,
+            cond: self.cond,
+            knots: self.knots,
+            stencil: self.stencil,
+            qw: self.qw,
+            wsets: self.wsets,
+            d: self.d,
+            conic_opts: self.conic_opts,
+            margin: self.margin,
+            target: self.target,
+        }
+    }
+
     /// Whether the polish from `sol` would run on a condensation onto W's active points (W of
     /// balls alone, a fifth or more of it inactive).
     pub(super) fn prefers_subset(&mut self, sol: &conic::Solution) -> bool {

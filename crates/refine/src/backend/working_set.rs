@@ -742,10 +742,19 @@ fn run_round<C>(
                       tol: &conic::Options,
                       iterations: usize|
      -> Result<Option<Certified<C>>, Error> {
-        finish_round(
-            be, cond, knots, stencil, &qw, &wsets, d, tol, options, judge, near, certify, aim, sol,
-            iterations,
-        )
+        let round = ActivePolish {
+            be,
+            cond,
+            knots,
+            stencil,
+            qw: &qw,
+            wsets: &wsets,
+            d,
+            conic_opts: tol,
+            margin: options.margin,
+            target: aim.target,
+        };
+        finish_round(round, judge, near, certify, sol, iterations)
     };
     // The iterate to go on from, when the round has a stricter tolerance to go on to.
     let strict = aim.strict.filter(|&s| s < conic_opts.tolerance);
@@ -807,23 +816,14 @@ fn report_iteration(progress: Option<&crate::Observer>, it: &conic::Iterate<'_>)
 }
 
 /// The end of a round ([`run_round`]) from the method's last iterate `sol`, after `iterations`
-/// of the round: its curve judged, certified, and polished to the aim. `None` when the judge
-/// refuses a curve.
-#[allow(clippy::too_many_arguments)]
+/// of the round: its curve judged, certified, and polished to the aim (`round`: W's backend,
+/// condensation and sets, the method's options and the target, as the polish on the active
+/// points takes them). `None` when the judge refuses a curve.
 fn finish_round<C>(
-    be: &mut Condensed<'_>,
-    cond: &Condensation,
-    knots: &Knots,
-    stencil: &Stencil,
-    qw: &[f64],
-    wsets: &[PointSet],
-    d: usize,
-    conic_opts: &conic::Options,
-    options: &WorkingSetOptions,
+    mut round: ActivePolish<'_, '_>,
     judge: Judge<'_>,
     near: &mut Vec<(usize, f64)>,
     certify: Certify<'_, C>,
-    aim: Aim,
     sol: conic::Solution,
     iterations: usize,
 ) -> Result<Option<Certified<C>>, Error> {
@@ -835,11 +835,11 @@ fn finish_round<C>(
             residual: sol.residuals.total,
         });
     }
-    let (points, g) = be.curve(&sol.x, stencil)?;
+    let (points, g) = round.be.curve(&sol.x, round.stencil)?;
     if !judge(&points, near) {
         return Ok(None);
     }
-    let mult = multipliers(be, wsets, &sol.z, &g, d);
+    let mult = multipliers(round.be, round.wsets, &sol.z, &g, round.d);
     let (k, certificate) = certify(&points, &mult);
     let certified = Certified {
         k,
@@ -857,37 +857,27 @@ fn finish_round<C>(
     // Each polished curve is judged again (it moves a little). On the active points of W when
     // a fifth of W or more is inactive (`ActivePolish`); on W when that polish leaves a point of
     // W it dropped.
-    if certified.k > aim.target && conic_opts.polish.is_some() {
-        let mut on_active = ActivePolish {
-            be,
-            cond,
-            knots,
-            stencil,
-            qw,
-            wsets,
-            d,
-            conic_opts,
-            margin: options.margin,
-            target: aim.target,
-        };
-        if on_active.prefers_subset(&sol) {
-            if let Some(p) = on_active.run(&sol, &mut |p| judge(p, near), certify)? {
-                return Ok(Some(match p.best {
-                    Some(b) if b.k < certified.k => b,
-                    _ => certified,
-                }));
-            }
+    let polish = round.conic_opts.polish.is_some();
+    if certified.k > round.target && polish && round.prefers_subset(&sol) {
+        if let Some(p) = round
+            .reborrow()
+            .run(&sol, &mut |p| judge(p, near), certify)?
+        {
+            return Ok(Some(match p.best {
+                Some(b) if b.k < certified.k => b,
+                _ => certified,
+            }));
         }
     }
     let polished = polish_rounds(
-        be,
-        stencil,
-        wsets,
-        d,
-        conic_opts,
+        round.be,
+        round.stencil,
+        round.wsets,
+        round.d,
+        round.conic_opts,
         sol,
         Some(certified),
-        aim.target,
+        round.target,
         &mut |p| judge(p, near),
         certify,
         None,
