@@ -5,36 +5,18 @@
 //! (`SolveOptions::strict_tolerance`). It goes on from its last iterate; the strategy list's
 //! strict entry started over, which doubled the solve.
 
+mod kersey_support;
 mod noisy;
 
 use divdiff::{Points, Topology};
-use refine::{Constraint, HalfSpace, Problem};
+use refine::{Constraint, Problem};
 
 /// An axis-aligned box around every point, of half-width `ratio` times the shorter of the point's
 /// chords to its neighbours (wrapping around).
 fn boxes(q: &Points, ratio: f64) -> Constraint {
     let n = q.len();
     let chord = |i: usize| banded::vector::dist(q.point(i), q.point((i + 1) % n));
-    Constraint::HalfSpaces(
-        q.iter()
-            .enumerate()
-            .map(|(i, x)| {
-                let w = ratio * chord(i).min(chord((i + n - 1) % n));
-                let mut set = Vec::new();
-                for (j, &c) in x.iter().enumerate() {
-                    for sign in [1.0, -1.0] {
-                        let mut normal = vec![0.0; x.len()];
-                        normal[j] = sign;
-                        set.push(HalfSpace {
-                            offset: sign * c + w,
-                            normal,
-                        });
-                    }
-                }
-                set
-            })
-            .collect(),
-    )
+    kersey_support::cases::axis_boxes(q, |i| ratio * chord(i).min(chord((i + n - 1) % n)))
 }
 
 /// The noisy star of n = 3000 in boxes of 0.3 of the local spacing, closed and open: certified,

@@ -5,6 +5,7 @@
 //! violation, recomputed here — or fails with a typed error. The limits asserted here are the
 //! ones measured and tabulated in ROBUSTNESS.md (run with `--nocapture` to print the table).
 
+mod kersey_support;
 mod noisy;
 
 use banded::vector::dist;
@@ -108,25 +109,9 @@ fn data(n: usize, closed: bool, s: f64, centre: f64) -> Points {
     Points::new(2, c).unwrap()
 }
 
+/// Every point in an axis-aligned box of half-width `w`.
 fn boxes(q: &Points, w: f64) -> Constraint {
-    Constraint::HalfSpaces(
-        q.iter()
-            .map(|x| {
-                let mut set = Vec::new();
-                for j in 0..2 {
-                    for sign in [1.0, -1.0] {
-                        let mut normal = vec![0.0; 2];
-                        normal[j] = sign;
-                        set.push(HalfSpace {
-                            offset: sign * x[j] + w,
-                            normal,
-                        });
-                    }
-                }
-                set
-            })
-            .collect(),
-    )
+    kersey_support::cases::axis_boxes(q, |_| w)
 }
 
 fn kinds(q: &Points, s: f64) -> Vec<(&'static str, Constraint)> {

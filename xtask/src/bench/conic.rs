@@ -207,26 +207,8 @@ fn wider_balls(p: refine::Problem, factor: f64) -> refine::Problem {
 /// mean distance to its neighbours), in place of `p`'s constraint.
 fn axis_boxes(p: refine::Problem, ratio: f64) -> refine::Problem {
     let chords = kersey_support::cases::local_chords(&p.points, p.topology);
-    let sets = p
-        .points
-        .iter()
-        .zip(&chords)
-        .map(|(x, c)| {
-            let mut set = Vec::new();
-            for (j, &xj) in x.iter().enumerate() {
-                for sign in [1.0, -1.0] {
-                    let mut normal = vec![0.0; x.len()];
-                    normal[j] = sign;
-                    set.push(refine::HalfSpace {
-                        offset: sign * xj + ratio * c,
-                        normal,
-                    });
-                }
-            }
-            set
-        })
-        .collect();
-    p.with_constraint(refine::Constraint::HalfSpaces(sets))
+    let boxes = kersey_support::cases::axis_boxes(&p.points, |i| ratio * chords[i]);
+    p.with_constraint(boxes)
 }
 
 /// The bench's smooth wavy circle with balls of radii 0.2–0.7 of the spacing (a sparse active

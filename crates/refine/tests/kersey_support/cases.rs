@@ -46,6 +46,31 @@ pub fn noisy_star(n: usize, d: usize, seed: u64) -> Points {
     Points::new(d, c).expect("finite points")
 }
 
+/// Every point of `q` in an axis-aligned box of half-width `half_width(i)` (a tolerance per
+/// coordinate): 2d half-spaces per point, ±e_j · x ≤ ±q_ij + w in the order j, then sign.
+pub fn axis_boxes(q: &Points, half_width: impl Fn(usize) -> f64) -> Constraint {
+    Constraint::HalfSpaces(
+        q.iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let w = half_width(i);
+                let mut set = Vec::new();
+                for (j, &c) in x.iter().enumerate() {
+                    for sign in [1.0, -1.0] {
+                        let mut normal = vec![0.0; x.len()];
+                        normal[j] = sign;
+                        set.push(HalfSpace {
+                            offset: sign * c + w,
+                            normal,
+                        });
+                    }
+                }
+                set
+            })
+            .collect(),
+    )
+}
+
 /// The local chord at each point: the mean distance to its neighbours (one neighbour at the
 /// ends of an open curve).
 pub fn local_chords(q: &Points, topology: Topology) -> Vec<f64> {
