@@ -738,7 +738,7 @@ fn run_round<C>(
     // The round's answer from the method's last iterate (`None`: the judge refused a curve),
     // at the method's tolerance `tol`.
     let mut finish = |be: &mut Condensed<'_>,
-                      sol: conic::Solution,
+                      sol: &conic::Solution,
                       tol: &conic::Options,
                       iterations: usize|
      -> Result<Option<Certified<C>>, Error> {
@@ -756,18 +756,13 @@ fn run_round<C>(
         };
         finish_round(round, judge, near, certify, sol, iterations)
     };
-    // The iterate to go on from, when the round has a stricter tolerance to go on to.
     let strict = aim.strict.filter(|&s| s < conic_opts.tolerance);
-    let resume = strict.map(|_| Start {
-        x: sol.x.clone(),
-        sz: Some((sol.s.clone(), sol.z.clone())),
-    });
-    let mut best = finish(&mut be, sol, conic_opts, iterations)?;
+    let mut best = finish(&mut be, &sol, conic_opts, iterations)?;
     // An answer the caller's certificate does not accept goes on at the stricter tolerance
     // from the same iterate (the strict entry of the strategy list would start over: on
     // points in boxes of half-spaces, where the polish does not settle the active set, that
     // was half of the solve), and the better answer is kept.
-    if let (Some(tol), Some(start), Some(b)) = (strict, resume, best.as_ref()) {
+    if let (Some(tol), Some(b)) = (strict, best.as_ref()) {
         // (NaN is not accepted either.)
         if b.k > aim.accept || b.k.is_nan() {
             let strict_opts = conic_opts.clone().with_tolerance(tol);
@@ -785,10 +780,14 @@ fn run_round<C>(
             // keeps the answer the round has.)
             let fresh = Condensed::new(cond, knots, qw.clone(), wsets.clone(), d).ok();
             if let Some(mut fresh) = fresh {
+                let start = Start {
+                    x: sol.x,
+                    sz: Some((sol.s, sol.z)),
+                };
                 let sol = conic::solve_with(&mut fresh, &ipm_opts, Some(start), &mut monitor);
                 if let Ok(sol) = sol {
                     iterations += sol.iterations;
-                    if let Ok(Some(c)) = finish(&mut fresh, sol, &strict_opts, iterations) {
+                    if let Ok(Some(c)) = finish(&mut fresh, &sol, &strict_opts, iterations) {
                         if best.as_ref().is_some_and(|b| c.k < b.k || b.k.is_nan()) {
                             best = Some(c);
                         }
@@ -824,7 +823,7 @@ fn finish_round<C>(
     judge: Judge<'_>,
     near: &mut Vec<(usize, f64)>,
     certify: Certify<'_, C>,
-    sol: conic::Solution,
+    sol: &conic::Solution,
     iterations: usize,
 ) -> Result<Option<Certified<C>>, Error> {
     // (NaN is not converged either.)
@@ -858,10 +857,10 @@ fn finish_round<C>(
     // a fifth of W or more is inactive (`ActivePolish`); on W when that polish leaves a point of
     // W it dropped.
     let polish = round.conic_opts.polish.is_some();
-    if certified.k > round.target && polish && round.prefers_subset(&sol) {
+    if certified.k > round.target && polish && round.prefers_subset(sol) {
         if let Some(p) = round
             .reborrow()
-            .run(&sol, &mut |p| judge(p, near), certify)?
+            .run(sol, &mut |p| judge(p, near), certify)?
         {
             return Ok(Some(match p.best {
                 Some(b) if b.k < certified.k => b,
@@ -875,7 +874,8 @@ fn finish_round<C>(
         round.wsets,
         round.d,
         round.conic_opts,
-        sol,
+        // (a copy: the round goes on from `sol` when the certificate refuses the answer)
+        sol.clone(),
         Some(certified),
         round.target,
         &mut |p| judge(p, near),
