@@ -154,16 +154,16 @@ fn table_row(
 /// Balls beyond the plane noisy star of the class table: the star in space (d = 3, dense active
 /// set), the plane star with radii four times larger (about half active) and the bench's smooth
 /// wavy circle with radii of 0.2–0.7 of the spacing (a sparse active set), closed and open,
-/// k = 3; and the plane star in axis-aligned boxes of half-width 0.3 of the local chord (a
+/// k = 3; the plane star in axis-aligned boxes of half-width 0.3 of the local chord (a
 /// tolerance per coordinate, every box active: the class ROBUSTNESS.md item 32 found ten times
-/// slower than balls); Clarabel on the same program up to n = 10⁴ (10⁵ gives the scaling of
-/// ours).
+/// slower than balls) and in balls of radii spread over five decades ([`spread_radii`], item 33);
+/// Clarabel on the same program up to n = 10⁴ (10⁵ gives the scaling of ours).
 fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
     println!(
         "## conic — balls in space, half active and with a sparse active set, and boxes, ours vs Clarabel"
     );
     println!();
-    println!("k = 3, knot_iterations = 0; noisy star d = 3 (radii 0.05–0.25 of the local chord), the plane star with radii 0.2–1.0 of the local chord (about half active: the working set's rounds), wavy circle d = 2 (radii 0.2–0.7 of the mean spacing), the plane star in axis-aligned boxes of half-width 0.3 of the local chord");
+    println!("k = 3, knot_iterations = 0; noisy star d = 3 (radii 0.05–0.25 of the local chord), the plane star with radii 0.2–1.0 of the local chord (about half active: the working set's rounds), wavy circle d = 2 (radii 0.2–0.7 of the mean spacing), the plane star in axis-aligned boxes of half-width 0.3 of the local chord, the plane star in balls of radii 10^u local chords, u uniform in [-4, 1]");
     println!();
     println!("| data | topology | n | N | ours | ns/vertex | iterations | active | certificate | Clarabel | status | its certificate | energy rel. diff | Clarabel / ours |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|");
@@ -178,11 +178,13 @@ fn balls_beyond(opts: Opts) -> anyhow::Result<()> {
             let mid = wider_balls(problem(Class::Balls, n, 2, topology, 3, 7), 4.0);
             let wavy = wavy_balls(n, topology);
             let boxes = axis_boxes(problem(Class::Balls, n, 2, topology, 3, 7), 0.3);
+            let spread = spread_radii(problem(Class::Balls, n, 2, topology, 3, 7));
             for (name, p) in [
                 ("noisy star, d = 3", star),
                 ("noisy star, radii × 4", mid),
                 ("wavy circle", wavy),
                 ("noisy star, axis-aligned boxes", boxes),
+                ("noisy star, radii over five decades", spread),
             ] {
                 table_row(name, topology, n, &p, n <= 10_000)?;
             }
@@ -209,6 +211,20 @@ fn axis_boxes(p: refine::Problem, ratio: f64) -> refine::Problem {
     let chords = kersey_support::cases::local_chords(&p.points, p.topology);
     let boxes = kersey_support::cases::axis_boxes(&p.points, |i| ratio * chords[i]);
     p.with_constraint(boxes)
+}
+
+/// `p`'s points each in a ball of radius 10^u local chords, u uniform in [−4, 1] (a tolerance
+/// that varies from point to point over five decades), in place of `p`'s constraint: the class
+/// where a round's polish pulled points back onto the tiniest balls from hundreds of radii away
+/// (ROBUSTNESS.md item 33).
+fn spread_radii(p: refine::Problem) -> refine::Problem {
+    let chords = kersey_support::cases::local_chords(&p.points, p.topology);
+    let mut rng = kersey_support::cases::Rng::new(33);
+    let radii = chords
+        .iter()
+        .map(|c| c * 10f64.powf(rng.range(-4.0, 1.0)))
+        .collect();
+    p.with_constraint(refine::Constraint::Balls(radii))
 }
 
 /// The bench's smooth wavy circle with balls of radii 0.2–0.7 of the spacing (a sparse active
