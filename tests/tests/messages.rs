@@ -162,9 +162,10 @@ fn messages_say_what_the_field_must_be() {
     let got = message("strip", &cases.last().expect("the strip case").1);
     assert!(got.ends_with("shift t to start near 0"), "{got}");
 
-    // One tiny ball among large ones (found by a sweep; ROBUSTNESS.md §4, item 20): the solve is
-    // not certified, and the refusal names the radius and the remedy, which works — radius 0
-    // solves.
+    // One tiny ball among large ones (found by a sweep; ROBUSTNESS.md §4, item 20): the solve
+    // after the first knot update is not certified (the first solve is: item 33), and the
+    // refusal names the radius and the remedies, which work — radius 0 solves, and so does
+    // knot_iterations 0.
     let balls = |r3: &str| {
         format!(
             r#"{{"points": [[0, 0], [1, 1], [2, 0], [3, 1], [4, 0], [5, 1]], "k": 3, "closed": true, "constraint": {{"type": "balls", "radii": [0.3, 0.3, 0.3, {r3}, 0.3, 0.3]}}}}"#
@@ -179,7 +180,11 @@ fn messages_say_what_the_field_must_be() {
             ),
         "{got}"
     );
+    assert!(got.contains("knot_iterations 0 stops there"), "{got}");
     let (code, _, err) = run_cli(&["refine", "-"], &balls("0"));
+    assert_eq!(code, 0, "{err}");
+    let no_updates = balls("1e-8").replacen('{', r#"{"knot_iterations": 0, "#, 1);
+    let (code, _, err) = run_cli(&["refine", "-"], &no_updates);
     assert_eq!(code, 0, "{err}");
 }
 

@@ -448,6 +448,28 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
                 None => user_error(e),
             },
         },
+        // The solve before the update was certified; a tiny ball is still the likelier cause
+        // than the spans (a sweep's case of ROBUSTNESS.md §4, item 20, whose first solve the
+        // polish of item 33 certifies and whose first update it does not), and radius 0
+        // removes it at every update.
+        e @ refine::Error::NotConvergedAfterUpdate {
+            update,
+            solver,
+            iterations,
+            residual,
+            ..
+        } => match tiny_ball(&prob) {
+            Some((i, r, extent)) => InputError::new(
+                format!("constraint.radii[{i}]"),
+                format!(
+                    "after knot update {update} (the solve before it was certified: knot_iterations 0 stops there), {solver} did not converge in {iterations} iterations (best residual {}); this radius, {}, is {} of the data's extent, and a ball that small is a stiff spring (its force over its radius) that the solver may not balance to its certificate: give that point radius 0 to interpolate it exactly, or a larger radius",
+                    num(residual),
+                    num(r),
+                    num(r / extent)
+                ),
+            ),
+            None => user_error(e),
+        },
         // The spread of the spans comes from the knot updates, the given knots, or the points'
         // spacing under the parametrization: the field the user can change.
         e @ refine::Error::SpansTooUnequal { .. } => {
