@@ -427,13 +427,11 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
             iterations,
             residual,
         } => match tiny_ball(&prob) {
-            Some((i, r, extent)) => InputError::new(
-                format!("constraint.radii[{i}]"),
+            Some(ball) => tiny_ball_refusal(
+                ball,
                 format!(
-                    "{solver} did not converge in {iterations} iterations (best residual {}); this radius, {}, is {} of the data's extent, and a ball that small is a stiff spring (its force over its radius) that the solver may not balance to its certificate: give that point radius 0 to interpolate it exactly, or a larger radius",
-                    num(residual),
-                    num(r),
-                    num(r / extent)
+                    "{solver} did not converge in {iterations} iterations (best residual {})",
+                    num(residual)
                 ),
             ),
             None => match derivative_field(&prob) {
@@ -459,13 +457,11 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
             residual,
             ..
         } => match tiny_ball(&prob) {
-            Some((i, r, extent)) => InputError::new(
-                format!("constraint.radii[{i}]"),
+            Some(ball) => tiny_ball_refusal(
+                ball,
                 format!(
-                    "after knot update {update} (the solve before it was certified: knot_iterations 0 stops there), {solver} did not converge in {iterations} iterations (best residual {}); this radius, {}, is {} of the data's extent, and a ball that small is a stiff spring (its force over its radius) that the solver may not balance to its certificate: give that point radius 0 to interpolate it exactly, or a larger radius",
-                    num(residual),
-                    num(r),
-                    num(r / extent)
+                    "after knot update {update} (the solve before it was certified: knot_iterations 0 stops there), {solver} did not converge in {iterations} iterations (best residual {})",
+                    num(residual)
                 ),
             ),
             None => user_error(e),
@@ -508,6 +504,20 @@ fn derivative_field(prob: &refine::Problem) -> Option<&'static str> {
 /// certified ([`run`]): a known cause of such refusals (ROBUSTNESS.md §4, items 3 and 20: one
 /// radius of 1e-8 among radii of 0.3 on points 5 apart is refused, radius 0 solves).
 const TINY_RADIUS: f64 = 1e-6;
+
+/// The refusal naming a tiny ball ([`tiny_ball`]: its index, radius and the data's extent) after
+/// `failure`, the solver's own words.
+fn tiny_ball_refusal((i, r, extent): (usize, f64, f64), failure: String) -> InputError {
+    use super::messages::num;
+    InputError::new(
+        format!("constraint.radii[{i}]"),
+        format!(
+            "{failure}; this radius, {}, is {} of the data's extent, and a ball that small is a stiff spring (its force over its radius) that the solver may not balance to its certificate: give that point radius 0 to interpolate it exactly, or a larger radius",
+            num(r),
+            num(r / extent)
+        ),
+    )
+}
 
 /// The smallest positive ball radius, its index and the data's extent (the largest side of their
 /// bounding box), when that radius is below [`TINY_RADIUS`] of the extent.
