@@ -427,13 +427,7 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
             iterations,
             residual,
         } => match tiny_ball(&prob) {
-            Some(ball) => tiny_ball_refusal(
-                ball,
-                format!(
-                    "{solver} did not converge in {iterations} iterations (best residual {})",
-                    num(residual)
-                ),
-            ),
+            Some(ball) => tiny_ball_refusal(ball, "", solver, iterations, residual),
             None => match derivative_field(&prob) {
                 Some(field) => InputError::new(
                     field,
@@ -459,10 +453,10 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
         } => match tiny_ball(&prob) {
             Some(ball) => tiny_ball_refusal(
                 ball,
-                format!(
-                    "after knot update {update} (the solve before it was certified: knot_iterations 0 stops there), {solver} did not converge in {iterations} iterations (best residual {})",
-                    num(residual)
-                ),
+                &format!("after knot update {update} (the solve before it was certified: knot_iterations 0 stops there), "),
+                solver,
+                iterations,
+                residual,
             ),
             None => user_error(e),
         },
@@ -506,13 +500,20 @@ fn derivative_field(prob: &refine::Problem) -> Option<&'static str> {
 const TINY_RADIUS: f64 = 1e-6;
 
 /// The refusal naming a tiny ball ([`tiny_ball`]: its index, radius and the data's extent) after
-/// `failure`, the solver's own words.
-fn tiny_ball_refusal((i, r, extent): (usize, f64, f64), failure: String) -> InputError {
+/// `when` (where the solve failed; empty for the first solve) and the solver's report.
+fn tiny_ball_refusal(
+    (i, r, extent): (usize, f64, f64),
+    when: &str,
+    solver: &str,
+    iterations: usize,
+    residual: f64,
+) -> InputError {
     use super::messages::num;
     InputError::new(
         format!("constraint.radii[{i}]"),
         format!(
-            "{failure}; this radius, {}, is {} of the data's extent, and a ball that small is a stiff spring (its force over its radius) that the solver may not balance to its certificate: give that point radius 0 to interpolate it exactly, or a larger radius",
+            "{when}{solver} did not converge in {iterations} iterations (best residual {}); this radius, {}, is {} of the data's extent, and a ball that small is a stiff spring (its force over its radius) that the solver may not balance to its certificate: give that point radius 0 to interpolate it exactly, or a larger radius",
+            num(residual),
             num(r),
             num(r / extent)
         ),
