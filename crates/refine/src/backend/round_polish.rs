@@ -77,11 +77,9 @@ pub(super) fn polish_rounds<C>(
             multipliers,
         });
         // A call that left the method's residual no lower than at the point it started from
-        // (when that is known: an interior-point iterate, an earlier call's point) ran its
-        // Newton steps outside their quadratic regime, and another call from its point repeats
-        // them: the calls end ([`POLISH_ROUNDS`]; NaN is never lower).
-        let lowered = p.residuals.total < sol.residuals.total;
-        if sol.residuals.total > 0.0 && !lowered {
+        // ran its Newton steps outside their quadratic regime, and another call from its point
+        // repeats them: the calls end ([`POLISH_ROUNDS`]).
+        if no_lower(&p, &sol) {
             break;
         }
         if p.residuals.total <= ROUNDING_LEVEL * conic_opts.tolerance {
@@ -98,6 +96,14 @@ pub(super) fn polish_rounds<C>(
         calls,
         settled,
     }))
+}
+
+/// Whether the polished point `p` is no better than the point `from` it started from by the
+/// method's residual, when that is known (an interior-point iterate, an earlier call's point;
+/// not a warm start's, whose residual is 0: unknown). NaN is never better.
+fn no_lower(p: &conic::Solution, from: &conic::Solution) -> bool {
+    let lowered = p.residuals.total < from.residuals.total;
+    from.residuals.total > 0.0 && !lowered
 }
 
 /// What [`polish_rounds`] ends with: the best certified curve (if any), the calls made, and
@@ -327,9 +333,7 @@ impl<'c> ActivePolish<'_, 'c> {
             // A polished point no better than where the round's method stood is not worth
             // another attempt on a larger subset (whose polish starts from it): the method
             // resumes from its iterate instead (SUBSET_ATTEMPTS).
-            if left.as_ref().is_some_and(|(p, _)| {
-                sol.residuals.total > 0.0 && p.residuals.total >= sol.residuals.total
-            }) {
+            if left.as_ref().is_some_and(|(p, _)| no_lower(p, sol)) {
                 return Ok(None);
             }
             // The next start: the polished point, and the violated points where its curve put
