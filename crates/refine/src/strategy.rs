@@ -225,15 +225,17 @@ fn condensed(fp: &FixedProblem<'_>, tolerance: f64) -> Result<FixedSolution, Err
         sets: &sets,
         stride: fp.stride,
         conic: &opts,
-        strict: Some(fp.options.strict_tolerance),
     };
     let sol = working_set::solve(
         &setting,
         &fp.options.working_set,
         fp.warm,
         &mut judge,
-        fp.options.polish_above,
-        fp.options.accept_kkt,
+        working_set::Aim {
+            target: fp.options.polish_above,
+            accept: fp.options.accept_kkt,
+            strict: Some(fp.options.strict_tolerance),
+        },
         fp.options.progress.as_ref(),
     )?;
     Ok(FixedSolution {

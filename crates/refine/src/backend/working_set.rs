@@ -28,7 +28,7 @@
 //! a fifth of W or more is inactive, on a condensation onto its active points), and the method
 //! resumes only when that polish does not get the caller's certificate to its aim. An answer
 //! the judge accepts but the caller's certificate does not goes on from the round's last iterate
-//! to the stricter tolerance the caller gives ([`Setting::strict`]), and the better answer is
+//! to the stricter tolerance the caller gives ([`Aim::strict`]), and the better answer is
 //! kept. Each round's condensation reuses the spans of the previous one that no new point
 //! splits. The multipliers of the constraints outside W are 0.
 
@@ -208,14 +208,12 @@ pub(crate) struct Setting<'a> {
     pub sets: &'a [Option<PointSet>],
     pub stride: usize,
     pub conic: &'a conic::Options,
-    /// A stricter tolerance of the method (below `conic`'s), to which a round whose answer the
-    /// caller's certificate does not accept goes on from its last iterate (`None`: it stops).
-    pub strict: Option<f64>,
 }
 
 /// What the caller's certificate is asked for: the level a round's curve is polished to
-/// (`target`) and the level at which a curve is accepted at all (`accept`); and the method's
-/// stricter tolerance a round not accepted goes on to ([`Setting::strict`]).
+/// (`target`) and the level at which a curve is accepted at all (`accept`); and a stricter
+/// tolerance of the method (below `Setting::conic`'s), to which a round whose answer is not
+/// accepted goes on from its last iterate (`strict`; `None`: it stops).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Aim {
     pub target: f64,
@@ -226,7 +224,7 @@ pub(crate) struct Aim {
 /// Solves the data-vertex problem (each data point i in `sets[i]`, `None` for no constraint)
 /// at the data vertices 0, stride, 2·stride, … of `knots` by the working-set method, first from
 /// `warm` (the previous knot iteration's answer) when given ([`polish_from_warm`]). An
-/// accepted round whose curve `certify` puts above `target` is polished
+/// accepted round whose curve `certify` puts above `aim.target` is polished
 /// ([`conic::polish::polish_solution`]) and judged again; the better of the two is returned.
 ///
 /// # Errors
@@ -238,12 +236,11 @@ pub(crate) fn solve<C>(
     options: &WorkingSetOptions,
     warm: Option<(&Points, &[Vec<f64>])>,
     certify: Certify<'_, C>,
-    target: f64,
-    accept: f64,
+    aim: Aim,
     progress: Option<&crate::Observer>,
 ) -> Result<WorkingSetSolution<C>, Error> {
     if let Some(warm) = warm {
-        if let Some(sol) = polish_from_warm(setting, warm, certify, accept)? {
+        if let Some(sol) = polish_from_warm(setting, warm, certify, aim.accept)? {
             return Ok(sol);
         }
     }
@@ -265,11 +262,6 @@ pub(crate) fn solve<C>(
         1
     } else {
         (n / options.start_points).clamp(1, options.start_step)
-    };
-    let aim = Aim {
-        target,
-        accept,
-        strict: setting.strict,
     };
     solve_from(setting, options, step, start, certify, aim, progress)
 }
@@ -338,7 +330,6 @@ fn polish_from_warm<C>(
         sets,
         stride,
         conic: conic_opts,
-        ..
     }: &Setting<'_>,
     (points, wmult): (&Points, &[Vec<f64>]),
     certify: Certify<'_, C>,
@@ -436,7 +427,6 @@ pub(crate) fn solve_from<C>(
         sets,
         stride,
         conic: conic_opts,
-        ..
     }: &Setting<'_>,
     options: &WorkingSetOptions,
     step: usize,
@@ -766,10 +756,7 @@ fn run_round<C>(
         // (NaN is not accepted either.)
         if b.k > aim.accept || b.k.is_nan() {
             let strict_opts = conic_opts.clone().with_tolerance(tol);
-            let ipm_opts = conic::Options {
-                polish: None,
-                ..strict_opts.clone()
-            };
+            let ipm_opts = ipm_opts.clone().with_tolerance(tol);
             let mut monitor = |it: &conic::Iterate<'_>| {
                 report_iteration(progress, it);
                 true

@@ -118,7 +118,6 @@ fn run_with(
         sets,
         stride: m,
         conic: &conic::Options::default(),
-        strict: None,
     };
     let sol = solve_from(
         &setting,
@@ -188,9 +187,13 @@ impl Balls {
             sets: &self.sets,
             stride: self.m,
             conic: &conic::Options::default(),
+        };
+        let aim = super::Aim {
+            target,
+            accept: EXACT,
             strict: None,
         };
-        solve(&setting, options, warm, &mut judge, target, EXACT, None).unwrap()
+        solve(&setting, options, warm, &mut judge, aim, None).unwrap()
     }
 }
 
