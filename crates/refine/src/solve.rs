@@ -246,30 +246,33 @@ fn span_ratio(knots: &divdiff::Knots) -> f64 {
 /// 2^−64 … 2^64 (about 1e−19 … 1e19).
 const RESCALE_BEYOND: i32 = 64;
 
-/// [`algorithm::run`], for balls alone (no derivative constraints, the exact solver) on data or
-/// knots of extreme scale solved on points and radii scaled by 2^−e and knots by 2^−f, powers of
-/// two that bring the data's extent and the mean data span near 1, and mapped back.
+/// [`algorithm::run`], for balls or half-spaces alone (no derivative constraints, the exact
+/// solver) on data or knots of extreme scale solved on points, radii and offsets scaled by 2^−e
+/// and knots by 2^−f, powers of two that bring the data's extent and the mean data span near 1,
+/// and mapped back.
 ///
 /// Why: a ball's multiplier is its force over its radius, w ∝ 1/h³ on spans h, and the forces
 /// scale with the points: on centripetal knots of data at 1e80 (spans ~1e40) or 1e−80 the
 /// interior-point method's products of such numbers under- or overflowed, and it stopped in one
-/// or two iterations (the other data constraints were solved at every scale of the extent
-/// range). Balls without derivative constraints are homogeneous: the optimum on knots 2^−f·t
-/// for data 2^−e·q is 2^−e·p, and powers of two scale exactly, so the certificate — every part
-/// relative — is the original problem's. The data knots are computed once, from the data as
-/// given, and passed scaled (knot updates map back onto their span); the result maps back as
-/// points 2^e·p, knots 2^f·t, E 2^(2e−3f)·E, ball weights 2^(−3f)·w, and the reactions of
-/// radius-0 points 2^(e−3f)·λ.
+/// or two iterations. Half-spaces failed from an extent of ~1e30 (a fuzz find: three points in
+/// boxes of width 0 at 1e37, ROBUSTNESS.md item 34). Both kinds without derivative constraints
+/// are homogeneous: the optimum on knots 2^−f·t for data 2^−e·q (offsets 2^−e·c, normals as
+/// given) is 2^−e·p, and powers of two scale exactly, so the certificate — every part relative —
+/// is the original problem's. The data knots are computed once, from the data as given, and
+/// passed scaled (knot updates map back onto their span); the result maps back as points 2^e·p,
+/// knots 2^f·t, E 2^(2e−3f)·E, ball weights 2^(−3f)·w, and the reactions of radius-0 points and
+/// the half-spaces' multipliers (forces per unit of normal) 2^(e−3f)·λ.
 fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
-    let crate::Constraint::Balls(radii) = &problem.constraint else {
-        return algorithm::run(problem);
-    };
     let derivative_free = problem.boundary == crate::Boundary::Natural
         && problem
             .tangents
             .as_ref()
             .is_none_or(|t| t.iter().all(Option::is_none));
-    if !derivative_free || problem.solver != Solver::Exact {
+    let homogeneous = matches!(
+        problem.constraint,
+        crate::Constraint::Balls(_) | crate::Constraint::HalfSpaces(_)
+    );
+    if !(homogeneous && derivative_free && problem.solver == Solver::Exact) {
         return algorithm::run(problem);
     }
     let q = &problem.points;
@@ -297,7 +300,33 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .coords_mut()
         .iter_mut()
         .for_each(|x| *x = down(x));
-    scaled.constraint = crate::Constraint::Balls(radii.iter().map(down).collect());
+    // The power of two each point's multipliers map back by.
+    let multiplier_power: Vec<i32> = match &problem.constraint {
+        crate::Constraint::Balls(radii) => {
+            scaled.constraint = crate::Constraint::Balls(radii.iter().map(down).collect());
+            radii
+                .iter()
+                .map(|&r| if r == 0.0 { e - 3 * f } else { -3 * f })
+                .collect()
+        }
+        crate::Constraint::HalfSpaces(sets) => {
+            scaled.constraint = crate::Constraint::HalfSpaces(
+                sets.iter()
+                    .map(|set| {
+                        set.iter()
+                            .map(|h| crate::HalfSpace {
+                                normal: h.normal.clone(),
+                                offset: down(&h.offset),
+                            })
+                            .collect()
+                    })
+                    .collect(),
+            );
+            vec![e - 3 * f; sets.len()]
+        }
+        // (not reached: `homogeneous` admits the two kinds above)
+        _ => return algorithm::run_on(problem, u),
+    };
     let t_scaled: Vec<f64> = t.iter().map(|&x| times_power_of_two(x, -f)).collect();
     // (Given knots stay given, scaled: a failed split then names them, else the points.)
     scaled.knots = problem.knots.as_ref().map(|_| t_scaled.clone());
@@ -322,11 +351,8 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .multipliers
         .to_vecs()
         .into_iter()
-        .zip(radii)
-        .map(|(m, &radius)| {
-            let k = if radius == 0.0 { e - 3 * f } else { -3 * f };
-            m.into_iter().map(|x| times_power_of_two(x, k)).collect()
-        })
+        .zip(multiplier_power)
+        .map(|(m, k)| m.into_iter().map(|x| times_power_of_two(x, k)).collect())
         .collect::<Vec<Vec<f64>>>()
         .into();
     Ok(r)

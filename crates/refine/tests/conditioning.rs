@@ -632,7 +632,7 @@ fn tangent_halfspaces_far_beyond_the_slopes_leave_derivatives_free() {
 /// radius, ∝ 1/h³) ∝ s^{−3/2}, the reactions of radius-0 points ∝ s^{−1/2} — each compared
 /// with the scale-1 solve to 1e-9. Before the solve rescaled such problems by powers of two
 /// (`run_rescaled` in `solve.rs`) the interior-point method stopped after one or two iterations
-/// from 1e±80 (the other constraint kinds were solved at every scale).
+/// from 1e±80 (half-spaces, rescaled the same way since, next test).
 #[test]
 fn balls_at_the_ends_of_the_extent_range_scale_exactly() {
     let base = noisy_star(40);
@@ -691,6 +691,89 @@ fn balls_at_the_ends_of_the_extent_range_scale_exactly() {
             }
         }
     }
+}
+
+/// Boxes of half-spaces at the ends of the extent range, and far from the origin, give the
+/// solution at scale 1, scaled: points ∝ s, E ∝ s^{1/2} (centripetal), the net forces of the
+/// multipliers (per unit normal, ∝ s/h³) ∝ s^{−1/2}, each compared with the scale-1 solve to 1e-9. Every
+/// fifth box has width 0 (the point pinned). Before the solve rescaled half-spaces as it does
+/// balls (`run_rescaled`), the interior-point method stopped without converging from an extent
+/// of ~1e30; the fuzz find of ROBUSTNESS.md item 34 (three points in boxes of width 0 at 2.5e37,
+/// d = 3, closed, k = 1) was refused translated and solved at the origin.
+#[test]
+fn half_spaces_at_the_ends_of_the_extent_range_scale_exactly() {
+    let base = noisy_star(40);
+    let width = |i: usize| if i % 5 == 0 { 0.0 } else { 0.1 };
+    for topo in [Topology::Closed, Topology::Open] {
+        let solve = |s: f64| {
+            let q = Points::new(2, base.coords().iter().map(|x| x * s).collect()).unwrap();
+            let boxes = kersey_support::cases::axis_boxes(&q, |i| width(i) * s);
+            Problem::new(q)
+                .with_topology(topo)
+                .with_constraint(boxes)
+                .solve()
+                .unwrap_or_else(|e| panic!("{topo:?} scale {s:e}: {e}"))
+        };
+        let one = solve(1.0);
+        let l = extent(&base);
+        for s in [1e-140, 1e-100, 1e30, 1e37, 1e100, 1e140] {
+            let label = format!("{topo:?} scale {s:e}");
+            let r = solve(s);
+            assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
+            let close = |a: f64, b: f64, scale: f64, what: &str| {
+                assert!(
+                    (a - b).abs() <= 1e-9 * scale,
+                    "{label} {what}: {a:e} vs {b:e}"
+                )
+            };
+            for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
+                close(a / s, *b, l, "points");
+            }
+            close(r.energy / s.sqrt(), one.energy, one.energy, "energy");
+            // (A pinned point's faces share its force in no unique way: compared is the net
+            // force Σ_j w_j n_j, per coordinate the + face's multiplier less the − face's.)
+            let net = |r: &Refinement| -> Vec<f64> {
+                r.multipliers
+                    .values()
+                    .chunks_exact(2)
+                    .map(|w| w[0] - w[1])
+                    .collect()
+            };
+            let (got, want) = (net(&r), net(&one));
+            let big = want.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            for (a, b) in got.iter().zip(&want) {
+                close(a * s.sqrt(), *b, big, "net forces");
+            }
+        }
+    }
+    // The fuzz find, at the origin and translated by 2.7e37 (its data as the fuzzer gave them).
+    let fuzz = |shift: f64| {
+        let rows = [
+            [-2e36, -2e36, 9e36],
+            [-1e36, -1e36, -1e36],
+            [-1e36, -3e36, -1e36],
+        ];
+        let q = Points::new(3, rows.iter().flatten().map(|x| x + shift).collect()).unwrap();
+        let pinned = kersey_support::cases::axis_boxes(&q, |_| 0.0);
+        Problem::new(q)
+            .with_topology(Topology::Closed)
+            .with_k(1)
+            .with_knot_iterations(0)
+            .with_parametrization(Parametrization::Uniform)
+            .with_constraint(pinned)
+            .solve()
+            .unwrap_or_else(|e| panic!("fuzz find shifted by {shift:e}: {e}"))
+    };
+    let (at_origin, moved) = (fuzz(0.0), fuzz(2.7e37));
+    assert!(moved.kkt_residual <= KKT_GOOD, "{}", moved.kkt_residual);
+    for (a, b) in moved.points.coords().iter().zip(at_origin.points.coords()) {
+        assert!(
+            (a - 2.7e37 - b).abs() <= 1e-9 * 1e37,
+            "{a:e} vs {b:e} + 2.7e37"
+        );
+    }
+    let rel = (moved.energy - at_origin.energy).abs() / at_origin.energy;
+    assert!(rel <= 1e-9, "E {} vs {}", moved.energy, at_origin.energy);
 }
 
 /// Iterations are bounded: the interior-point method with an absurdly low iteration limit
