@@ -242,37 +242,49 @@ fn span_ratio(knots: &divdiff::Knots) -> f64 {
     }
 }
 
-/// Where [`run_rescaled`] rescales: a data extent or a mean data knot span outside
-/// 2^−64 … 2^64 (about 1e−19 … 1e19).
+/// Where [`run_rescaled`] rescales balls and half-spaces: a data extent or a mean data knot
+/// span outside 2^−64 … 2^64 (about 1e−19 … 1e19).
 const RESCALE_BEYOND: i32 = 64;
 
-/// [`algorithm::run`], for balls or half-spaces alone (no derivative constraints, the exact
-/// solver) on data or knots of extreme scale solved on points, radii and offsets scaled by 2^−e
-/// and knots by 2^−f, powers of two that bring the data's extent and the mean data span near 1,
-/// and mapped back.
+/// Where [`run_rescaled`] rescales a problem with derivative constraints (tangents, end
+/// conditions), whatever its data constraint: outside 2^−20 … 2^20 (about 1e−6 … 1e6). On a
+/// noisy star such problems were refused from 1e±15 and, at 1e80, one was certified with 1e73
+/// times the optimal energy (ROBUSTNESS.md item 35); from 1e−12 to 1e12 they solved.
+const RESCALE_DERIVATIVES_BEYOND: i32 = 20;
+
+/// [`algorithm::run`] for the exact solver on data or knots of extreme scale, solved on points,
+/// radii, offsets and derivative bounds scaled by powers of two that bring the data's extent
+/// and the mean data span near 1 (points by 2^−e, knots by 2^−f), and mapped back. It applies
+/// to balls and half-spaces beyond [`RESCALE_BEYOND`] and to any problem with derivative
+/// constraints beyond [`RESCALE_DERIVATIVES_BEYOND`]; interpolation and smoothing alone are
+/// solved where they are (they solved at every scale of the extent range).
 ///
 /// Why: a ball's multiplier is its force over its radius, w ∝ 1/h³ on spans h, and the forces
 /// scale with the points: on centripetal knots of data at 1e80 (spans ~1e40) or 1e−80 the
 /// interior-point method's products of such numbers under- or overflowed, and it stopped in one
 /// or two iterations. Half-spaces failed from an extent of ~1e30 (a fuzz find: three points in
-/// boxes of width 0 at 1e37, ROBUSTNESS.md item 34). Both kinds without derivative constraints
-/// are homogeneous: the optimum on knots 2^−f·t for data 2^−e·q (offsets 2^−e·c, normals as
-/// given) is 2^−e·p, and powers of two scale exactly, so the certificate — every part relative —
-/// is the original problem's. The data knots are computed once, from the data as given, and
-/// passed scaled (knot updates map back onto their span); the result maps back as points 2^e·p,
-/// knots 2^f·t, E 2^(2e−3f)·E, ball weights 2^(−3f)·w, and the reactions of radius-0 points and
+/// boxes of width 0 at 1e37, ROBUSTNESS.md item 34); derivative constraints from ~1e15 (item
+/// 35). Every kind is homogeneous: the optimum on knots 2^−f·t for data 2^−e·q — radii and
+/// offsets 2^−e·c, smoothing weights 2^(3f)·w, derivative bounds (centres, radii, offsets, end
+/// derivatives) 2^(f−e)·v, normals and wedges as given — is 2^−e·p, and powers of two scale
+/// exactly, so the certificate — every part relative — is the original problem's. The data
+/// knots are computed once, from the data as given, and passed scaled (knot updates map back
+/// onto their span); the result maps back as points 2^e·p, knots 2^f·t, E 2^(2e−3f)·E, ball
+/// and smoothing weights 2^(−3f)·w, and the reactions of interpolated points (radius 0 too) and
 /// the half-spaces' multipliers (forces per unit of normal) 2^(e−3f)·λ.
 fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
-    let derivative_free = problem.boundary == crate::Boundary::Natural
-        && problem
-            .tangents
-            .as_ref()
-            .is_none_or(|t| t.iter().all(Option::is_none));
-    let homogeneous = matches!(
+    use crate::Constraint;
+    let limit = if problem.has_derivative_constraints() {
+        RESCALE_DERIVATIVES_BEYOND
+    } else if matches!(
         problem.constraint,
-        crate::Constraint::Balls(_) | crate::Constraint::HalfSpaces(_)
-    );
-    if !(homogeneous && derivative_free && problem.solver == Solver::Exact) {
+        Constraint::Balls(_) | Constraint::HalfSpaces(_)
+    ) {
+        RESCALE_BEYOND
+    } else {
+        return algorithm::run(problem);
+    };
+    if problem.solver != Solver::Exact {
         return algorithm::run(problem);
     }
     let q = &problem.points;
@@ -280,10 +292,10 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
     let u = problem.data_knots_unvalidated()?;
     let t = u.values();
     let mean_span = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-    // The power of two nearest x when x is beyond 2^±RESCALE_BEYOND, else 0 (nothing to do).
+    // The power of two nearest x when x is beyond 2^±limit, else 0 (nothing to do).
     let beyond = |x: f64| {
         let e = x.log2().round() as i32;
-        if e.abs() > RESCALE_BEYOND {
+        if e.abs() > limit {
             e
         } else {
             0
@@ -300,33 +312,40 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .coords_mut()
         .iter_mut()
         .for_each(|x| *x = down(x));
-    // The power of two each point's multipliers map back by.
-    let multiplier_power: Vec<i32> = match &problem.constraint {
-        crate::Constraint::Balls(radii) => {
-            scaled.constraint = crate::Constraint::Balls(radii.iter().map(down).collect());
+    let n = q.len();
+    // The data constraint, scaled, and the power of two each point's multipliers map back by.
+    let (constraint, multiplier_power): (Constraint, Vec<i32>) = match &problem.constraint {
+        Constraint::Interpolate => (Constraint::Interpolate, vec![e - 3 * f; n]),
+        Constraint::Balls(radii) => (
+            Constraint::Balls(radii.iter().map(down).collect()),
             radii
                 .iter()
                 .map(|&r| if r == 0.0 { e - 3 * f } else { -3 * f })
-                .collect()
-        }
-        crate::Constraint::HalfSpaces(sets) => {
-            scaled.constraint = crate::Constraint::HalfSpaces(
-                sets.iter()
-                    .map(|set| {
-                        set.iter()
-                            .map(|h| crate::HalfSpace {
-                                normal: h.normal.clone(),
-                                offset: down(&h.offset),
-                            })
-                            .collect()
-                    })
+                .collect(),
+        ),
+        Constraint::Smoothing(weights) => (
+            Constraint::Smoothing(
+                weights
+                    .iter()
+                    .map(|&w| times_power_of_two(w, 3 * f))
                     .collect(),
-            );
-            vec![e - 3 * f; sets.len()]
-        }
-        // (not reached: `homogeneous` admits the two kinds above)
-        _ => return algorithm::run_on(problem, u),
+            ),
+            vec![-3 * f; n],
+        ),
+        Constraint::HalfSpaces(sets) => (
+            Constraint::HalfSpaces(sets.iter().map(|set| scale_halfspaces(set, -e)).collect()),
+            vec![e - 3 * f; n],
+        ),
     };
+    scaled.constraint = constraint;
+    // Derivatives Df scale as points over knots.
+    let slope = f - e;
+    scaled.tangents = problem.tangents.as_ref().map(|ts| {
+        ts.iter()
+            .map(|t| t.as_ref().map(|t| scale_tangent(t, slope)))
+            .collect()
+    });
+    scaled.boundary = scale_boundary(&problem.boundary, slope);
     let t_scaled: Vec<f64> = t.iter().map(|&x| times_power_of_two(x, -f)).collect();
     // (Given knots stay given, scaled: a failed split then names them, else the points.)
     scaled.knots = problem.knots.as_ref().map(|_| t_scaled.clone());
@@ -356,6 +375,49 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .collect::<Vec<Vec<f64>>>()
         .into();
     Ok(r)
+}
+
+/// Half-spaces with their offsets times 2^k (normals as given).
+fn scale_halfspaces(set: &[crate::HalfSpace], k: i32) -> Vec<crate::HalfSpace> {
+    set.iter()
+        .map(|h| crate::HalfSpace {
+            normal: h.normal.clone(),
+            offset: times_power_of_two(h.offset, k),
+        })
+        .collect()
+}
+
+/// A tangent constraint on derivatives scaled by 2^k (a wedge's direction and angle as given).
+fn scale_tangent(t: &crate::Tangent, k: i32) -> crate::Tangent {
+    use crate::Tangent;
+    let up = |x: &f64| times_power_of_two(*x, k);
+    match t {
+        Tangent::Ball { center, radius } => Tangent::Ball {
+            center: center.iter().map(up).collect(),
+            radius: up(radius),
+        },
+        Tangent::Wedge { .. } => t.clone(),
+        Tangent::Tension { radius } => Tangent::Tension { radius: up(radius) },
+        Tangent::HalfSpaces(set) => Tangent::HalfSpaces(scale_halfspaces(set, k)),
+    }
+}
+
+/// End conditions on derivatives scaled by 2^k.
+fn scale_boundary(b: &crate::Boundary, k: i32) -> crate::Boundary {
+    use crate::Boundary;
+    let up = |v: &Vec<f64>| v.iter().map(|&x| times_power_of_two(x, k)).collect();
+    match b {
+        Boundary::Natural => Boundary::Natural,
+        Boundary::Clamped { start, end } => Boundary::Clamped {
+            start: up(start),
+            end: up(end),
+        },
+        Boundary::NearClamped { start, end, radius } => Boundary::NearClamped {
+            start: up(start),
+            end: up(end),
+            radius: times_power_of_two(*radius, k),
+        },
+    }
 }
 
 /// x·2^k, exact unless the result over- or underflows (in steps: 2^k alone need not be

@@ -703,7 +703,7 @@ fn balls_at_the_ends_of_the_extent_range_scale_exactly() {
 #[test]
 fn half_spaces_at_the_ends_of_the_extent_range_scale_exactly() {
     let base = noisy_star(40);
-    let width = |i: usize| if i % 5 == 0 { 0.0 } else { 0.1 };
+    let width = |i: usize| if i.is_multiple_of(5) { 0.0 } else { 0.1 };
     for topo in [Topology::Closed, Topology::Open] {
         let solve = |s: f64| {
             let q = Points::new(2, base.coords().iter().map(|x| x * s).collect()).unwrap();
@@ -774,6 +774,80 @@ fn half_spaces_at_the_ends_of_the_extent_range_scale_exactly() {
     }
     let rel = (moved.energy - at_origin.energy).abs() / at_origin.energy;
     assert!(rel <= 1e-9, "E {} vs {}", moved.energy, at_origin.energy);
+}
+
+/// Derivative constraints — tension at every third point (not the ends) over balls (some of radius 0), wedges,
+/// and for the open curve near-clamped ends — at scales from 1e−80 to 1e80 give the solution at
+/// scale 1, scaled: points ∝ s, E ∝ s^{1/2} (centripetal knots ∝ s^{1/2}, derivatives ∝ s^{1/2}),
+/// compared to 1e-9. Before `run_rescaled` took derivative constraints, these were refused from
+/// 1e±15 on, and at 1e80 the wedges were certified (KKT 3e-32) at 1e73 times the optimal energy
+/// (ROBUSTNESS.md item 35).
+#[test]
+fn derivative_constraints_at_extreme_scales_scale_exactly() {
+    let base = noisy_star(40);
+    let n = base.len();
+    let chord = extent(&base) / n as f64;
+    for topo in [Topology::Closed, Topology::Open] {
+        for wedge in [false, true] {
+            let solve = |s: f64| {
+                let q = Points::new(2, base.coords().iter().map(|x| x * s).collect()).unwrap();
+                let slope = chord.sqrt() * s.sqrt();
+                let tangents = (0..n)
+                    .map(|i| {
+                        (i % 3 == 1).then(|| {
+                            if wedge {
+                                Tangent::Wedge {
+                                    direction: vec![1.0, 0.5],
+                                    half_angle: 0.3,
+                                }
+                            } else {
+                                Tangent::Tension {
+                                    radius: 0.5 * slope,
+                                }
+                            }
+                        })
+                    })
+                    .collect();
+                let radii = (0..n)
+                    .map(|i| {
+                        if i.is_multiple_of(4) {
+                            0.0
+                        } else {
+                            0.2 * chord * s
+                        }
+                    })
+                    .collect();
+                let mut p = Problem::new(q)
+                    .with_topology(topo)
+                    .with_constraint(Constraint::Balls(radii))
+                    .with_tangents(tangents);
+                if topo == Topology::Open {
+                    p = p.with_boundary(Boundary::NearClamped {
+                        start: vec![0.0, 3.0 * slope],
+                        end: vec![-3.0 * slope, 0.0],
+                        radius: slope,
+                    });
+                }
+                p.solve()
+                    .unwrap_or_else(|e| panic!("{topo:?} wedge {wedge} scale {s:e}: {e}"))
+            };
+            let one = solve(1.0);
+            let l = extent(&base);
+            for s in [1e-80, 1e-15, 1e15, 1e80] {
+                let label = format!("{topo:?} wedge {wedge} scale {s:e}");
+                let r = solve(s);
+                assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
+                for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
+                    assert!(
+                        (a / s - b).abs() <= 1e-9 * l,
+                        "{label} points: {a:e} vs {b:e}"
+                    );
+                }
+                let rel = (r.energy / s.sqrt() - one.energy).abs() / one.energy;
+                assert!(rel <= 1e-9, "{label}: E {} vs {}", r.energy, one.energy);
+            }
+        }
+    }
 }
 
 /// Iterations are bounded: the interior-point method with an absurdly low iteration limit
