@@ -31,7 +31,26 @@
 //!   its own scale (max(|L p|, the set's size, Σ_u |c_u||p_u − p_v|_∞ — the rounding scale of
 //!   the stencil, which a zero target lacks));
 //! - the **duality gap** Σ (multiplier × slack) over E (it bounds the relative excess E(p) − E*
-//!   of a feasible p over the optimum; E* = 0 is measured against the rounding level ε F L).
+//!   of a feasible p over the optimum; E* = 0 is measured against the rounding level ε F L);
+//! - **run-off**: 0 while the curve's extent about the data's centroid is at most [`RUN_OFF`]
+//!   (1e6) times L_data + V·T — V the largest size of a derivative constraint's set (|centre| +
+//!   radius, |offset| / |normal|, an end derivative; 0 without derivative constraints, and for a
+//!   wedge), T the knots' span — and that extent over the bound (≥ 1) beyond it.
+//!
+//! ## Why run-off is a term
+//!
+//! Every other term is relative to the answer's own scales (its largest force, its extent, its
+//! energy), so a curve that runs away is judged on its own run. At data scales of 1e80 the
+//! interior-point method once returned curves with wedges or tangent half-spaces whose free
+//! vertices reached 6e115, balanced by huge cone multipliers, at 1e73 times the optimal energy:
+//! every residual was below the rounding of those coordinates, and they scored 2.9e-32
+//! (ROBUSTNESS.md §4, item 35). An optimal curve stays within a modest multiple of what its data
+//! and the sizes its derivative bounds allow over the knots' span (the overshoot of spline
+//! interpolation is bounded independently of the knots; ball radii and half-space offsets beyond
+//! the data are capped for the solvers at 100 times the extent, and the data vertices count in
+//! L_data); 1e6 leaves room for every answer the sweeps certify (one-sided half-planes on an open
+//! arc, whose optimum straightens away from its data, reach 6 × L_data) and none for a
+//! run-away.
 //!
 //! ## Why the force scale is the largest force
 //!
@@ -75,6 +94,10 @@ use crate::constraint::{At, Kind, Terms};
 
 /// The multiple of ε ‖H‖_∞ max|p| that bounds the rounding in Hp (module docs).
 const ROUNDING_MULTIPLE: f64 = 16.0;
+
+/// How far beyond its reach a curve may run before the certificate refuses it (module docs,
+/// "Run-off"): its extent about the data's centroid against this times L_data + V·T.
+pub(crate) const RUN_OFF: f64 = 1e6;
 
 /// The relative residual that a stationarity residual at the rounding level R scores at most:
 /// the force scale is at least R / this (module docs). Equal to the default acceptance
@@ -618,6 +641,17 @@ fn sweep(
     out
 }
 
+/// The run-off term (module docs): 0 while `extent` is at most [`RUN_OFF`] × (`data_length` +
+/// `reach` × `span`), else `extent` over that bound (> 1).
+fn run_off(extent: f64, data_length: f64, reach: f64, span: f64) -> f64 {
+    let bound = RUN_OFF * (data_length + reach * span);
+    if extent > bound {
+        extent / bound
+    } else {
+        0.0
+    }
+}
+
 /// Certifies points `p` for data `q` attached at `data_vertex` under `kinds` (the data kind
 /// first), with the data kind's multipliers in the conventions of
 /// [`crate::Refinement::multipliers`] (`None`: the reactions −(Hp)_{i_k} of interpolation,
@@ -770,6 +804,9 @@ pub(crate) fn certify(
             .energy
             .max(f64::EPSILON * force * length)
             .max(f64::MIN_POSITIVE);
+    let values = knots.values();
+    let span = values[values.len() - 1] - values[0];
+    let run_off = run_off(pass.extent, data_length, terms.reach, span);
     let parts = [
         stat / force,
         // (Past its own rounding level a vertex's residual counts against the largest force
@@ -782,6 +819,7 @@ pub(crate) fn certify(
         terms.primal.max(0.0) / data_length,
         terms.primal_rel,
         gap_rel,
+        run_off,
     ];
     // (NaN anywhere makes the residual NaN: never accepted.)
     let kkt = if parts.iter().any(|v| v.is_nan()) {
@@ -943,6 +981,20 @@ mod tests {
         let (own, other) = (judged(&moved), judged(&given));
         assert!(own <= 1e-9, "certified for its own data: {own}");
         assert!(other >= 1e-3, "refused for the data it misses: {other}");
+    }
+
+    /// The run-off term: 0 within RUN_OFF times what the data and the derivative bounds reach
+    /// over the knots' span, and at least 1 beyond it. The numbers are the cases it is for: the
+    /// curve of the test above (clamped ends of 1e12 put its vertices ~1e11 away from data of
+    /// length ~4 on knots spanning ~7: kept), and the run-away of ROBUSTNESS.md §4 item 35
+    /// (vertices at 6e115 for data of extent 1.3e80, derivative bounds ~1e40 on knots spanning
+    /// 1.8e41, certified at 2.9e-32 before this term: refused).
+    #[test]
+    fn run_off_counts_beyond_the_reach_of_data_and_derivative_bounds() {
+        assert!(super::run_off(1e11, 4.0, 1e12, 7.0) <= 0.0);
+        assert!(super::run_off(4.9e6, 5.0, 0.0, 1.0) <= 0.0);
+        assert!(super::run_off(5.1e6, 5.0, 0.0, 1.0) >= 1.0);
+        assert!(super::run_off(6e115, 1.3e80, 1e40, 1.8e41) > 1e20);
     }
 
     proptest! {

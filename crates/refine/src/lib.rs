@@ -84,7 +84,9 @@
 //! consecutive vertices, the rounding scale of Hp computed from differences), the constraint violation
 //! (over L), where L is the largest coordinate distance of a vertex or data point from the data's
 //! centroid, and the duality gap Σ ½w_i(ε_i² − |p_{i_k} − q_i|²) over E (a bound on the relative
-//! energy excess over the optimum). Balls that share a common point make the constant curve optimal (E = 0); it is
+//! energy excess over the optimum), and a run-off term that refuses a curve reaching beyond 1e6
+//! times what its data and derivative bounds allow (its other terms are relative to its own
+//! scales). Balls that share a common point make the constant curve optimal (E = 0); it is
 //! returned directly.
 //!
 //! # Threads

@@ -264,6 +264,10 @@ pub(crate) struct Terms {
     pub no_jump: Vec<bool>,
     /// The next derivative dual to read.
     pub next_dual: usize,
+    /// The largest size of a derivative constraint's set (|centre| + radius, |offset| / |normal|;
+    /// 0 for a wedge), in derivative units: how far its derivatives may take the curve from its
+    /// data per unit of parameter (the certificate's run-off bound, [`crate::certify`]).
+    pub reach: f64,
 }
 
 impl Terms {
@@ -281,6 +285,7 @@ impl Terms {
             active: vec![false; n],
             no_jump: vec![false; n],
             next_dual: 0,
+            reach: 0.0,
         }
     }
 }
@@ -586,6 +591,7 @@ pub(crate) fn certify_derivative(
     set: ConvexSet,
     far: f64,
 ) {
+    terms.reach = terms.reach.max(crate::backend::full::set_scale(&set));
     let (solved, checked) = split_far_derivative_set(set, far);
     if let Some(set) = solved {
         derivative_terms(at, terms, v, &set);
