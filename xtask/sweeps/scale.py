@@ -5,6 +5,7 @@ at scale s must be the scale-1 answer scaled, or both refused.
     python xtask/sweeps/scale.py                  # numpy needed
     SCALES=1e-15,1e15 python xtask/sweeps/scale.py
     EXPONENT=0 K=7 python xtask/sweeps/scale.py   # uniform knots (1: chordal), k = 7
+    D=3 python xtask/sweeps/scale.py              # the star lifted into space (z = 0.3 sin 3θ)
 
 Data: a 30-point noisy star, closed and open, k = 3 (K), centripetal knots (knots from spans
 |q_{i+1} - q_i|^a, a = EXPONENT, default 1/2), knot_iterations 0 and 3.
@@ -26,12 +27,14 @@ SCALES = [float(x) for x in os.environ.get("SCALES", "1e-140,1e-80,1e-30,1e30,1e
 OUT = os.environ.get("SWEEP_OUT", "/tmp/curvefit-sweep/scale"); os.makedirs(OUT, exist_ok=True)
 A = float(os.environ.get("EXPONENT", "0.5"))
 K = int(os.environ.get("K", "3"))
+D = int(os.environ.get("D", "2"))
 PARAM = {0.5: "centripetal", 0.0: "uniform", 1.0: "chordal"}.get(A, {"exponent": A})
 rng = np.random.default_rng(5)
 def star(n, closed):
     th = np.sort(2*np.pi*(np.arange(n)+rng.uniform(-0.4,0.4,n))/n) * (1 if closed else 0.9)
     r = 1 + 0.35*(np.arange(n)%2) + 0.05*rng.normal(size=n)
-    return np.column_stack([r*np.cos(th), r*np.sin(th)])
+    cols = [r*np.cos(th), r*np.sin(th)] + ([0.3*np.sin(3*th)] if D == 3 else [])
+    return np.column_stack(cols)
 def cent(q, closed):
     pts = np.vstack([q, q[:1]]) if closed else q
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts,axis=0),axis=1)**A)])
@@ -51,9 +54,9 @@ def boxes(q, w, s):
     sets=[]
     for i,x in enumerate(q):
         S=[]
-        for j in range(2):
+        for j in range(D):
             for sg in (1.0,-1.0):
-                nrm=[0.0,0.0]; nrm[j]=sg
+                nrm=[0.0]*D; nrm[j]=sg
                 S.append({"normal":nrm,"offset":sg*x[j]+w[i]*s})
         sets.append(S)
     return sets
@@ -75,9 +78,9 @@ def cases(closed):
                 if kind=="tan_tension": t[i]={"type":"tension","radius":0.8*L}
                 elif kind=="tan_ball": t[i]={"type":"ball","center":(1.3*vi).tolist(),"radius":0.1*L}
                 elif kind=="tan_wedge":
-                    a=0.4; d=[math.cos(a)*vi[0]-math.sin(a)*vi[1], math.sin(a)*vi[0]+math.cos(a)*vi[1]]
+                    a=0.4; d=[math.cos(a)*vi[0]-math.sin(a)*vi[1], math.sin(a)*vi[0]+math.cos(a)*vi[1]]+[float(x) for x in vi[2:]]
                     t[i]={"type":"wedge","direction":d,"half_angle":0.2}
-                elif kind=="tan_hs": t[i]={"type":"halfspaces","halfspaces":[{"normal":[1.0,0.0],"offset":0.5*abs(vi[0])}]}
+                elif kind=="tan_hs": t[i]={"type":"halfspaces","halfspaces":[{"normal":[1.0]+[0.0]*(D-1),"offset":0.5*abs(vi[0])}]}
             p["tangents"]=t
             p["constraint"]={"type":"balls","radii":[x*s for x in rad]}
         elif kind=="clamped":
