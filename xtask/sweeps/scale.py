@@ -11,11 +11,12 @@ Data: a 30-point noisy star, closed and open, k = 3 (K), centripetal knots (knot
 |q_{i+1} - q_i|^a, a = EXPONENT, default 1/2), knot_iterations 0 and 3.
 Kinds: interpolation; balls (every fifth of radius 0); smoothing; boxes of half-spaces (every
 fifth of width 0); balls with tension, tangent balls, wedges or tangent half-spaces at every third
-point; clamped ends; near-clamped ends over balls. At scale s the points, radii and offsets scale
+point; tension over interpolation and over smoothing; clamped ends; near-clamped ends over balls. At scale s the points, radii and offsets scale
 by s, the knots by s^a, the smoothing weights by s^(-3a) and every derivative bound by s^(1-a),
 so the problem is the same one and its energy scales by s^(2-3a). Checks,
-independent of the solver: both scales solved with energies in that ratio to 1e-6, or both
-refused. Default scales 1e-140, 1e-80, 1e-30, 1e30, 1e80, 1e140. ROBUSTNESS.md item 35 reports
+independent of the solver: both scales solved with energies in that ratio to 1e-6 and the
+multipliers in theirs (reactions s^(1-3a), ball and smoothing weights s^(-3a); not for boxes,
+whose pinned points' faces share a force in no unique way), or both refused. Default scales 1e-140, 1e-80, 1e-30, 1e30, 1e80, 1e140. ROBUSTNESS.md item 35 reports
 runs (before the fix: 108 of 216 problems failed the check, one of them certified at 1e73 times
 the optimal energy).
 """
@@ -75,22 +76,31 @@ def cases(closed):
             t=[None]*n
             for i in range(0,n,3):
                 vi=v[i]*rs; L=np.linalg.norm(vi)
-                if kind=="tan_tension": t[i]={"type":"tension","radius":0.8*L}
+                if kind in ("tan_tension","tan_interp","tan_smooth"): t[i]={"type":"tension","radius":0.8*L}
                 elif kind=="tan_ball": t[i]={"type":"ball","center":(1.3*vi).tolist(),"radius":0.1*L}
                 elif kind=="tan_wedge":
                     a=0.4; d=[math.cos(a)*vi[0]-math.sin(a)*vi[1], math.sin(a)*vi[0]+math.cos(a)*vi[1]]+[float(x) for x in vi[2:]]
                     t[i]={"type":"wedge","direction":d,"half_angle":0.2}
                 elif kind=="tan_hs": t[i]={"type":"halfspaces","halfspaces":[{"normal":[1.0]+[0.0]*(D-1),"offset":0.5*abs(vi[0])}]}
             p["tangents"]=t
-            p["constraint"]={"type":"balls","radii":[x*s for x in rad]}
+            if kind=="tan_smooth": p["constraint"]={"type":"smoothing","weights":[10.0*s**(-3*A)]*n}
+            elif kind!="tan_interp": p["constraint"]={"type":"balls","radii":[x*s for x in rad]}
         elif kind=="clamped":
             p["boundary"]={"type":"clamped","start":(2*v[0]*rs).tolist(),"end":(2*v[-1]*rs).tolist()}
         elif kind=="near":
             p["boundary"]={"type":"near_clamped","start":(2*v[0]*rs).tolist(),"end":(2*v[-1]*rs).tolist(),"radius":0.3*np.linalg.norm(v[0])*rs}
             p["constraint"]={"type":"balls","radii":[x*s for x in rad]}
         return p
-    kinds=["interp","balls","smooth","boxes","tan_tension","tan_ball","tan_wedge","tan_hs"]+([] if closed else ["clamped","near"])
-    return make, kinds
+    kinds=["interp","balls","smooth","boxes","tan_tension","tan_ball","tan_wedge","tan_hs","tan_interp","tan_smooth"]+([] if closed else ["clamped","near"])
+    # The power of s each data point's multipliers scale by (None: not compared — a pinned
+    # box's faces share its force in no unique way): reactions of interpolated points s^(1-3a),
+    # ball and smoothing weights s^(-3a).
+    def powers(kind):
+        if kind=="boxes": return None
+        if kind in ("interp","clamped","tan_interp"): return [1-3*A]*n
+        if kind in ("smooth","tan_smooth"): return [-3*A]*n
+        return [1-3*A if r==0.0 else -3*A for r in rad]
+    return make, kinds, powers
 def run(p):
     json.dump(p, open(os.path.join(OUT, 'p.json'),'w'))
     r=subprocess.run([BIN,'refine',os.path.join(OUT, 'p.json'),'-o',os.path.join(OUT, 'o.json')],capture_output=True,text=True,timeout=120)
@@ -98,7 +108,7 @@ def run(p):
     return json.load(open(os.path.join(OUT, 'o.json'))), ''
 bad=0; tot=0
 for closed in (True, False):
-    make, kinds = cases(closed)
+    make, kinds, powers = cases(closed)
     for kind in kinds:
         for ki in (0,3):
             p1=make(1.0, kind); p1["knot_iterations"]=ki
@@ -112,6 +122,16 @@ for closed in (True, False):
                     bad+=1; print("DIFF", tag, "scale1:", e1[:100] if r1 is None else "ok", "| s:", e[:140] if r is None else "ok"); continue
                 E1=r1["energy"]; E=r["energy"]/s**(2-3*A)
                 rel=abs(E-E1)/max(abs(E1),1e-300)
-                if rel>1e-6: bad+=1; print("ENERGY", tag, E1, E, rel)
+                if rel>1e-6: bad+=1; print("ENERGY", tag, E1, E, rel); continue
+                pw=powers(kind)
+                if pw is not None:
+                    worst=0.0
+                    for pk in set(pw):
+                        rows=[i for i in range(len(pw)) if pw[i]==pk]
+                        big=max([abs(x) for i in rows for x in r1["multipliers"][i]]+[1e-300])
+                        for i in rows:
+                            for a,b in zip(r["multipliers"][i], r1["multipliers"][i]):
+                                worst=max(worst, abs(a/s**pk-b)/big)
+                    if worst>1e-6: bad+=1; print("MULTIPLIERS", tag, worst)
 print("bad", bad, "of", tot)
 sys.exit(1 if bad else 0)
