@@ -97,7 +97,7 @@ const ROUNDING_MULTIPLE: f64 = 16.0;
 
 /// How far beyond its reach a curve may run before the certificate refuses it (module docs,
 /// "Run-off"): its extent about the data's centroid against this times L_data + V·T.
-pub(crate) const RUN_OFF: f64 = 1e6;
+const RUN_OFF: f64 = 1e6;
 
 /// The relative residual that a stationarity residual at the rounding level R scores at most:
 /// the force scale is at least R / this (module docs). Equal to the default acceptance
