@@ -267,22 +267,21 @@ const RESCALE_DERIVATIVES_BEYOND: i32 = 40;
 /// interior-point method's products of such numbers under- or overflowed, and it stopped in one
 /// or two iterations. Half-spaces failed from an extent of ~1e30 (a fuzz find: three points in
 /// boxes of width 0 at 1e37, ROBUSTNESS.md item 34); derivative constraints from ~1e15 (item
-/// 35). Every kind is homogeneous: the optimum on knots 2^−f·t for data 2^−e·q — radii and
-/// offsets 2^−e·c, smoothing weights 2^(3f)·w, derivative bounds (centres, radii, offsets, end
-/// derivatives) 2^(f−e)·v, normals and wedges as given — is 2^−e·p, and powers of two scale
-/// exactly, so the certificate — every part relative — is the original problem's. The data
-/// knots are computed once, from the data as given, and passed scaled (knot updates map back
-/// onto their span); the result maps back as points 2^e·p, knots 2^f·t, E 2^(2e−3f)·E, ball
-/// and smoothing weights 2^(−3f)·w, and the reactions of interpolated points (radius 0 too) and
-/// the half-spaces' multipliers (forces per unit of normal) 2^(e−3f)·λ.
+/// 35). Every kind is homogeneous: the optimum on knots 2^−f·t for data 2^−e·q, each kind's
+/// data scaled with them ([`crate::constraint::Kind::rescale`]: radii and offsets 2^−e·c,
+/// smoothing weights 2^(3f)·w, derivative bounds 2^(f−e)·v, normals and wedges as given), is
+/// 2^−e·p, and powers of two scale exactly, so the certificate — every part relative — is the
+/// original problem's. The data knots are computed once, from the data as given, and passed
+/// scaled (knot updates map back onto their span); the result maps back as points 2^e·p, knots
+/// 2^f·t, E 2^(2e−3f)·E, and the multipliers by the data kind's
+/// [`crate::constraint::Kind::multiplier_power`] (weights 2^(−3f)·w, forces 2^(e−3f)·λ).
 fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
-    use crate::Constraint;
     let derivatives = problem.has_derivative_constraints();
     let limit = if derivatives {
         RESCALE_DERIVATIVES_BEYOND
     } else if matches!(
         problem.constraint,
-        Constraint::Balls(_) | Constraint::HalfSpaces(_)
+        crate::Constraint::Balls(_) | crate::Constraint::HalfSpaces(_)
     ) {
         RESCALE_BEYOND
     } else {
@@ -316,46 +315,15 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         )
     };
     let mut scaled = problem.clone();
-    let down = |x: &f64| times_power_of_two(*x, -e);
     scaled
         .points
         .coords_mut()
         .iter_mut()
-        .for_each(|x| *x = down(x));
-    let n = q.len();
-    // The data constraint, scaled, and the power of two each point's multipliers map back by.
-    let (constraint, multiplier_power): (Constraint, Vec<i32>) = match &problem.constraint {
-        Constraint::Interpolate => (Constraint::Interpolate, vec![e - 3 * f; n]),
-        Constraint::Balls(radii) => (
-            Constraint::Balls(radii.iter().map(down).collect()),
-            radii
-                .iter()
-                .map(|&r| if r == 0.0 { e - 3 * f } else { -3 * f })
-                .collect(),
-        ),
-        Constraint::Smoothing(weights) => (
-            Constraint::Smoothing(
-                weights
-                    .iter()
-                    .map(|&w| times_power_of_two(w, 3 * f))
-                    .collect(),
-            ),
-            vec![-3 * f; n],
-        ),
-        Constraint::HalfSpaces(sets) => (
-            Constraint::HalfSpaces(sets.iter().map(|set| scale_halfspaces(set, -e)).collect()),
-            vec![e - 3 * f; n],
-        ),
-    };
-    scaled.constraint = constraint;
-    // Derivatives Df scale as points over knots.
-    let slope = f - e;
-    scaled.tangents = problem.tangents.as_ref().map(|ts| {
-        ts.iter()
-            .map(|t| t.as_ref().map(|t| scale_tangent(t, slope)))
-            .collect()
-    });
-    scaled.boundary = scale_boundary(&problem.boundary, slope);
+        .for_each(|x| *x = times_power_of_two(*x, -e));
+    // Each kind scales its own data (radii, offsets, weights, derivative bounds).
+    for kind in problem.kinds() {
+        kind.rescale(-e, -f, &mut scaled);
+    }
     let t_scaled: Vec<f64> = t.iter().map(|&x| times_power_of_two(x, -f)).collect();
     // (Given knots stay given, scaled: a failed split then names them, else the points.)
     scaled.knots = problem.knots.as_ref().map(|_| t_scaled.clone());
@@ -376,63 +344,24 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
     for s in &mut r.stages {
         s.energy = times_power_of_two(s.energy, 2 * e - 3 * f);
     }
+    let data = problem.constraint.kind();
     r.multipliers = r
         .multipliers
         .to_vecs()
         .into_iter()
-        .zip(multiplier_power)
-        .map(|(m, k)| m.into_iter().map(|x| times_power_of_two(x, k)).collect())
+        .enumerate()
+        .map(|(i, m)| {
+            let k = data.multiplier_power(i, e, f);
+            m.into_iter().map(|x| times_power_of_two(x, k)).collect()
+        })
         .collect::<Vec<Vec<f64>>>()
         .into();
     Ok(r)
 }
 
-/// Half-spaces with their offsets times 2^k (normals as given).
-fn scale_halfspaces(set: &[crate::HalfSpace], k: i32) -> Vec<crate::HalfSpace> {
-    set.iter()
-        .map(|h| crate::HalfSpace {
-            normal: h.normal.clone(),
-            offset: times_power_of_two(h.offset, k),
-        })
-        .collect()
-}
-
-/// A tangent constraint on derivatives scaled by 2^k (a wedge's direction and angle as given).
-fn scale_tangent(t: &crate::Tangent, k: i32) -> crate::Tangent {
-    use crate::Tangent;
-    let up = |x: &f64| times_power_of_two(*x, k);
-    match t {
-        Tangent::Ball { center, radius } => Tangent::Ball {
-            center: center.iter().map(up).collect(),
-            radius: up(radius),
-        },
-        Tangent::Wedge { .. } => t.clone(),
-        Tangent::Tension { radius } => Tangent::Tension { radius: up(radius) },
-        Tangent::HalfSpaces(set) => Tangent::HalfSpaces(scale_halfspaces(set, k)),
-    }
-}
-
-/// End conditions on derivatives scaled by 2^k.
-fn scale_boundary(b: &crate::Boundary, k: i32) -> crate::Boundary {
-    use crate::Boundary;
-    let up = |v: &Vec<f64>| v.iter().map(|&x| times_power_of_two(x, k)).collect();
-    match b {
-        Boundary::Natural => Boundary::Natural,
-        Boundary::Clamped { start, end } => Boundary::Clamped {
-            start: up(start),
-            end: up(end),
-        },
-        Boundary::NearClamped { start, end, radius } => Boundary::NearClamped {
-            start: up(start),
-            end: up(end),
-            radius: times_power_of_two(*radius, k),
-        },
-    }
-}
-
 /// x·2^k, exact unless the result over- or underflows (in steps: 2^k alone need not be
 /// representable, e.g. k = −3f for knots of 1e300).
-fn times_power_of_two(mut x: f64, mut k: i32) -> f64 {
+pub(crate) fn times_power_of_two(mut x: f64, mut k: i32) -> f64 {
     while k != 0 {
         let step = k.clamp(-1000, 1000);
         x *= 2f64.powi(step);

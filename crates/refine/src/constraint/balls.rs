@@ -20,6 +20,7 @@ use super::{dist, At, CommonPoint, Kind, Projections, Rows, Terms};
 use crate::backend::condensed::PointSet;
 use crate::conic_problem::{ConicSolution, ConvexSet};
 use crate::problem::Problem;
+use crate::solve::times_power_of_two;
 use crate::stage::FixedProblem;
 use crate::Error;
 
@@ -132,6 +133,20 @@ impl Kind for Balls<'_> {
 
     fn common_point<'s>(&'s self, q: &'s Points) -> CommonPoint<'s> {
         CommonPoint::Sets(Box::new(BallSets { radii: self.0, q }))
+    }
+
+    fn rescale(&self, points: i32, _: i32, into: &mut Problem) {
+        let radii = self.0.iter().map(|&r| times_power_of_two(r, points));
+        into.constraint = crate::Constraint::Balls(radii.collect());
+    }
+
+    /// A ball's weight is its force over its radius; radius 0 reports the reaction.
+    fn multiplier_power(&self, i: usize, points: i32, knots: i32) -> i32 {
+        if self.0[i] == 0.0 {
+            points - 3 * knots
+        } else {
+            -3 * knots
+        }
     }
 }
 

@@ -11,6 +11,7 @@ use divdiff::Topology;
 use super::{At, Boundary, Kind, Rows, Tangent, Terms};
 use crate::conic_problem::{set_distance, ConvexSet};
 use crate::problem::Problem;
+use crate::solve::times_power_of_two;
 use crate::stage::FixedProblem;
 use crate::Error;
 
@@ -84,6 +85,24 @@ impl Kind for Ends<'_> {
         for (v, set) in [0, last].into_iter().zip(self.sets()) {
             super::certify_derivative(at, terms, v, set, far);
         }
+    }
+
+    /// The end derivatives (and a near-clamped end's radius) by 2^(points − knots).
+    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) {
+        let k = points - knots;
+        let up = |v: &[f64]| v.iter().map(|&x| times_power_of_two(x, k)).collect();
+        into.boundary = match self.0 {
+            Boundary::Natural => Boundary::Natural,
+            Boundary::Clamped { start, end } => Boundary::Clamped {
+                start: up(start),
+                end: up(end),
+            },
+            Boundary::NearClamped { start, end, radius } => Boundary::NearClamped {
+                start: up(start),
+                end: up(end),
+                radius: times_power_of_two(*radius, k),
+            },
+        };
     }
 }
 

@@ -171,6 +171,15 @@ impl Kind for HalfSpaces<'_> {
             .collect();
         into.constraint = Constraint::HalfSpaces(moved);
     }
+
+    fn rescale(&self, points: i32, _: i32, into: &mut Problem) {
+        let scaled = self
+            .0
+            .iter()
+            .map(|set| super::scaled_halfspaces(set, points))
+            .collect();
+        into.constraint = Constraint::HalfSpaces(scaled);
+    }
 }
 
 /// The polytopes as sets of the common-point test.

@@ -375,6 +375,23 @@ pub(crate) trait Kind {
     fn translate(&self, offset: &[f64], into: &mut Problem) {
         let _ = (offset, into);
     }
+
+    /// Scales its data with the data points scaled by 2^`points` and the knots by 2^`knots`, in
+    /// `into`, so that the problem stays the same one (`run_rescaled` in `solve.rs`): lengths
+    /// (radii, offsets) by 2^points, derivative bounds by 2^(points − knots), smoothing weights
+    /// by 2^(−3·knots) (E scales by 2^(2·points − 3·knots)); normals and wedges as given.
+    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) {
+        let _ = (points, knots, into);
+    }
+
+    /// The power of two the multipliers of data point `i` scale by under [`Kind::rescale`]'s
+    /// scaling (data kinds, in the convention of [`crate::Refinement::multipliers`]): forces
+    /// (reactions, half-space multipliers) scale as Hp, by 2^(points − 3·knots); weights (a
+    /// ball's force over its radius, a smoothing weight) by 2^(−3·knots).
+    fn multiplier_power(&self, i: usize, points: i32, knots: i32) -> i32 {
+        let _ = i;
+        points - 3 * knots
+    }
 }
 
 impl Constraint {
@@ -621,6 +638,17 @@ fn split_far_derivative_set(set: ConvexSet, cap: f64) -> (Option<ConvexSet>, Opt
         }
         set => (Some(set), None),
     }
+}
+
+/// Half-spaces with their offsets times 2^k (normals as given): the data's under
+/// [`Kind::rescale`], or a tangent set's.
+pub(crate) fn scaled_halfspaces(set: &[HalfSpace], k: i32) -> Vec<HalfSpace> {
+    set.iter()
+        .map(|h| HalfSpace {
+            normal: h.normal.clone(),
+            offset: crate::solve::times_power_of_two(h.offset, k),
+        })
+        .collect()
 }
 
 /// The half-spaces as the conic model's polytope.

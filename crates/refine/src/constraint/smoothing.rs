@@ -12,6 +12,7 @@ use divdiff::Topology;
 use super::{At, Kind, Rows, Terms};
 use crate::conic_problem::ConicSolution;
 use crate::problem::Problem;
+use crate::solve::times_power_of_two;
 use crate::stage::FixedProblem;
 use crate::Error;
 
@@ -78,5 +79,15 @@ impl Kind for Smoothing<'_> {
             terms.no_jump[i] = true;
             terms.stiffness = terms.stiffness.max(w.abs());
         }
+    }
+
+    fn rescale(&self, _: i32, knots: i32, into: &mut Problem) {
+        let weights = self.0.iter().map(|&w| times_power_of_two(w, -3 * knots));
+        into.constraint = crate::Constraint::Smoothing(weights.collect());
+    }
+
+    /// The given weights (scaled as [`Kind::rescale`] scales them).
+    fn multiplier_power(&self, _: usize, _: i32, knots: i32) -> i32 {
+        -3 * knots
     }
 }

@@ -13,6 +13,7 @@
 use super::{At, Kind, Rows, Tangent, Terms};
 use crate::conic_problem::ConvexSet;
 use crate::problem::Problem;
+use crate::solve::times_power_of_two;
 use crate::stage::FixedProblem;
 use crate::Error;
 
@@ -122,5 +123,25 @@ impl Kind for Tangents<'_> {
         for (i, set) in self.sets(at.q.dim()) {
             super::certify_derivative(at, terms, at.data_vertex[i], set, far);
         }
+    }
+
+    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) {
+        let slope = points - knots;
+        let scaled = self.0.iter().map(|t| t.as_ref().map(|t| scaled(t, slope)));
+        into.tangents = Some(scaled.collect());
+    }
+}
+
+/// A tangent constraint on derivatives scaled by 2^k (a wedge's direction and angle as given).
+fn scaled(tangent: &Tangent, k: i32) -> Tangent {
+    let up = |x: &f64| times_power_of_two(*x, k);
+    match tangent {
+        Tangent::Ball { center, radius } => Tangent::Ball {
+            center: center.iter().map(up).collect(),
+            radius: up(radius),
+        },
+        Tangent::Wedge { .. } => tangent.clone(),
+        Tangent::Tension { radius } => Tangent::Tension { radius: up(radius) },
+        Tangent::HalfSpaces(set) => Tangent::HalfSpaces(super::scaled_halfspaces(set, k)),
     }
 }
