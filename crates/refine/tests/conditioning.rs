@@ -627,6 +627,24 @@ fn tangent_halfspaces_far_beyond_the_slopes_leave_derivatives_free() {
     }
 }
 
+/// Asserts `a` = `b` to 1e-9 of `scale` (`label` and `what` say where, for the message).
+fn assert_close(label: &str, what: &str, a: f64, b: f64, scale: f64) {
+    assert!(
+        (a - b).abs() <= 1e-9 * scale,
+        "{label} {what}: {a:e} vs {b:e}"
+    );
+}
+
+/// Asserts that `r`, solved at scale `s` on centripetal knots, is certified and is `one` (the
+/// scale-1 solve, data of extent `l`) scaled: points ∝ s to 1e-9 of `l`, E ∝ s^{1/2} to 1e-9.
+fn assert_scaled(label: &str, r: &Refinement, one: &Refinement, s: f64, l: f64) {
+    assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
+    for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
+        assert_close(label, "points", a / s, *b, l);
+    }
+    assert_close(label, "energy", r.energy / s.sqrt(), one.energy, one.energy);
+}
+
 /// Balls at the ends of the extent range (1e±100, 1e±140) give the solution at scale 1,
 /// scaled: points ∝ s, knots ∝ s^{1/2} (centripetal), E ∝ s^{1/2}, ball weights (force over
 /// radius, ∝ 1/h³) ∝ s^{−3/2}, the reactions of radius-0 points ∝ s^{−1/2} — each compared
@@ -660,21 +678,11 @@ fn balls_at_the_ends_of_the_extent_range_scale_exactly() {
         for s in [1e-140, 1e-100, 1e100, 1e140] {
             let label = format!("{topo:?} scale {s:e}");
             let r = solve(s);
-            assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
-            let close = |a: f64, b: f64, scale: f64, what: &str| {
-                assert!(
-                    (a - b).abs() <= 1e-9 * scale,
-                    "{label} {what}: {a:e} vs {b:e}"
-                )
-            };
-            for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
-                close(a / s, *b, l, "points");
-            }
+            assert_scaled(&label, &r, &one, s, l);
             let span = one.knots.values().last().unwrap() - one.knots.values()[0];
             for (a, b) in r.knots.values().iter().zip(one.knots.values()) {
-                close(a / s.sqrt(), *b, span, "knots");
+                assert_close(&label, "knots", a / s.sqrt(), *b, span);
             }
-            close(r.energy / s.sqrt(), one.energy, one.energy, "energy");
             for (i, (a, b)) in r.multipliers.iter().zip(one.multipliers.iter()).enumerate() {
                 // (rows: [w] for a ball, the d reaction components at radius 0)
                 let k = if i % 5 == 0 { s.sqrt() } else { s * s.sqrt() };
@@ -686,7 +694,7 @@ fn balls_at_the_ends_of_the_extent_range_scale_exactly() {
                     .flatten()
                     .fold(0.0f64, |m, x| m.max(x.abs()));
                 for (x, y) in a.iter().zip(b) {
-                    close(x * k, *y, big.max(size), "multipliers");
+                    assert_close(&label, "multipliers", x * k, *y, big.max(size));
                 }
             }
         }
@@ -719,17 +727,7 @@ fn half_spaces_at_the_ends_of_the_extent_range_scale_exactly() {
         for s in [1e-140, 1e-100, 1e30, 1e37, 1e100, 1e140] {
             let label = format!("{topo:?} scale {s:e}");
             let r = solve(s);
-            assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
-            let close = |a: f64, b: f64, scale: f64, what: &str| {
-                assert!(
-                    (a - b).abs() <= 1e-9 * scale,
-                    "{label} {what}: {a:e} vs {b:e}"
-                )
-            };
-            for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
-                close(a / s, *b, l, "points");
-            }
-            close(r.energy / s.sqrt(), one.energy, one.energy, "energy");
+            assert_scaled(&label, &r, &one, s, l);
             // (A pinned point's faces share its force in no unique way: compared is the net
             // force Σ_j w_j n_j, per coordinate the + face's multiplier less the − face's.)
             let net = |r: &Refinement| -> Vec<f64> {
@@ -742,7 +740,7 @@ fn half_spaces_at_the_ends_of_the_extent_range_scale_exactly() {
             let (got, want) = (net(&r), net(&one));
             let big = want.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             for (a, b) in got.iter().zip(&want) {
-                close(a * s.sqrt(), *b, big, "net forces");
+                assert_close(&label, "net forces", a * s.sqrt(), *b, big);
             }
         }
     }
@@ -835,16 +833,7 @@ fn derivative_constraints_at_extreme_scales_scale_exactly() {
             let l = extent(&base);
             for s in [1e-80, 1e-15, 1e15, 1e80] {
                 let label = format!("{topo:?} wedge {wedge} scale {s:e}");
-                let r = solve(s);
-                assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
-                for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
-                    assert!(
-                        (a / s - b).abs() <= 1e-9 * l,
-                        "{label} points: {a:e} vs {b:e}"
-                    );
-                }
-                let rel = (r.energy / s.sqrt() - one.energy).abs() / one.energy;
-                assert!(rel <= 1e-9, "{label}: E {} vs {}", r.energy, one.energy);
+                assert_scaled(&label, &solve(s), &one, s, l);
             }
         }
     }
