@@ -166,12 +166,22 @@ fn deeply_nested_json_is_refused_without_a_stack_overflow() {
             refused(sub, &format!(r#"{{"points": {nested}}}"#), "points");
             refused(sub, &nested, "must be a JSON object");
         }
-        // Nested objects inside a field the parser would otherwise descend into.
+        // Nested objects inside a field the parser would otherwise descend into: refused at
+        // the first key that is not a field of the object (`constraint` is read flat,
+        // `spec::tagged`; serde's tagged enum read the whole object into a buffer first and
+        // stopped at its recursion limit, naming `problem`).
         let objs = format!("{}1{}", r#"{"a":"#.repeat(depth), "}".repeat(depth));
         refused(
             "refine",
             &format!(r#"{{"points": {SQUARE}, "constraint": {objs}}}"#),
-            "problem",
+            "constraint.a: unknown field",
+        );
+        // A field the object has, holding the nesting: refused at its first level.
+        let radii = format!("{}1{}", r#"{"radii":"#.repeat(depth), "}".repeat(depth));
+        refused(
+            "refine",
+            &format!(r#"{{"points": {SQUARE}, "constraint": {radii}}}"#),
+            "constraint.radii",
         );
     }
 }

@@ -56,6 +56,60 @@ fn messages_say_what_the_field_must_be() {
             format!(r#"{{{P}, "constraint": {{"type": "balls"}}}}"#),
             r#"error: constraint: needs the field "radii""#,
         ),
+        // Inside an object with a "type", errors keep their path (`spec::tagged`) …
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": {{"type": "balls", "radii": 0.1}}}}"#),
+            "error: constraint.radii: must be an array, not 0.1",
+        ),
+        (
+            "refine",
+            format!(
+                r#"{{{P}, "constraint": {{"type": "halfspaces", "sets": [[], [{{"normal": [1, 0], "offset": "x"}}], []]}}}}"#
+            ),
+            r#"error: constraint.sets[1][0].offset: must be a number, not the string "x""#,
+        ),
+        (
+            "refine",
+            format!(
+                r#"{{{P}, "tangents": [null, {{"type": "ball", "center": [1, "x"], "radius": 1}}, null]}}"#
+            ),
+            r#"error: tangents[1].center[1]: must be a number, not the string "x""#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "boundary": {{"type": "clamped", "start": [1, 0], "end": 2}}}}"#),
+            "error: boundary.end: must be an array, not 2",
+        ),
+        // … a field of another type is refused, not ignored …
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": {{"type": "interpolate", "radii": [1, 1, 1]}}}}"#),
+            r#"error: constraint: unknown field "radii": this type has no other field than "type""#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "boundary": {{"type": "natural", "start": [1, 0]}}}}"#),
+            r#"error: boundary: unknown field "start": this type has no other field than "type""#,
+        ),
+        (
+            "refine",
+            format!(
+                r#"{{{P}, "tangents": [{{"type": "tension", "radius": 1, "center": [0, 0]}}, null, null]}}"#
+            ),
+            r#"error: tangents[0]: unknown field "center" (the fields are "radius")"#,
+        ),
+        // … and neither an array nor a number is read as the object or its type.
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": [1, 2]}}"#),
+            r#"error: constraint: must be an object like {"type": "balls", "radii": [...]}"#,
+        ),
+        (
+            "refine",
+            format!(r#"{{{P}, "constraint": {{"type": 3}}}}"#),
+            r#"error: constraint.type: must be a string: constraint must be an object like"#,
+        ),
         (
             "refine",
             format!(r#"{{{P}, "tangents": ["wedge", null, null]}}"#),

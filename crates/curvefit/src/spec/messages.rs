@@ -165,9 +165,19 @@ fn kind(text: &str) -> char {
 
 /// What `field` must be, given the parser's expectation `want`: the table's description when it
 /// is about the field itself; the parser's (in JSON words) when the error is about a value
-/// nested inside it that the parser could not locate (inside an object with a `"type"`, serde
-/// reads the whole object before it knows the variant, so paths end at the object).
+/// nested inside it that the parser could not locate (a reader without path tracking; the
+/// objects with a `"type"` are read flat so that their paths are kept, `spec::tagged`). A
+/// `"type"` of the wrong kind (serde's "variant identifier") is told with its object's form.
 fn must_be(field: &str, want: &str) -> String {
+    if want.trim() == "variant identifier" {
+        if let Some((owner, e)) = field
+            .strip_suffix(".type")
+            .and_then(|owner| expected(owner).map(|e| (owner, e)))
+        {
+            return format!("a string ({owner} must be {e})");
+        }
+        return "a string".into();
+    }
     let generic = json_words(want);
     match expected(field) {
         Some(table) => {
@@ -240,6 +250,11 @@ pub fn rewrite(field: &str, raw: &str) -> String {
     // "unknown field `x`, expected one of `a`, `b`" / "expected `a` or `b`"
     if let Some(rest) = raw.strip_prefix("unknown field `") {
         if let Some((name, tail)) = rest.split_once('`') {
+            if tail == ", there are no fields" {
+                return format!(
+                    "unknown field \"{name}\": this type has no other field than \"type\""
+                );
+            }
             let fields = tail
                 .trim_start_matches(", expected one of ")
                 .trim_start_matches(", expected ")
@@ -254,6 +269,15 @@ pub fn rewrite(field: &str, raw: &str) -> String {
 /// number where an enum is expected as "expected value", and a fixed-size array that is too
 /// long as "trailing characters").
 pub fn syntax_at_field(field: &str, raw: &str) -> Option<String> {
+    // (The `type` of an object with one names its form: a number there is read as a syntax error.)
+    if let Some(e) = field
+        .strip_suffix(".type")
+        .and_then(|owner| expected(owner).map(|e| (owner, e)))
+    {
+        return raw
+            .starts_with("expected value")
+            .then(|| format!("must be a string: {} must be {}", e.0, e.1));
+    }
     let e = expected(field)?;
     (raw.starts_with("expected value") || raw.starts_with("trailing characters"))
         .then(|| format!("must be {e}"))

@@ -35,6 +35,7 @@ mod refine_types;
 pub mod scheme;
 pub mod strip;
 pub mod surface;
+mod tagged;
 
 use std::fmt::Display;
 

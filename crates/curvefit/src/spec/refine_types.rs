@@ -90,7 +90,7 @@ pub struct HalfSpaceSpec {
 
 /// The constraint on the data vertices.
 #[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
-#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ConstraintSpec {
     /// p_{i_k} = q_i.
@@ -115,7 +115,7 @@ pub enum ConstraintSpec {
 
 /// A constraint on the derivative Df at a data vertex.
 #[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TangentSpec {
     /// |Df − center| ≤ radius.
@@ -158,7 +158,7 @@ pub enum DerivativeSpec {
 
 /// End conditions of an open curve.
 #[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
-#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundarySpec {
     /// Natural ends (default).
