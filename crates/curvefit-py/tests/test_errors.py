@@ -197,8 +197,12 @@ def test_convenience_keywords_name_themselves():
 def test_bad_subcommand_and_threads():
     with pytest.raises(ValueError):
         curvefit._curvefit.solve("bogus", {})
-    with pytest.raises(ValueError):
-        curvefit.refine_many([], threads=0)
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ValueError, match="threads must be at least 1"):
+            curvefit.refine_many([], threads=bad)
+    # One problem where a list of them is wanted (iterating it would give its keys).
+    with pytest.raises(TypeError, match="sequence of problems"):
+        curvefit.refine_many({"points": [[0, 0], [1, 0]]})
 
 
 def test_a_panic_becomes_an_internal_error():

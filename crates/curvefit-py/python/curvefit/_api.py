@@ -9,6 +9,7 @@ raises :class:`curvefit.InputError` with the command line's field, index and mes
 
 from __future__ import annotations
 
+import numbers
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -268,6 +269,16 @@ def refine_many(
         :class:`InternalError` where the library panicked).
         ``refine_many(ps)[i]`` equals ``refine(**ps[i])`` field for field.
     """
+    if isinstance(problems, Mapping):
+        # (Iterating a dict gives its keys: each would come back as "not a problem".)
+        raise TypeError(
+            "refine_many takes a sequence of problems (e.g. a list of dicts); "
+            "for one problem call refine(**problem)"
+        )
+    if threads is not None and (
+        isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1
+    ):
+        raise ValueError(f"threads must be at least 1 (or None), not {threads!r}")
     prepared: List[Any] = []
     renames: List[Dict[str, str]] = []
     early: Dict[int, InputError] = {}
