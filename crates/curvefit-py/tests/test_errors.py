@@ -192,6 +192,11 @@ def test_convenience_keywords_name_themselves():
     with pytest.raises(curvefit.InputError) as e:
         curvefit.strip([0, 1, 2], [0, 1, 0], bc_type="clamped", end_slopes=[0, 0])
     assert e.value.field == "bc_type"
+    # "periodic" is answered in each function's own terms (the strip has no closed curves).
+    with pytest.raises(curvefit.InputError, match="closed=True"):
+        curvefit.refine(q, bc_type="periodic")
+    with pytest.raises(curvefit.InputError, match="strip's spline is not periodic"):
+        curvefit.strip([0, 1, 2], [0, 1, 0], bc_type="periodic")
 
 
 def test_bad_subcommand_and_threads():

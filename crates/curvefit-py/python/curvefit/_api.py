@@ -49,20 +49,16 @@ def _renamed(e: InputError, renames: Mapping[str, str]) -> InputError:
     return e
 
 
-def _ends(bc_type: Any, field: str = "bc_type") -> List[Tuple[Any, ...]]:
-    """scipy's ``bc_type`` as [start, end], each ("natural",) or ("slope", value)."""
+def _ends(bc_type: Any, periodic: str, field: str = "bc_type") -> List[Tuple[Any, ...]]:
+    """scipy's ``bc_type`` as [start, end], each ("natural",) or ("slope", value);
+    ``periodic`` says what the caller offers instead of ``"periodic"``."""
     if isinstance(bc_type, str):
         if bc_type == "natural":
             return [("natural",), ("natural",)]
         if bc_type == "clamped":
             return [("slope", 0.0), ("slope", 0.0)]
         if bc_type == "periodic":
-            raise InputError(
-                field,
-                None,
-                '"periodic" is not an end condition here: a closed curve is closed=True '
-                "(its first point is not repeated)",
-            )
+            raise InputError(field, None, f'"periodic" is not an end condition here: {periodic}')
         raise InputError(
             field,
             None,
@@ -119,7 +115,9 @@ def _refine_convenience(p: Dict[str, Any]) -> Dict[str, str]:
     if bc_type is not None:
         if p.get("boundary", _NATURAL) is not _NATURAL:
             raise InputError("bc_type", None, "give bc_type or boundary, not both")
-        start, end = _ends(bc_type)
+        start, end = _ends(
+            bc_type, "a closed curve is closed=True (its first point is not repeated)"
+        )
         if start[0] != end[0]:
             raise InputError(
                 "bc_type",
@@ -353,7 +351,11 @@ def strip(
     if bc_type is not None:
         if end_slopes is not None:
             raise InputError("bc_type", None, "give bc_type or end_slopes, not both")
-        p["end_slopes"] = [None if e[0] == "natural" else e[1] for e in _ends(bc_type)]
+        ends = _ends(
+            bc_type,
+            "the strip's spline is not periodic (its ends are natural or have a given slope)",
+        )
+        p["end_slopes"] = [None if e[0] == "natural" else e[1] for e in ends]
         renames["end_slopes"] = "bc_type"
     try:
         return StripResult(**_curvefit.solve("strip", p))
