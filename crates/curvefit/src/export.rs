@@ -81,6 +81,11 @@ fn coordinate_names(d: usize) -> Vec<String> {
     }
 }
 
+/// The most numbers a CSV export writes (`--samples` × (d + 1)): the refined curve's own limit
+/// ([`crate::spec::refine::MAX_REFINED_COORDS`]), about a gigabyte of text. `--samples 10^12`
+/// was killed for its memory.
+pub const MAX_SAMPLE_COORDS: usize = crate::spec::refine::MAX_REFINED_COORDS;
+
 /// Samples of the curve as CSV: a header `u,x,y[,z]` (`x1,…,xd` for d > 3), then one line per
 /// sample. With `samples` = `None`: [`DEFAULT_SAMPLES_PER_PIECE`] samples per piece, evenly in each
 /// piece's parameter, every break included (so the polyline through them passes through the
@@ -88,8 +93,17 @@ fn coordinate_names(d: usize) -> Vec<String> {
 /// both ends included. A closed curve's last sample is its first point again, at t_P.
 ///
 /// # Errors
-/// `--samples` below 2.
+/// `--samples` below 2, or beyond [`MAX_SAMPLE_COORDS`] numbers.
 pub fn csv(spline: &CubicSpline, samples: Option<usize>) -> Result<String, InputError> {
+    if let Some(n) = samples.filter(|n| n.saturating_mul(spline.dim() + 1) > MAX_SAMPLE_COORDS) {
+        return Err(InputError::new(
+            "--samples",
+            format!(
+                "{n} samples of u and {} coordinates are more than {MAX_SAMPLE_COORDS} numbers, the limit",
+                spline.dim()
+            ),
+        ));
+    }
     let t = spline.breaks();
     let params: Vec<f64> = match samples {
         None => {

@@ -366,6 +366,25 @@ fn the_command_line_writes_the_export_all_or_nothing() {
     let (code, err) = run(&["refine", p, "-o", "/dev/null", "--samples", "3"]);
     assert_eq!(code, 2);
     assert!(err.contains("--samples"), "{err}");
+    // Samples beyond the output limit are refused, not allocated (10^12 was killed for memory),
+    // and nothing is written.
+    let csv = fresh.join("c.csv");
+    let (code, err) = run(&[
+        "refine",
+        p,
+        "-o",
+        out.to_str().unwrap(),
+        "--export",
+        csv.to_str().unwrap(),
+        "--samples",
+        "1000000000000",
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("--samples") && err.contains("the limit"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_dir(&fresh).unwrap().count(), 0);
 }
 
 #[test]
