@@ -275,3 +275,13 @@ fn a_polygon_whose_refinement_overflows_says_so() {
         "{err}"
     );
 }
+
+#[test]
+fn levels_without_a_polygon_are_refused_not_ignored() {
+    // `scheme --levels 5` alone printed the rules, exit 0: the levels went nowhere.
+    let args = ["scheme", "--stencil", "4", "--arity", "2", "--levels", "5"];
+    let (code, out, err) = run_cli(&args, "");
+    assert_eq!(code, 2, "{err}");
+    assert!(out.is_empty());
+    assert_eq!(err.trim_end(), "error: --levels: needs --apply POLYGON.json");
+}

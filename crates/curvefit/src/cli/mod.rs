@@ -94,6 +94,10 @@ fn run_scheme_cmd(
     stderr: &mut dyn Write,
 ) -> Result<(), Failure> {
     let t0 = Instant::now();
+    if a.levels.is_some() && a.apply.is_none() {
+        // (The rules alone have no levels: the flag would be ignored.)
+        return Err(InputError::new("--levels", "needs --apply POLYGON.json").into());
+    }
     let polygon = match &a.apply {
         Some(p) => Some(input::read_problem_file(p, "--apply").map_err(|e| {
             let field = if e.field.is_empty() || e.field == "problem" {
@@ -111,7 +115,7 @@ fn run_scheme_cmd(
         arity: a.arity,
         surface: a.surface,
         polygon,
-        levels: a.levels,
+        levels: a.levels.unwrap_or(1),
     };
     // Field names of the JSON problem back to the flags they came from.
     let value = crate::spec::scheme(&problem).map_err(|e| {
@@ -228,9 +232,9 @@ pub struct SchemeArgs {
     /// Apply the scheme to this polygon ({"points": [[…], …], "closed": bool}).
     #[arg(long, value_name = "POLYGON.json")]
     pub apply: Option<PathBuf>,
-    /// Levels of refinement for `--apply`.
-    #[arg(long, default_value_t = 1)]
-    pub levels: usize,
+    /// Levels of refinement for `--apply` [default: 1].
+    #[arg(long)]
+    pub levels: Option<usize>,
     /// Write the JSON result here (default: standard output).
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
