@@ -283,5 +283,8 @@ fn levels_without_a_polygon_are_refused_not_ignored() {
     let (code, out, err) = run_cli(&args, "");
     assert_eq!(code, 2, "{err}");
     assert!(out.is_empty());
-    assert_eq!(err.trim_end(), "error: --levels: needs --apply POLYGON.json");
+    assert_eq!(
+        err.trim_end(),
+        "error: --levels: needs --apply POLYGON.json"
+    );
 }
