@@ -163,6 +163,13 @@ fn kind(text: &str) -> char {
     }
 }
 
+/// What the `type` of an object with one (`constraint.type`, …) must be: a string naming the
+/// object's form; `None` for other fields.
+fn type_field(field: &str) -> Option<String> {
+    let owner = field.strip_suffix(".type")?;
+    expected(owner).map(|e| format!("a string: {owner} must be {e}"))
+}
+
 /// What `field` must be, given the parser's expectation `want`: the table's description when it
 /// is about the field itself; the parser's (in JSON words) when the error is about a value
 /// nested inside it that the parser could not locate (a reader without path tracking; the
@@ -170,13 +177,7 @@ fn kind(text: &str) -> char {
 /// `"type"` of the wrong kind (serde's "variant identifier") is told with its object's form.
 fn must_be(field: &str, want: &str) -> String {
     if want.trim() == "variant identifier" {
-        if let Some((owner, e)) = field
-            .strip_suffix(".type")
-            .and_then(|owner| expected(owner).map(|e| (owner, e)))
-        {
-            return format!("a string ({owner} must be {e})");
-        }
-        return "a string".into();
+        return type_field(field).unwrap_or_else(|| "a string".into());
     }
     let generic = json_words(want);
     match expected(field) {
@@ -269,14 +270,11 @@ pub fn rewrite(field: &str, raw: &str) -> String {
 /// number where an enum is expected as "expected value", and a fixed-size array that is too
 /// long as "trailing characters").
 pub fn syntax_at_field(field: &str, raw: &str) -> Option<String> {
-    // (The `type` of an object with one names its form: a number there is read as a syntax error.)
-    if let Some(e) = field
-        .strip_suffix(".type")
-        .and_then(|owner| expected(owner).map(|e| (owner, e)))
-    {
+    // (serde_json reads a number where a `type` is expected as a syntax error.)
+    if let Some(e) = type_field(field) {
         return raw
             .starts_with("expected value")
-            .then(|| format!("must be a string: {} must be {}", e.0, e.1));
+            .then(|| format!("must be {e}"));
     }
     let e = expected(field)?;
     (raw.starts_with("expected value") || raw.starts_with("trailing characters"))
