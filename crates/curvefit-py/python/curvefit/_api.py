@@ -266,6 +266,10 @@ def refine_many(
         :class:`InputError` that :func:`refine` would raise for it (returned, not raised; an
         :class:`InternalError` where the library panicked).
         ``refine_many(ps)[i]`` equals ``refine(**ps[i])`` field for field.
+
+    Raises:
+        TypeError: ``problems`` is one problem (a mapping) instead of a sequence of them.
+        ValueError: ``threads`` is not a whole number ≥ 1.
     """
     if isinstance(problems, Mapping):
         # (Iterating a dict gives its keys: each would come back as "not a problem".)
