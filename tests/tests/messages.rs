@@ -99,6 +99,20 @@ fn messages_say_what_the_field_must_be() {
             ),
             r#"error: tangents[0]: unknown field "center" (the fields are "radius")"#,
         ),
+        // A field given twice is named, at any depth (serde reported "duplicate field `k`"
+        // at the object holding it: no field at the top).
+        (
+            "refine",
+            format!(r#"{{{P}, "k": 3, "k": 5}}"#),
+            "error: k: is given twice (each field at most once)",
+        ),
+        (
+            "refine",
+            format!(
+                r#"{{{P}, "constraint": {{"type": "balls", "radii": [1, 1, 1], "radii": [2, 2, 2]}}}}"#
+            ),
+            "error: constraint.radii: is given twice (each field at most once)",
+        ),
         // … and neither an array nor a number is read as the object or its type.
         (
             "refine",

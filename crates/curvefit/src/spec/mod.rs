@@ -257,6 +257,18 @@ pub fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputErro
         Some(i) if inner.line() > 0 => text[..i].to_string(),
         _ => text,
     };
+    // "duplicate field `k`" is reported at the object holding it: name the field itself.
+    if let Some(name) = bare
+        .strip_prefix("duplicate field `")
+        .and_then(|r| r.strip_suffix('`'))
+    {
+        let at = if field.is_empty() {
+            name.to_string()
+        } else {
+            format!("{field}.{name}")
+        };
+        return InputError::new(at, "is given twice (each field at most once)");
+    }
     if inner.is_syntax() || inner.is_eof() {
         match messages::syntax_at_field(&field, &bare) {
             Some(m) => InputError::new(field, m),
