@@ -32,7 +32,7 @@ use conic::{Cone, Residuals, Start};
 use divdiff::{Knots, Points, Topology};
 use energy::{Hessian, System};
 
-use crate::backend::full::{merge_stencil, set_scale, FullVertex};
+use crate::backend::full::{merge_stencil, FullVertex};
 use crate::operator::Stencil;
 use crate::Error;
 
@@ -686,6 +686,17 @@ fn polytope_is_empty(hs: &[(Vec<f64>, f64)], d: usize) -> bool {
         // (NaN is not converged.)
         Ok(sol) => sol.residuals.total.is_nan() || sol.residuals.total > 1e-9,
         Err(_) => true,
+    }
+}
+
+/// The scale of a set's data (largest |coordinate| of centres + radii, points, offsets): the
+/// full-vertex backend's length scale and the certificate's reach of a derivative set.
+pub(crate) fn set_scale(set: &ConvexSet) -> f64 {
+    match set {
+        ConvexSet::Ball { center, radius } => inf_norm(center) + radius,
+        ConvexSet::Point(v) => inf_norm(v),
+        ConvexSet::HalfSpaces(hs) => hs.iter().fold(0.0, |a, (nr, o)| a.max(o.abs() / norm(nr))),
+        ConvexSet::Cone { .. } => 0.0,
     }
 }
 

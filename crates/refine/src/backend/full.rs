@@ -29,7 +29,7 @@ use banded::vector::{dot, norm};
 use conic::{BlockWeight, Cone, Cones, KktSystem, Scales, Weights};
 use energy::{Factor, System};
 
-use crate::conic_problem::{ConicProblem, ConvexSet};
+use crate::conic_problem::{set_scale, ConicProblem, ConvexSet};
 use crate::operator::Stencil;
 use crate::Error;
 
@@ -170,16 +170,6 @@ pub(crate) fn set_rows(set: &ConvexSet, d: usize) -> Vec<(Cone, Vec<Vec<f64>>, V
                 vec![(Cone::SecondOrder(d + 1), f, vec![0.0; d + 1])]
             }
         }
-    }
-}
-
-/// The scale of a set's data (largest |coordinate| of centres + radii, points, offsets).
-pub(crate) fn set_scale(set: &ConvexSet) -> f64 {
-    match set {
-        ConvexSet::Ball { center, radius } => inf_norm(center) + radius,
-        ConvexSet::Point(v) => inf_norm(v),
-        ConvexSet::HalfSpaces(hs) => hs.iter().fold(0.0, |a, (nr, o)| a.max(o.abs() / norm(nr))),
-        ConvexSet::Cone { .. } => 0.0,
     }
 }
 
@@ -704,7 +694,7 @@ impl conic::clarabel::Sparse for FullVertex {
 #[cfg(test)]
 mod tests {
     use super::FullVertex;
-    use crate::conic_problem::{ConicProblem, ConvexSet};
+    use crate::conic_problem::{set_scale, ConicProblem, ConvexSet};
     use conic::KktSystem;
     use divdiff::Knots;
 

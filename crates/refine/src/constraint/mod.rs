@@ -608,7 +608,7 @@ pub(crate) fn certify_derivative(
     set: ConvexSet,
     far: f64,
 ) {
-    terms.reach = terms.reach.max(crate::backend::full::set_scale(&set));
+    terms.reach = terms.reach.max(crate::conic_problem::set_scale(&set));
     let (solved, checked) = split_far_derivative_set(set, far);
     if let Some(set) = solved {
         derivative_terms(at, terms, v, &set);
