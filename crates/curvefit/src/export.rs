@@ -21,6 +21,7 @@ use std::fmt::Write;
 
 use refine::CubicSpline;
 
+use crate::spec::refine::MAX_REFINED_COORDS;
 use crate::spec::InputError;
 
 /// Samples per piece of [`csv`] when no count is given: every break and 15 points between two.
@@ -81,11 +82,6 @@ fn coordinate_names(d: usize) -> Vec<String> {
     }
 }
 
-/// The most numbers a CSV export writes (`--samples` × (d + 1)): the refined curve's own limit
-/// ([`crate::spec::refine::MAX_REFINED_COORDS`]), about a gigabyte of text. `--samples 10^12`
-/// was killed for its memory.
-pub const MAX_SAMPLE_COORDS: usize = crate::spec::refine::MAX_REFINED_COORDS;
-
 /// Samples of the curve as CSV: a header `u,x,y[,z]` (`x1,…,xd` for d > 3), then one line per
 /// sample. With `samples` = `None`: [`DEFAULT_SAMPLES_PER_PIECE`] samples per piece, evenly in each
 /// piece's parameter, every break included (so the polyline through them passes through the
@@ -93,13 +89,14 @@ pub const MAX_SAMPLE_COORDS: usize = crate::spec::refine::MAX_REFINED_COORDS;
 /// both ends included. A closed curve's last sample is its first point again, at t_P.
 ///
 /// # Errors
-/// `--samples` below 2, or beyond [`MAX_SAMPLE_COORDS`] numbers.
+/// `--samples` below 2, or samples × (d + 1) beyond the refined curve's own limit
+/// ([`MAX_REFINED_COORDS`], about a gigabyte of text; `--samples 10^12` was killed for its memory).
 pub fn csv(spline: &CubicSpline, samples: Option<usize>) -> Result<String, InputError> {
-    if let Some(n) = samples.filter(|n| n.saturating_mul(spline.dim() + 1) > MAX_SAMPLE_COORDS) {
+    if let Some(n) = samples.filter(|n| n.saturating_mul(spline.dim() + 1) > MAX_REFINED_COORDS) {
         return Err(InputError::new(
             "--samples",
             format!(
-                "{n} samples of u and {} coordinates are more than {MAX_SAMPLE_COORDS} numbers, the limit",
+                "{n} samples of u and {} coordinates are more than {MAX_REFINED_COORDS} numbers, the limit",
                 spline.dim()
             ),
         ));
