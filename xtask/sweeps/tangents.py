@@ -21,6 +21,8 @@ failures (ROBUSTNESS.md §4, item 37 reports a run).
 import json, os, subprocess, sys, time
 import numpy as np
 
+from derivatives import derivative_rows
+
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 BIN = os.environ.get("BIN", os.path.join(ROOT, "target", "release", "curvefit"))
 OUT = os.environ.get("SWEEP_OUT", "/tmp/curvefit-sweep/tangents")
@@ -62,13 +64,9 @@ def problem(n, k, kind, seed):
     }
 
 
-def bessel(p, t, closed):
-    """Df at every vertex: the derivative at t_j of the quadratic through p_{j-1}, p_j, p_{j+1}."""
-    h = np.diff(t)
-    s = np.diff(np.vstack([p, p[:1]]) if closed else p, axis=0) / h[:, None]
-    hp, hn = np.roll(h, 1), h
-    sp, sn = np.roll(s, 1, axis=0), s
-    return (sn * hp[:, None] + sp * hn[:, None]) / (hp + hn)[:, None]
+def derivative(p, t, j):
+    """Df(t_j) of the closed curve p on knots t by the "bessel" rule (`derivatives.py`)."""
+    return sum(w * p[v] for v, w in derivative_rows(np.diff(t), True, j, "bessel").items())
 
 
 def check(prob, res):
@@ -83,14 +81,14 @@ def check(prob, res):
     e = (np.linalg.norm(p[dv] - q, axis=1) - radii).max()
     if e > 1e-9 * extent:
         bad.append(f"ball {e:.3g}")
-    df = bessel(p, np.array(res["knots"]), True)
+    t = np.array(res["knots"])
     # (A wedge is a cone: Df = 0, the curve stopping at its apex, is in it; its violation is
     # measured against the curve's typical speed, not its own |Df|.)
-    speed = np.median(np.linalg.norm(df, axis=1))
+    speed = np.median([np.linalg.norm(derivative(p, t, j)) for j in range(len(p))])
     for i, s in enumerate(prob["tangents"]):
         if s is None:
             continue
-        v = df[dv[i]]
+        v = derivative(p, t, dv[i])
         if s["type"] == "wedge":
             a = np.array(s["direction"])
             # v·a ≥ |v| cos θ.
