@@ -66,168 +66,81 @@ fn only<E: Error>(
     }
 }
 
-#[derive(Deserialize)]
-#[serde(rename_all = "snake_case")]
-enum ConstraintType {
-    Interpolate,
-    Balls,
-    Smoothing,
-    Halfspaces,
+/// One object with a `"type"`: `$spec`'s Deserialize through the flat struct `$fields` of every
+/// field (each optional) and the enum `$types` of the type names, then per type the fields it
+/// has, in order (a field of another type refused, a missing one required). The type names are
+/// the variants' own, in snake_case as `$spec` is written.
+macro_rules! tagged {
+    (
+        $spec:ident via $fields:ident, $types:ident {
+            $($field:ident: $ty:ty),* $(,)?
+        }
+        $($variant:ident { $($has:ident),* }),* $(,)?
+    ) => {
+        #[derive(Deserialize)]
+        #[serde(rename_all = "snake_case")]
+        enum $types {
+            $($variant),*
+        }
+
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $fields {
+            #[serde(rename = "type")]
+            kind: $types,
+            $($field: Option<$ty>,)*
+        }
+
+        impl<'de> Deserialize<'de> for $spec {
+            fn deserialize<D: Deserializer<'de>>(de: D) -> Result<Self, D::Error> {
+                let f: $fields = object(de, stringify!($spec))?;
+                let present = [$((stringify!($field), f.$field.is_some())),*];
+                Ok(match f.kind {
+                    $($types::$variant => {
+                        only(&present, &[$(stringify!($has)),*])?;
+                        $spec::$variant {
+                            $($has: need(f.$has, stringify!($has))?),*
+                        }
+                    })*
+                })
+            }
+        }
+    };
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ConstraintFields {
-    #[serde(rename = "type")]
-    kind: ConstraintType,
-    radii: Option<Vec<f64>>,
-    weights: Option<Vec<f64>>,
-    sets: Option<Vec<Vec<HalfSpaceSpec>>>,
-}
-
-impl<'de> Deserialize<'de> for ConstraintSpec {
-    fn deserialize<D: Deserializer<'de>>(de: D) -> Result<Self, D::Error> {
-        let f: ConstraintFields = object(de, "ConstraintSpec")?;
-        let present = [
-            ("radii", f.radii.is_some()),
-            ("weights", f.weights.is_some()),
-            ("sets", f.sets.is_some()),
-        ];
-        Ok(match f.kind {
-            ConstraintType::Interpolate => {
-                only(&present, &[])?;
-                ConstraintSpec::Interpolate
-            }
-            ConstraintType::Balls => {
-                only(&present, &["radii"])?;
-                ConstraintSpec::Balls {
-                    radii: need(f.radii, "radii")?,
-                }
-            }
-            ConstraintType::Smoothing => {
-                only(&present, &["weights"])?;
-                ConstraintSpec::Smoothing {
-                    weights: need(f.weights, "weights")?,
-                }
-            }
-            ConstraintType::Halfspaces => {
-                only(&present, &["sets"])?;
-                ConstraintSpec::Halfspaces {
-                    sets: need(f.sets, "sets")?,
-                }
-            }
-        })
+tagged! {
+    ConstraintSpec via ConstraintFields, ConstraintType {
+        radii: Vec<f64>,
+        weights: Vec<f64>,
+        sets: Vec<Vec<HalfSpaceSpec>>,
     }
+    Interpolate {},
+    Balls { radii },
+    Smoothing { weights },
+    Halfspaces { sets },
 }
 
-#[derive(Deserialize)]
-#[serde(rename_all = "snake_case")]
-enum TangentType {
-    Ball,
-    Wedge,
-    Tension,
-    Halfspaces,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct TangentFields {
-    #[serde(rename = "type")]
-    kind: TangentType,
-    center: Option<Vec<f64>>,
-    radius: Option<f64>,
-    direction: Option<Vec<f64>>,
-    half_angle: Option<f64>,
-    halfspaces: Option<Vec<HalfSpaceSpec>>,
-}
-
-impl<'de> Deserialize<'de> for TangentSpec {
-    fn deserialize<D: Deserializer<'de>>(de: D) -> Result<Self, D::Error> {
-        let f: TangentFields = object(de, "TangentSpec")?;
-        let present = [
-            ("center", f.center.is_some()),
-            ("radius", f.radius.is_some()),
-            ("direction", f.direction.is_some()),
-            ("half_angle", f.half_angle.is_some()),
-            ("halfspaces", f.halfspaces.is_some()),
-        ];
-        Ok(match f.kind {
-            TangentType::Ball => {
-                only(&present, &["center", "radius"])?;
-                TangentSpec::Ball {
-                    center: need(f.center, "center")?,
-                    radius: need(f.radius, "radius")?,
-                }
-            }
-            TangentType::Wedge => {
-                only(&present, &["direction", "half_angle"])?;
-                TangentSpec::Wedge {
-                    direction: need(f.direction, "direction")?,
-                    half_angle: need(f.half_angle, "half_angle")?,
-                }
-            }
-            TangentType::Tension => {
-                only(&present, &["radius"])?;
-                TangentSpec::Tension {
-                    radius: need(f.radius, "radius")?,
-                }
-            }
-            TangentType::Halfspaces => {
-                only(&present, &["halfspaces"])?;
-                TangentSpec::Halfspaces {
-                    halfspaces: need(f.halfspaces, "halfspaces")?,
-                }
-            }
-        })
+tagged! {
+    TangentSpec via TangentFields, TangentType {
+        center: Vec<f64>,
+        radius: f64,
+        direction: Vec<f64>,
+        half_angle: f64,
+        halfspaces: Vec<HalfSpaceSpec>,
     }
+    Ball { center, radius },
+    Wedge { direction, half_angle },
+    Tension { radius },
+    Halfspaces { halfspaces },
 }
 
-#[derive(Deserialize)]
-#[serde(rename_all = "snake_case")]
-enum BoundaryType {
-    Natural,
-    Clamped,
-    NearClamped,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct BoundaryFields {
-    #[serde(rename = "type")]
-    kind: BoundaryType,
-    start: Option<Vec<f64>>,
-    end: Option<Vec<f64>>,
-    radius: Option<f64>,
-}
-
-impl<'de> Deserialize<'de> for BoundarySpec {
-    fn deserialize<D: Deserializer<'de>>(de: D) -> Result<Self, D::Error> {
-        let f: BoundaryFields = object(de, "BoundarySpec")?;
-        let present = [
-            ("start", f.start.is_some()),
-            ("end", f.end.is_some()),
-            ("radius", f.radius.is_some()),
-        ];
-        Ok(match f.kind {
-            BoundaryType::Natural => {
-                only(&present, &[])?;
-                BoundarySpec::Natural
-            }
-            BoundaryType::Clamped => {
-                only(&present, &["start", "end"])?;
-                BoundarySpec::Clamped {
-                    start: need(f.start, "start")?,
-                    end: need(f.end, "end")?,
-                }
-            }
-            BoundaryType::NearClamped => {
-                only(&present, &["start", "end", "radius"])?;
-                BoundarySpec::NearClamped {
-                    start: need(f.start, "start")?,
-                    end: need(f.end, "end")?,
-                    radius: need(f.radius, "radius")?,
-                }
-            }
-        })
+tagged! {
+    BoundarySpec via BoundaryFields, BoundaryType {
+        start: Vec<f64>,
+        end: Vec<f64>,
+        radius: f64,
     }
+    Natural {},
+    Clamped { start, end },
+    NearClamped { start, end, radius },
 }
