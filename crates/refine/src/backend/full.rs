@@ -694,7 +694,7 @@ impl conic::clarabel::Sparse for FullVertex {
 #[cfg(test)]
 mod tests {
     use super::FullVertex;
-    use crate::conic_problem::{set_scale, ConicProblem, ConvexSet};
+    use crate::conic_problem::{ConicProblem, ConvexSet};
     use conic::KktSystem;
     use divdiff::Knots;
 
