@@ -56,6 +56,13 @@ fn messages_say_what_the_field_must_be() {
             format!(r#"{{{P}, "constraint": {{"type": "balls"}}}}"#),
             r#"error: constraint: needs the field "radii""#,
         ),
+        // A required field of the problem itself is named (serde reports it at the problem,
+        // and the line was "error: needs the field \"rows\"", with no field).
+        (
+            "surface",
+            r#"{"cols": 2, "points": [[0, 0], [1, 0], [0, 1], [1, 1]]}"#.to_string(),
+            "error: rows: is required (this problem has no default for it)",
+        ),
         // Inside an object with a "type", errors keep their path (`spec::tagged`) …
         (
             "refine",

@@ -269,6 +269,17 @@ pub fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputErro
         };
         return InputError::new(at, "is given twice (each field at most once)");
     }
+    // A required field of the problem itself left out: serde reports it at the problem (an
+    // empty path), so the message named no field ("error: needs the field \"rows\"", and an
+    // `InputError` with an empty `field`). Name it. (Inside an object the object is named and
+    // the message says which of its fields is missing: `constraint: needs the field "radii"`.)
+    if let Some(name) = bare
+        .strip_prefix("missing field `")
+        .and_then(|r| r.strip_suffix('`'))
+        .filter(|_| field.is_empty())
+    {
+        return InputError::new(name, "is required (this problem has no default for it)");
+    }
     if inner.is_syntax() || inner.is_eof() {
         match messages::syntax_at_field(&field, &bare) {
             Some(m) => InputError::new(field, m),
