@@ -125,7 +125,30 @@ def test_every_error_names_a_field_the_problem_has():
     for sub, text in CASES:
         e = python_error(sub, text)
         top = re.split(r"[.\[]", e.field)[0]
-        assert top == "" or top in json.loads(text) or top == "bogus", (text, e.field)
+        required = e.message.startswith("is required")
+        assert top == "" or top in json.loads(text) or top == "bogus" or required, (text, e.field)
+
+
+def test_a_required_field_left_out_is_named():
+    # (serde reports it at the problem itself: the message named no field, and `field` was "".)
+    e = python_error("surface", '{"cols": 2, "points": [[0, 0], [1, 0], [0, 1], [1, 1]]}')
+    assert (e.field, e.index) == ("rows", None)
+    assert str(e) == "rows: is required (this problem has no default for it)"
+
+
+def test_a_grid_array_and_its_rows_and_cols():
+    g = np.arange(4 * 5 * 3, dtype=float).reshape(4, 5, 3)
+    whole = curvefit.surface(g).to_dict()
+    # Given as well, rows and cols that agree with the array's shape change nothing ...
+    assert curvefit.surface(g, rows=4, cols=5).to_dict() == whole
+    assert curvefit.surface(g, rows=np.int64(4)).to_dict() == whole
+    # ... and ones that do not are refused by name (the array was passed on as it was, and
+    # refused as "points[0][0]: must be a number, not an array").
+    for kwargs, field in [({"rows": 5, "cols": 4}, "rows"), ({"cols": 4}, "cols"), ({"rows": 4.0}, "rows")]:
+        with pytest.raises(curvefit.InputError) as e:
+            curvefit.surface(g, **kwargs)
+        assert e.value.field == field
+        assert "(4, 5, 3)" in e.value.message
 
 
 def test_errors_pickle():

@@ -426,8 +426,8 @@ def surface(
 
     Args:
         points: the grid, ``rows·cols`` points of dimension 2 or 3, row-major (point (i, j) is
-            entry i·cols + j). Required. A ``(rows, cols, d)`` array may stand for it with
-            ``rows`` and ``cols`` left out.
+            entry i·cols + j). Required. A ``(rows, cols, d)`` array may stand for it:
+            ``rows`` and ``cols`` then come from its shape (given as well, they must agree).
         rows: number of rows (range of i), ≥ 2. Required, unless ``points`` is
             ``(rows, cols, d)``.
         cols: number of columns (range of j), ≥ 2. Required, like ``rows``.
@@ -444,12 +444,22 @@ def surface(
     Raises:
         InputError: bad input, with the command line's field, index and message.
     """
-    if rows is _FROM_POINTS or cols is _FROM_POINTS:
-        shape = np.shape(points) if isinstance(points, np.ndarray) else None
-        if shape is not None and len(shape) == 3:
-            rows = shape[0] if rows is _FROM_POINTS else rows
-            cols = shape[1] if cols is _FROM_POINTS else cols
-            points = points.reshape(shape[0] * shape[1], shape[2])
+    shape = np.shape(points) if isinstance(points, np.ndarray) else None
+    if shape is not None and len(shape) == 3:
+        # A (rows, cols, d) grid: its shape says rows and cols; given as well, they must agree
+        # (passed on as a 3-D array, it was refused as "points[0][0]: must be a number").
+        for name, given, size in (("rows", rows, shape[0]), ("cols", cols, shape[1])):
+            if given is not _FROM_POINTS and not (
+                isinstance(given, numbers.Integral) and not isinstance(given, bool) and given == size
+            ):
+                raise InputError(
+                    name,
+                    None,
+                    f"is {given!r}, but the points array of shape {tuple(shape)} has {size} "
+                    f"{name} (leave {name} out to take it from the array)",
+                )
+        rows, cols = shape[0], shape[1]
+        points = points.reshape(shape[0] * shape[1], shape[2])
     p: Dict[str, Any] = {"points": points, "closed": closed, "scheme": scheme, "levels": levels}
     if rows is not _FROM_POINTS:
         p["rows"] = rows
