@@ -309,3 +309,23 @@ fn levels_without_a_polygon_are_refused_not_ignored() {
         "error: --levels: needs --apply POLYGON.json"
     );
 }
+
+#[test]
+fn a_polygon_file_that_cannot_be_read_is_named_by_its_flag() {
+    // The file's own errors were prefixed as a field of the polygon: "polygon.--apply: cannot
+    // open …".
+    let dir = curvefit_tests::scratch_dir("apply_missing");
+    let missing = dir.join("no_such_polygon.json");
+    let m = missing.to_str().unwrap();
+    let d = dir.to_str().unwrap();
+    for (path, want) in [
+        (m, format!("error: --apply: cannot open {m}: ")),
+        (d, format!("error: --apply: {d} is a directory, not a file")),
+    ] {
+        let args = ["scheme", "--stencil", "4", "--arity", "2", "--apply", path];
+        let (code, out, err) = run_cli(&args, "");
+        assert_eq!(code, 2, "{err}");
+        assert!(out.is_empty());
+        assert!(err.starts_with(&want), "{err}\nwant: {want}");
+    }
+}

@@ -102,6 +102,9 @@ fn run_scheme_cmd(
         Some(p) => Some(input::read_problem_file(p, "--apply").map_err(|e| {
             let field = if e.field.is_empty() || e.field == "problem" {
                 "polygon".to_string()
+            } else if e.field.starts_with("--") {
+                // The file itself (cannot open it, a directory): the flag that named it.
+                e.field.clone()
             } else {
                 format!("polygon.{}", e.field)
             };
