@@ -437,7 +437,7 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
                         num(prob.options.accept_kkt)
                     ),
                 ),
-                None => user_error(e),
+                None => data_constraint_refusal(solver, iterations, residual, prob.options.accept_kkt),
             },
         },
         // The solve before the update was certified; a tiny ball is still the likelier cause
@@ -492,6 +492,27 @@ fn derivative_field(prob: &refine::Problem) -> Option<&'static str> {
     } else {
         None
     }
+}
+
+/// The refusal of a first solve with data constraints alone (no derivative constraint, no
+/// tiny ball) that no entry of the exact solver certified. It was the library's line with no
+/// field and the residual in full ("full-vertex interior point (strict) did not converge in 21
+/// iterations (best residual 4.708806638834959e-5)", ROBUSTNESS.md §4, item 38).
+fn data_constraint_refusal(
+    solver: &str,
+    iterations: usize,
+    residual: f64,
+    accept: f64,
+) -> InputError {
+    use super::messages::num;
+    InputError::new(
+        "constraint",
+        format!(
+            "{solver} did not converge in {iterations} iterations (best residual {}, accepted at most {}): not a statement that the constraints contradict each other; very unequal spacing of the points (or of their parameter spans) can cause it: another parametrization, fewer intermediate points (k) or fewer knot updates may help",
+            num(residual),
+            num(accept)
+        ),
+    )
 }
 
 /// Radii below this fraction of the data's extent are named when a ball problem is not
@@ -702,6 +723,20 @@ mod tests {
 
     /// A problem solved by value (its arrays moved) and by reference (copied) gives the same
     /// result and the same errors, for every kind of constraint.
+    #[test]
+    fn a_data_constraint_refusal_names_the_constraint_and_reads_its_numbers() {
+        let e =
+            data_constraint_refusal("full-vertex interior point", 21, 4.708806638834959e-5, 1e-9);
+        assert_eq!(e.field, "constraint");
+        assert!(
+            e.message.starts_with(
+                "full-vertex interior point did not converge in 21 iterations (best residual 4.70881e-5, accepted at most 1e-9): "
+            ),
+            "{}",
+            e.message
+        );
+    }
+
     #[test]
     fn solving_a_moved_problem_equals_solving_a_borrowed_one() {
         let texts = [

@@ -174,6 +174,12 @@ pub(crate) fn set_rows(set: &ConvexSet, d: usize) -> Vec<(Cone, Vec<Vec<f64>>, V
 }
 
 impl FullVertex {
+    /// Multiplies the force floor F₀ of [`conic::KktSystem::scales`] by `factor` (the last
+    /// attempt of [`crate::conic_problem::ConicProblem::solve_judged`]).
+    pub(crate) fn lower_force_floor(&mut self, factor: f64) {
+        self.scales.force *= factor;
+    }
+
     /// The backend of `problem`.
     ///
     /// # Errors
