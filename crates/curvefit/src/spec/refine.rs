@@ -721,8 +721,6 @@ mod tests {
         super::super::from_json(json).unwrap()
     }
 
-    /// A problem solved by value (its arrays moved) and by reference (copied) gives the same
-    /// result and the same errors, for every kind of constraint.
     #[test]
     fn a_data_constraint_refusal_names_the_constraint_and_reads_its_numbers() {
         let e =
@@ -737,6 +735,8 @@ mod tests {
         );
     }
 
+    /// A problem solved by value (its arrays moved) and by reference (copied) gives the same
+    /// result and the same errors, for every kind of constraint.
     #[test]
     fn solving_a_moved_problem_equals_solving_a_borrowed_one() {
         let texts = [
