@@ -499,8 +499,11 @@ impl ConicProblem {
         // certifies some problems the default refuses and refuses some it certifies (the sweeps
         // of item 38), so the default stays first.
         let rounding = ROUNDING_MULTIPLE_OF_FLOOR * conic::KktSystem::scales(&be).force;
+        let first_iterations = sol.iterations;
         be.lower_force_floor(ROUNDED_FORCE_FLOOR);
-        if let Ok(sol) = conic::solve_with(&mut be, &method, start, &mut monitor) {
+        if let Ok(mut sol) = conic::solve_with(&mut be, &method, start, &mut monitor) {
+            // (The iterations reported are both runs'.)
+            sol.iterations += first_iterations;
             // Only where the certificate resolves the stiffest vertices' forces: the rounding
             // level there (16 ε ‖H‖ × the coordinates' size) at most [`RESOLVED_ROUNDING`] of the
             // largest force the answer carries. Beyond it the certificate's per-vertex floors
