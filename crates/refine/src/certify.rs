@@ -93,7 +93,7 @@ use divdiff::{DerivativeRule, Knots, Points};
 use crate::constraint::{At, Kind, Terms};
 
 /// The multiple of ε ‖H‖_∞ max|p| that bounds the rounding in Hp (module docs).
-const ROUNDING_MULTIPLE: f64 = 16.0;
+pub(crate) const ROUNDING_MULTIPLE: f64 = 16.0;
 
 /// How far beyond its reach a curve may run before the certificate refuses it (module docs,
 /// "Run-off"): its extent about the data's centroid against this times L_data + V·T.

@@ -124,17 +124,16 @@ impl ConicOptions {
 /// active-set changes, then six steps to 1e-14 (the default three end at 2e-8).
 const REPOLISH_STEPS: usize = 10;
 
-/// The factor on the full-vertex backend's force floor F₀ in [`ConicProblem::solve_judged`]'s
-/// last attempt: 16 ε / 1e-9, the rounding level of Hp at the stiffest vertex (16 ε ‖H‖ times
-/// the coordinates' size) over the acceptance level, so that a residual at that rounding level
-/// scores the acceptance level — the same floor the method's polish keeps
-/// (`conic::polish`'s `settled`) and refine's certificate uses (`certify`'s `ROUNDING_MULTIPLE`
-/// and `ROUNDING_COUNTS_AS`).
-const ROUNDED_FORCE_FLOOR: f64 = 16.0 * f64::EPSILON / crate::EXACT_ACCEPT_KKT;
+/// 16 ε (the certificate's `ROUNDING_MULTIPLE` ε): the full-vertex backend's force floor
+/// (‖H‖ × the coordinates' size) times this is the rounding level of Hp at its stiffest vertex.
+const ROUNDING_MULTIPLE_OF_FLOOR: f64 = crate::certify::ROUNDING_MULTIPLE * f64::EPSILON;
 
-/// 16 ε: the full-vertex backend's force floor (‖H‖ × the coordinates' size) times this is the
-/// rounding level of Hp at its stiffest vertex.
-const ROUNDING_MULTIPLE_OF_FLOOR: f64 = 16.0 * f64::EPSILON;
+/// The factor on the full-vertex backend's force floor F₀ in [`ConicProblem::solve_judged`]'s
+/// last attempt: that rounding level over the score it counts as
+/// (`certify::ROUNDING_COUNTS_AS`, 1e-9), so that a residual at the rounding level scores the
+/// acceptance level — the floor the method's polish keeps (`conic::polish`'s `settled`) and
+/// refine's certificate uses.
+const ROUNDED_FORCE_FLOOR: f64 = ROUNDING_MULTIPLE_OF_FLOOR / crate::certify::ROUNDING_COUNTS_AS;
 
 /// The largest rounding level at the stiffest vertex, relative to the largest force of the
 /// answer, at which [`ConicProblem::solve_judged`]'s last attempt (the lowered floor) is taken
