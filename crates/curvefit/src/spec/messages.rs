@@ -201,6 +201,14 @@ fn must_be(field: &str, want: &str) -> String {
     }
 }
 
+/// The field a serde message of the form "`what` `name`" is about ("missing field `rows`",
+/// "duplicate field `k`"), or `None` for another message.
+pub fn field_named<'a>(raw: &'a str, what: &str) -> Option<&'a str> {
+    raw.strip_prefix(what)?
+        .strip_prefix(" `")?
+        .strip_suffix('`')
+}
+
 /// Rewrites a parser message for `field` in the user's words.
 pub fn rewrite(field: &str, raw: &str) -> String {
     // "invalid type: X, expected Y" / "invalid value: X, expected Y"
@@ -236,8 +244,7 @@ pub fn rewrite(field: &str, raw: &str) -> String {
         }
     }
     // "missing field `radii`"
-    if let Some(rest) = raw.strip_prefix("missing field `") {
-        let name = rest.trim_end_matches('`');
+    if let Some(name) = field_named(raw, "missing field") {
         return match expected(field) {
             Some(e) if e.contains(&format!("\"{name}\"")) => {
                 format!("needs the field \"{name}\": must be {e}")

@@ -258,10 +258,7 @@ pub fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputErro
         _ => text,
     };
     // "duplicate field `k`" is reported at the object holding it: name the field itself.
-    if let Some(name) = bare
-        .strip_prefix("duplicate field `")
-        .and_then(|r| r.strip_suffix('`'))
-    {
+    if let Some(name) = messages::field_named(&bare, "duplicate field") {
         let at = if field.is_empty() {
             name.to_string()
         } else {
@@ -273,11 +270,7 @@ pub fn path_error(e: serde_path_to_error::Error<serde_json::Error>) -> InputErro
     // empty path), so the message named no field ("error: needs the field \"rows\"", and an
     // `InputError` with an empty `field`). Name it. (Inside an object the object is named and
     // the message says which of its fields is missing: `constraint: needs the field "radii"`.)
-    if let Some(name) = bare
-        .strip_prefix("missing field `")
-        .and_then(|r| r.strip_suffix('`'))
-        .filter(|_| field.is_empty())
-    {
+    if let Some(name) = messages::field_named(&bare, "missing field").filter(|_| field.is_empty()) {
         return InputError::new(name, "is required (this problem has no default for it)");
     }
     if inner.is_syntax() || inner.is_eof() {
