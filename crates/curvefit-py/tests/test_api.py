@@ -85,6 +85,19 @@ def test_reprs_are_readable():
     assert repr(e) == "InputError(field='points[2]', index=2, message='bad')" and str(e) == "points[2]: bad"
 
 
+def test_one_radius_or_weight_for_every_point():
+    """``radii=r`` and ``weights=w`` given as one number (a Python or numpy scalar) are that
+    number at every point: the same answer as the array written out."""
+    q = np.array([[0, 0], [1, 0.2], [0.4, 1], [1.3, 1.5], [2, 0.5]])
+    for kw, value in (("radii", 0.1), ("radii", np.float32(0.25)), ("weights", 3), ("weights", np.array(0.5))):
+        one = curvefit.refine(q, **{kw: value})
+        full = curvefit.refine(q, **{kw: np.full(len(q), float(value))})
+        np.testing.assert_array_equal(one.points, full.points)
+        assert one.energy == full.energy
+    many = curvefit.refine_many([{"points": q, "radii": 0.1}])
+    np.testing.assert_array_equal(many[0].points, curvefit.refine(q, radii=[0.1] * 5).points)
+
+
 def test_kkt_certificate_of_a_hard_problem():
     """Balls on a noisy star with jittered angles, d = 3, open with clamped ends: the exact
     solver's certificate holds (the package adds nothing to the solver, but this is the path

@@ -197,6 +197,18 @@ def test_convenience_keywords_name_themselves():
     with pytest.raises(curvefit.InputError) as e:
         curvefit.refine(q, weights=[1, 1])
     assert e.value.field == "weights"
+    # One number for every point: its error names the keyword, with no index, in the
+    # contract's words for the entry.
+    with pytest.raises(curvefit.InputError) as e:
+        curvefit.refine(q, radii=-1)
+    assert (e.value.field, e.value.index) == ("radii", None)
+    assert e.value.message == cli_error("refine", f'{{{P}, "constraint": {{"type": "balls", "radii": [-1, -1, -1]}}}}').split(": ", 1)[1]
+    with pytest.raises(curvefit.InputError) as e:
+        curvefit.refine(q, weights=float("nan"))
+    assert (e.value.field, e.value.index, e.value.message) == ("weights", None, "must be a finite number, not NaN")
+    with pytest.raises(curvefit.InputError) as e:
+        curvefit.refine(q, radii=True)
+    assert e.value.field == "radii"
     with pytest.raises(curvefit.InputError) as e:
         curvefit.refine(q, radii=[1, 1, 1], constraint={"type": "interpolate"})
     assert e.value.field == "radii"

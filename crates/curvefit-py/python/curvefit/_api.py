@@ -40,12 +40,14 @@ _SCHEME = {"points": 4, "arity": 2}
 
 
 def _renamed(e: InputError, renames: Mapping[str, str]) -> InputError:
-    """The error with a field written through a convenience keyword named by that keyword."""
+    """The error with a field written through a convenience keyword named by that keyword; a
+    keyword that stands for the whole field (``bc_type``, one number for ``radii`` or
+    ``weights``: listed in ``renames`` with a trailing ``"="``) is named without an index."""
     for prefix, name in renames.items():
         if e.field == prefix or e.field.startswith(prefix + "[") or e.field.startswith(prefix + "."):
-            field = name + e.field[len(prefix):] if name != "bc_type" else name
-            index = e.index if name != "bc_type" else None
-            return InputError(field, index, e.message)
+            if name.endswith("="):
+                return InputError(name[:-1], None, e.message)
+            return InputError(name + e.field[len(prefix):], e.index, e.message)
     return e
 
 
@@ -96,6 +98,21 @@ def _ends(bc_type: Any, periodic: str, field: str = "bc_type") -> List[Tuple[Any
     return out
 
 
+def _per_point(value: Any, points: Any) -> Any:
+    """``radii=r`` / ``weights=w`` given as one number: that number for every point (numpy's
+    broadcasting of a scalar), when the points' count can be read; anything else as given, for
+    the contract's own validation (a bool is not a number there)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.ndarray)):
+        return value
+    if np.ndim(value) != 0:
+        return value
+    try:
+        n = len(points)
+    except TypeError:
+        return value
+    return np.full(n, float(value))
+
+
 def _refine_convenience(p: Dict[str, Any]) -> Dict[str, str]:
     """Turns ``radii=``, ``weights=`` and ``bc_type=`` in the problem ``p`` into its JSON
     fields (in place); returns the renames for errors."""
@@ -110,8 +127,9 @@ def _refine_convenience(p: Dict[str, Any]) -> Dict[str, str]:
             continue
         if p.get("constraint", _INTERPOLATE) is not _INTERPOLATE:
             raise InputError(name, None, f"give {name} or constraint, not both")
-        p["constraint"] = {"type": kind, name: value}
-        renames[f"constraint.{name}"] = name
+        per_point = _per_point(value, p.get("points"))
+        p["constraint"] = {"type": kind, name: per_point}
+        renames[f"constraint.{name}"] = name + ("=" if per_point is not value else "")
     if bc_type is not None:
         if p.get("boundary", _NATURAL) is not _NATURAL:
             raise InputError("bc_type", None, "give bc_type or boundary, not both")
@@ -138,7 +156,7 @@ def _refine_convenience(p: Dict[str, Any]) -> Dict[str, str]:
                 raise InputError(
                     "bc_type", None, f"the end derivatives must be vectors of the points' dimension {d}"
                 ) from None
-        renames["boundary"] = "bc_type"
+        renames["boundary"] = "bc_type="
     return renames
 
 
@@ -207,8 +225,10 @@ def refine(
             ``"paper"``: Kersey's multiplier iteration (approximate).
 
     Convenience keywords (each one way to say a JSON field; not together with that field):
-        radii: ``radii=r`` is ``constraint={"type": "balls", "radii": r}``.
-        weights: ``weights=w`` is ``constraint={"type": "smoothing", "weights": w}``.
+        radii: ``radii=r`` is ``constraint={"type": "balls", "radii": r}``; one number is that
+            radius for every point.
+        weights: ``weights=w`` is ``constraint={"type": "smoothing", "weights": w}``; one
+            number is that weight for every point.
         bc_type: scipy's spelling of ``boundary``: ``"natural"``; ``"clamped"`` (zero end
             derivatives); ``((1, v1), (1, vn))`` (``boundary={"type": "clamped", "start": v1,
             "end": vn}``); ``((2, 0), (2, 0))`` (natural).
@@ -360,7 +380,7 @@ def strip(
             "the strip's spline is not periodic (its ends are natural or have a given slope)",
         )
         p["end_slopes"] = [None if e[0] == "natural" else e[1] for e in ends]
-        renames["end_slopes"] = "bc_type"
+        renames["end_slopes"] = "bc_type="
     try:
         return StripResult(**_curvefit.solve("strip", p))
     except InputError as e:
