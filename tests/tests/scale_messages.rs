@@ -91,12 +91,32 @@ fn an_exponent_too_large_names_the_exponent() {
 }
 
 #[test]
-fn badly_scaled_spans_inside_the_range_name_points() {
+fn badly_scaled_spans_inside_the_range() {
     // Chordal spans of 1e-100 make H ~ 1e300 (was `singular system: non-positive pivot at
-    // vertex …` with no field).
-    let doc = r#"{"points": [[0,0],[1e-100,1e-100],[0,1e-100],[1e-100,0]], "parametrization": "chordal", "k": 7,
-                 "constraint": {"type": "smoothing", "weights": [1, 1, 1, 1]}}"#;
-    assert_eq!(refused_field(doc), "points");
+    // vertex …` with no field, then refused naming `points`): solved on data and knots scaled by
+    // powers of two (ROBUSTNESS.md item 39), the answer's energy ∝ 1/s of the same star at 1.
+    let star = |s: &str| {
+        format!(
+            r#""points": [[0,0],[{s},{s}],[0,{s}],[{s},0]], "parametrization": "chordal", "k": 7"#
+        )
+    };
+    let small = solved(&format!("{{{}}}", star("1e-100")));
+    let one = solved(&format!("{{{}}}", star("1")));
+    let (e, e1) = (
+        small["energy"].as_f64().unwrap(),
+        one["energy"].as_f64().unwrap(),
+    );
+    assert!((e * 1e-100 - e1).abs() <= 1e-9 * e1, "{e} vs {e1}");
+    // Smoothing weights of 1 against that stiffness leave H + W singular to rounding: named.
+    let doc = format!(
+        r#"{{{}, "constraint": {{"type": "smoothing", "weights": [1, 1, 1, 1]}}}}"#,
+        star("1e-100")
+    );
+    assert_eq!(refused_field(&doc), "constraint.weights");
+    // A span of 1e-100 beside spans of 1 stays out of reach: the point is named.
+    let doc =
+        r#"{"points": [[0,0],[1e-100,1e-100],[1,1],[2,0]], "parametrization": "chordal", "k": 1}"#;
+    assert_eq!(refused_field(doc), "points[1]");
 }
 
 #[test]

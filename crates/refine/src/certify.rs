@@ -821,8 +821,11 @@ pub(crate) fn certify(
         gap_rel,
         run_off,
     ];
-    // (NaN anywhere makes the residual NaN: never accepted.)
-    let kkt = if parts.iter().any(|v| v.is_nan()) {
+    // (NaN anywhere makes the residual NaN: never accepted. So does a force scale that is not
+    // finite: rows of H that overflow (spans whose cubes leave the doubles, 1e-141 on chordal
+    // knots of data at 1e-140) made F and every vertex's rounding level infinite, and a curve
+    // 1800 times the optimum's energy read 0.)
+    let kkt = if parts.iter().any(|v| v.is_nan()) || !force.is_finite() {
         f64::NAN
     } else {
         parts.iter().fold(0.0f64, |a, &v| a.max(v))

@@ -37,9 +37,10 @@ impl Problem {
     /// [`Problem::solve`] of a validated problem.
     fn solve_validated(&self) -> Result<Refinement, crate::Error> {
         // Interpolation with natural ends is a direct solve (closed form or span condensation,
-        // `linear`), with no convergence test to protect: solved where the data are.
+        // `linear`), with no convergence test to protect: solved where the data are, not
+        // centred — but rescaled where the data or their spans are beyond `RESCALE_BEYOND`.
         if self.interpolates_with_natural_ends() {
-            return self.accept(algorithm::run(self)?);
+            return self.accept(run_rescaled(self)?);
         }
         let (n, d) = (self.points.len(), self.points.dim());
         let mut centroid = vec![0.0; d];
@@ -257,10 +258,12 @@ const RESCALE_DERIVATIVES_BEYOND: i32 = 40;
 /// [`algorithm::run`] for the exact solver on data or knots of extreme scale, solved on points,
 /// radii, offsets and derivative bounds scaled by powers of two that bring the data's extent
 /// and the mean data span near 1 (points by 2^−e, knots by 2^−f), and mapped back. It applies
-/// to balls and half-spaces beyond [`RESCALE_BEYOND`] (the extent or the span beyond it scaled,
+/// to data constraints alone beyond [`RESCALE_BEYOND`] (the extent or the span beyond it scaled,
 /// the other left) and to any problem with derivative constraints beyond
-/// [`RESCALE_DERIVATIVES_BEYOND`] (both scaled); interpolation and smoothing alone are solved
-/// where they are (they solved at every scale of the extent range).
+/// [`RESCALE_DERIVATIVES_BEYOND`] (both scaled). (Interpolation and smoothing were solved where
+/// they are until a sweep with chordal knots, spans ~ the extent, met data at 1e−140: the rows
+/// of H, ~1/h³ on spans of 1e−141, overflowed, and an interpolant with 1800 times the optimal
+/// energy came back with a certificate of 0; ROBUSTNESS.md item 39.)
 ///
 /// Why: a ball's multiplier is its force over its radius, w ∝ 1/h³ on spans h, and the forces
 /// scale with the points: on centripetal knots of data at 1e80 (spans ~1e40) or 1e−80 the
@@ -279,13 +282,8 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
     let derivatives = problem.has_derivative_constraints();
     let limit = if derivatives {
         RESCALE_DERIVATIVES_BEYOND
-    } else if matches!(
-        problem.constraint,
-        crate::Constraint::Balls(_) | crate::Constraint::HalfSpaces(_)
-    ) {
-        RESCALE_BEYOND
     } else {
-        return algorithm::run(problem);
+        RESCALE_BEYOND
     };
     if problem.solver != Solver::Exact {
         return algorithm::run(problem);

@@ -645,6 +645,56 @@ fn assert_scaled(label: &str, r: &Refinement, one: &Refinement, s: f64, l: f64) 
     assert_close(label, "energy", r.energy / s.sqrt(), one.energy, one.energy);
 }
 
+/// Interpolation and smoothing on chordal knots at the ends of the extent range (1e±140, spans
+/// ~ the extent) give the solution at scale 1, scaled: points ∝ s, E ∝ s^{-1} (chordal: E scales
+/// as s^{2−3e}), certified. Solved where they were, the rows of H (~1/h³ on spans of 1e−141)
+/// overflowed: at 1e−140 the interpolant came back with 1800 times the optimal energy and a
+/// certificate of 0 (ROBUSTNESS.md item 39); both are now rescaled by powers of two, and a
+/// certificate whose force scale is not finite is NaN, never accepted.
+#[test]
+fn chordal_interpolation_and_smoothing_at_the_ends_of_the_extent_range_scale_exactly() {
+    let base = noisy_star(30);
+    let n = base.len();
+    let l = extent(&base);
+    for (topo, smoothing, updates) in [Topology::Closed, Topology::Open]
+        .into_iter()
+        .flat_map(|t| [(t, false), (t, true)])
+        .flat_map(|(t, s)| [(t, s, 0), (t, s, 3)])
+    {
+        let solve = |s: f64| {
+            let q = Points::new(2, base.coords().iter().map(|x| x * s).collect()).unwrap();
+            let mut p = Problem::new(q)
+                .with_topology(topo)
+                .with_k(5)
+                .with_knot_iterations(updates)
+                .with_parametrization(Parametrization::Chordal);
+            if smoothing {
+                // Weights scale by s^{-3} (chordal) to keep the problem the same one.
+                p = p.with_constraint(Constraint::Smoothing(vec![10.0 / (s * s * s); n]));
+            }
+            p.solve().unwrap_or_else(|e| {
+                panic!("{topo:?} smoothing {smoothing} updates {updates} scale {s:e}: {e}")
+            })
+        };
+        let one = solve(1.0);
+        // (Smoothing's weights 10 s^{-3} are doubles only up to |log10 s| ≈ 102.)
+        let scales: &[f64] = if smoothing {
+            &[1e-100, 1e100]
+        } else {
+            &[1e-140, 1e-100, 1e100, 1e140]
+        };
+        for &s in scales {
+            let label = format!("{topo:?} smoothing {smoothing} updates {updates} scale {s:e}");
+            let r = solve(s);
+            assert!(r.kkt_residual <= KKT_GOOD, "{label}: {}", r.kkt_residual);
+            for (a, b) in r.points.coords().iter().zip(one.points.coords()) {
+                assert_close(&label, "points", a / s, *b, l);
+            }
+            assert_close(&label, "energy", r.energy * s, one.energy, one.energy);
+        }
+    }
+}
+
 /// Balls at the ends of the extent range (1e±100, 1e±140) give the solution at scale 1,
 /// scaled: points ∝ s, knots ∝ s^{1/2} (centripetal), E ∝ s^{1/2}, ball weights (force over
 /// radius, ∝ 1/h³) ∝ s^{−3/2}, the reactions of radius-0 points ∝ s^{−1/2} — each compared
