@@ -113,6 +113,20 @@ fn badly_scaled_spans_inside_the_range() {
         star("1e-100")
     );
     assert_eq!(refused_field(&doc), "constraint.weights");
+    // Weights of 1e300 on spans of 1e100 (w·h³ = 1e600: no solve can tell them from
+    // interpolated points; unscaled, E came back 0 with a certificate of 0) are refused naming
+    // the first; weights of 1 there are solved, with the interpolant's energy.
+    let diamond = |w: &str| {
+        format!(
+            r#"{{"points": [[0,0],[1e100,1e100],[0,2e100],[-1e100,1e100]], "closed": true, "parametrization": "chordal",
+                "knot_iterations": 0, "constraint": {{"type": "smoothing", "weights": [{w},{w},{w},{w}]}}}}"#
+        )
+    };
+    assert_eq!(refused_field(&diamond("1e300")), "constraint.weights[0]");
+    let e = solved(&diamond("1"))["energy"].as_f64().unwrap();
+    let unit = r#"{"points": [[0,0],[1,1],[0,2],[-1,1]], "closed": true, "parametrization": "chordal", "knot_iterations": 0}"#;
+    let e1 = solved(unit)["energy"].as_f64().unwrap();
+    assert!((e * 1e100 - e1).abs() <= 1e-9 * e1, "{e} vs {e1}");
     // A span of 1e-100 beside spans of 1 stays out of reach: the point is named.
     let doc =
         r#"{"points": [[0,0],[1e-100,1e-100],[1,1],[2,0]], "parametrization": "chordal", "k": 1}"#;

@@ -192,17 +192,17 @@ impl Problem {
             })
             .flatten()
         {
-            let field = match &self.constraint {
-                crate::Constraint::Balls(_) => "radii",
-                crate::Constraint::HalfSpaces(_) => "sets",
-                crate::Constraint::Smoothing(_) => "weights",
-                crate::Constraint::Interpolate => "points",
+            let (field, reason) = match &self.constraint {
+                crate::Constraint::Balls(_) => ("radii", "the multiplier of this point's constraint overflows (a ball's force over a radius too small to tell from 0 against the data: give that point radius 0 to interpolate it exactly, or a larger radius)"),
+                crate::Constraint::HalfSpaces(_) => ("sets", "the multiplier of this point's half-spaces overflows (the force that holds the point in them is beyond the doubles against the data's scale); loosen them"),
+                crate::Constraint::Smoothing(_) => ("weights", "this point's weight overflows against the curve's stiffness (weights act against ~1/h^3 of the parameter spans h); use a smaller weight, or interpolate the point"),
+                crate::Constraint::Interpolate => ("points", "the reaction at this point overflows (the data's slopes against their parameter spans are beyond the doubles); rescale the data or use another parametrization"),
             };
             return Err(crate::Error::InvalidValue {
                 field,
                 index,
                 value: f64::INFINITY,
-                reason: "the multiplier of this point's constraint overflows (a ball's force over a radius too small to tell from 0 against the data: give that point radius 0 to interpolate it exactly, or a larger radius)",
+                reason,
             });
         }
         // Knots too unequal for the certificate to vouch for a conic answer (balls with a
@@ -312,6 +312,7 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
             if f.abs() > limit { f } else { 0 },
         )
     };
+    weight_beyond_stiffness(problem, f)?;
     let mut scaled = problem.clone();
     scaled
         .points
@@ -355,6 +356,30 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .collect::<Vec<Vec<f64>>>()
         .into();
     Ok(r)
+}
+
+/// A smoothing weight that overflows when scaled with knots of 2^−f (by 2^(3f),
+/// [`crate::constraint::Kind::rescale`]): w·h³ beyond the doubles for spans h, a weight that no
+/// solve can tell from an interpolated point (1e300 on spans of 1e100). Solved unscaled, such a
+/// problem came back with the interpolant's points but E = 0 (its divided differences
+/// underflowed) and a certificate of 0; it is refused naming the weight. (Weights that scale
+/// to 0 are left to the solve, which refuses H + W singular naming them.)
+fn weight_beyond_stiffness(problem: &Problem, f: i32) -> Result<(), crate::Error> {
+    if let crate::Constraint::Smoothing(w) = &problem.constraint {
+        if let Some((index, &value)) = w
+            .iter()
+            .enumerate()
+            .find(|(_, &w)| !times_power_of_two(w, 3 * f).is_finite())
+        {
+            return Err(crate::Error::InvalidValue {
+                field: "weights",
+                index,
+                value,
+                reason: "this weight is beyond the doubles against the curve's stiffness (w·h^3 for the parameter spans h exceeds 1e308): no solve can tell it from an interpolated point; interpolate the point (constraint interpolate, or a ball of radius 0) or use a smaller weight",
+            });
+        }
+    }
+    Ok(())
 }
 
 /// x·2^k, exact unless the result over- or underflows (in steps: 2^k alone need not be
