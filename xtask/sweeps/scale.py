@@ -126,7 +126,7 @@ for closed in (True, False):
                 # (Nor one whose multipliers would not be: a ball's weight s^(-3a), 1e420 at
                 # 1e-140 on chordal knots, is refused as overflowing, rightly.)
                 needed = [1-A, 2-3*A] + ([-3*A] if kind in ("smooth", "tan_smooth") else [])
-                needed += [pk for pk in set(powers(kind) or [])]
+                needed += powers(kind) or []
                 if not all(representable(s, a) for a in needed): continue
                 p=make(s, kind); p["knot_iterations"]=ki
                 r,e=run(p); tot+=1

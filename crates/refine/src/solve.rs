@@ -312,7 +312,6 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
             if f.abs() > limit { f } else { 0 },
         )
     };
-    weight_beyond_stiffness(problem, f)?;
     let mut scaled = problem.clone();
     scaled
         .points
@@ -321,7 +320,7 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .for_each(|x| *x = times_power_of_two(*x, -e));
     // Each kind scales its own data (radii, offsets, weights, derivative bounds).
     for kind in problem.kinds() {
-        kind.rescale(-e, -f, &mut scaled);
+        kind.rescale(-e, -f, &mut scaled)?;
     }
     let t_scaled: Vec<f64> = t.iter().map(|&x| times_power_of_two(x, -f)).collect();
     // (Given knots stay given, scaled: a failed split then names them, else the points.)
@@ -356,30 +355,6 @@ fn run_rescaled(problem: &Problem) -> Result<Refinement, crate::Error> {
         .collect::<Vec<Vec<f64>>>()
         .into();
     Ok(r)
-}
-
-/// A smoothing weight that overflows when scaled with knots of 2^−f (by 2^(3f),
-/// [`crate::constraint::Kind::rescale`]): w·h³ beyond the doubles for spans h, a weight that no
-/// solve can tell from an interpolated point (1e300 on spans of 1e100). Solved unscaled, such a
-/// problem came back with the interpolant's points but E = 0 (its divided differences
-/// underflowed) and a certificate of 0; it is refused naming the weight. (Weights that scale
-/// to 0 are left to the solve, which refuses H + W singular naming them.)
-fn weight_beyond_stiffness(problem: &Problem, f: i32) -> Result<(), crate::Error> {
-    if let crate::Constraint::Smoothing(w) = &problem.constraint {
-        if let Some((index, &value)) = w
-            .iter()
-            .enumerate()
-            .find(|(_, &w)| !times_power_of_two(w, 3 * f).is_finite())
-        {
-            return Err(crate::Error::InvalidValue {
-                field: "weights",
-                index,
-                value,
-                reason: "this weight is beyond the doubles against the curve's stiffness (w·h^3 for the parameter spans h exceeds 1e308): no solve can tell it from an interpolated point; interpolate the point (constraint interpolate, or a ball of radius 0) or use a smaller weight",
-            });
-        }
-    }
-    Ok(())
 }
 
 /// x·2^k, exact unless the result over- or underflows (in steps: 2^k alone need not be

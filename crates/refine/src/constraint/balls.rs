@@ -135,9 +135,10 @@ impl Kind for Balls<'_> {
         CommonPoint::Sets(Box::new(BallSets { radii: self.0, q }))
     }
 
-    fn rescale(&self, points: i32, _: i32, into: &mut Problem) {
+    fn rescale(&self, points: i32, _: i32, into: &mut Problem) -> Result<(), Error> {
         let radii = self.0.iter().map(|&r| times_power_of_two(r, points));
         into.constraint = crate::Constraint::Balls(radii.collect());
+        Ok(())
     }
 
     /// A ball's weight is its force over its radius; radius 0 reports the reaction.

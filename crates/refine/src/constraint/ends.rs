@@ -88,7 +88,7 @@ impl Kind for Ends<'_> {
     }
 
     /// The end derivatives (and a near-clamped end's radius) by 2^(points − knots).
-    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) {
+    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) -> Result<(), Error> {
         let k = points - knots;
         let up = |v: &[f64]| v.iter().map(|&x| times_power_of_two(x, k)).collect();
         into.boundary = match self.0 {
@@ -103,6 +103,7 @@ impl Kind for Ends<'_> {
                 radius: times_power_of_two(*radius, k),
             },
         };
+        Ok(())
     }
 }
 

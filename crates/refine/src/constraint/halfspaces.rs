@@ -172,13 +172,14 @@ impl Kind for HalfSpaces<'_> {
         into.constraint = Constraint::HalfSpaces(moved);
     }
 
-    fn rescale(&self, points: i32, _: i32, into: &mut Problem) {
+    fn rescale(&self, points: i32, _: i32, into: &mut Problem) -> Result<(), Error> {
         let scaled = self
             .0
             .iter()
             .map(|set| super::scaled_halfspaces(set, points))
             .collect();
         into.constraint = Constraint::HalfSpaces(scaled);
+        Ok(())
     }
 }
 

@@ -380,8 +380,13 @@ pub(crate) trait Kind {
     /// `into`, so that the problem stays the same one (`run_rescaled` in `solve.rs`): lengths
     /// (radii, offsets) by 2^points, derivative bounds by 2^(points − knots), smoothing weights
     /// by 2^(−3·knots) (E scales by 2^(2·points − 3·knots)); normals and wedges as given.
-    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) {
+    ///
+    /// # Errors
+    /// An entry whose scaled value leaves the doubles, named (a smoothing weight whose w·h³
+    /// exceeds them).
+    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) -> Result<(), Error> {
         let _ = (points, knots, into);
+        Ok(())
     }
 
     /// The power of two the multipliers of data point `i` scale by under [`Kind::rescale`]'s

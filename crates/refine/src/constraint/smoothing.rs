@@ -81,9 +81,27 @@ impl Kind for Smoothing<'_> {
         }
     }
 
-    fn rescale(&self, _: i32, knots: i32, into: &mut Problem) {
-        let weights = self.0.iter().map(|&w| times_power_of_two(w, -3 * knots));
-        into.constraint = crate::Constraint::Smoothing(weights.collect());
+    /// A weight whose scaled value overflows — w·h³ beyond the doubles for spans h, which no
+    /// solve can tell from an interpolated point (1e300 on spans of 1e100) — is refused naming
+    /// it. Solved unscaled, such a problem came back with the interpolant's points but E = 0 (its
+    /// divided differences underflowed) and a certificate of 0 (ROBUSTNESS.md item 39). (Weights
+    /// that scale to 0 are left to the solve, which refuses H + W singular naming them.)
+    fn rescale(&self, _: i32, knots: i32, into: &mut Problem) -> Result<(), Error> {
+        let weights: Vec<f64> = self
+            .0
+            .iter()
+            .map(|&w| times_power_of_two(w, -3 * knots))
+            .collect();
+        if let Some(index) = weights.iter().position(|w| !w.is_finite()) {
+            return Err(Error::InvalidValue {
+                field: "weights",
+                index,
+                value: self.0[index],
+                reason: "this weight is beyond the doubles against the curve's stiffness (w·h^3 for the parameter spans h exceeds 1e308): no solve can tell it from an interpolated point; interpolate the point (constraint interpolate, or a ball of radius 0) or use a smaller weight",
+            });
+        }
+        into.constraint = crate::Constraint::Smoothing(weights);
+        Ok(())
     }
 
     /// The given weights (scaled as [`Kind::rescale`] scales them).

@@ -125,10 +125,11 @@ impl Kind for Tangents<'_> {
         }
     }
 
-    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) {
+    fn rescale(&self, points: i32, knots: i32, into: &mut Problem) -> Result<(), Error> {
         let slope = points - knots;
         let scaled = self.0.iter().map(|t| t.as_ref().map(|t| scaled(t, slope)));
         into.tangents = Some(scaled.collect());
+        Ok(())
     }
 }
 
