@@ -548,5 +548,32 @@ fn stage_loop(
             tol,
         ),
     };
+    // A smoothing solve with one step of refinement that its certificate refuses (a cluster of
+    // very short spans: `linear::linear`) is solved again, refined until its corrections are at
+    // rounding. Only the stage that is returned: the stages before a knot update are not
+    // certified, and this is where one step's answer is judged.
+    let refuted = cert.kkt_residual.is_nan() || cert.kkt_residual > problem.options.accept_kkt;
+    if refuted
+        && problem.solver == Solver::Exact
+        && matches!(constraint, Constraint::Smoothing(_))
+        && fp.kinds().iter().all(|k| k.linear())
+    {
+        if let Ok(r) = crate::linear::solve(&fp, crate::linear::CONVERGED_STEPS) {
+            let (c, m) = certify(
+                fp.knots,
+                &r.points,
+                q,
+                data_vertex,
+                &fp.kinds(),
+                r.multipliers,
+                &r.derivative,
+                problem.derivative,
+                tol,
+            );
+            if c.kkt_residual < cert.kkt_residual || cert.kkt_residual.is_nan() {
+                return Ok((r.points, m, c));
+            }
+        }
+    }
     Ok((s.points, mult, cert))
 }

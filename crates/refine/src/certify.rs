@@ -32,6 +32,11 @@
 //!   the stencil, which a zero target lacks));
 //! - the **duality gap** Σ (multiplier × slack) over E (it bounds the relative excess E(p) − E*
 //!   of a feasible p over the optimum; E* = 0 is measured against the rounding level ε F L);
+//! - the **arc bound** (`crate::arcs`): a lower bound on the objective's excess over its optimum
+//!   from the net force on runs of vertices, measured across the spans at their ends, over the
+//!   objective (E, plus smoothing's penalty): the per-vertex floors below forgive each stiff row
+//!   its rounding, and on a cluster of very short spans those roundings can add up to a net force
+//!   on the cluster that no vertex shows (ROBUSTNESS.md item 40);
 //! - **run-off**: 0 while the curve's extent about the data's centroid is at most [`RUN_OFF`]
 //!   (1e6) times L_data + V·T — V the largest size of a derivative constraint's set (|centre| +
 //!   radius, |offset| / |normal|, an end derivative; 0 without derivative constraints, and for a
@@ -143,6 +148,12 @@ pub(crate) struct Pass {
     pub extent: f64,
     /// max_j |p_j|_∞, the size of the coordinates (the rounding level's scale).
     pub magnitude: f64,
+    /// Σ |Hp| over the vertices that are not data vertices (every coordinate), when the pass was
+    /// given them: the arc test's gate.
+    pub free_sum: f64,
+    /// The largest 1/k_j over the spans, k_j the stiffness of an arc's end on span j
+    /// ([`crate::arcs`]): the gate of the arc test.
+    pub compliance: f64,
 }
 
 /// Hp = 2 jmp (divided differences, module docs), E, ‖H‖_∞, the extent about `center` and the
@@ -227,6 +238,8 @@ impl Pass {
         self.h_norm = self.h_norm.max(other.h_norm);
         self.extent = self.extent.max(other.extent);
         self.magnitude = self.magnitude.max(other.magnitude);
+        self.compliance = self.compliance.max(other.compliance);
+        self.free_sum += other.free_sum;
     }
 }
 
@@ -537,6 +550,22 @@ fn sweep(
                 );
             }
             raise_abs(&mut out.h_norm, sums, 0.0);
+            // The compliance 1/k of an arc's end on each own span (crate::arcs):
+            // k = 2/h² (1/(h_{j−1} + h_j) + 1/(h_j + h_{j+1})), 0 where no row straddles it.
+            let (ih, iw0, iw1) = (&bl.ih[2..k + 2], &bl.iw[2..k + 2], &bl.iw[3..k + 3]);
+            // (The least positive k as the largest −k, one reciprocal per block.)
+            let mut softest = f64::NEG_INFINITY;
+            raise_over(&mut softest, k, |j| {
+                let stiffness = 2.0 * ih[j] * ih[j] * (iw0[j] + iw1[j]);
+                if stiffness > 0.0 {
+                    -stiffness
+                } else {
+                    f64::NEG_INFINITY
+                }
+            });
+            if softest > f64::NEG_INFINITY {
+                out.compliance = out.compliance.max(-1.0 / softest);
+            }
         }
         // The block's data vertices (when Hp is kept only there).
         // (At most m of them: the data vertices are strictly increasing.)
@@ -616,6 +645,7 @@ fn sweep(
                         v[i - a] = 0.0;
                     }
                     raise_abs(&mut out.free_stat, v, 0.0);
+                    out.free_sum += v.iter().map(|x| x.abs()).sum::<f64>();
                     let rows = &bl.rows[..m];
                     raise_over(&mut out.free_excess, m, |j| {
                         (v[j].abs() - local_rounding(rows[j], local_magnitude)).max(0.0)
@@ -639,6 +669,29 @@ fn sweep(
         a = b;
     }
     out
+}
+
+/// The arc test runs where a bound on it from the pass's residuals exceeds this fraction of E
+/// (a thousandth of the acceptance: skipped, it could not have refused).
+const ARC_GATE: f64 = 1e-12;
+
+/// The most free vertices between two consecutive data vertices (open: also before the first and
+/// after the last; closed: across the wrap), `data_vertex` strictly increasing.
+fn longest_run(data_vertex: &[usize], vertices: usize, closed: bool) -> usize {
+    let (Some(&first), Some(&last)) = (data_vertex.first(), data_vertex.last()) else {
+        return vertices;
+    };
+    let inner = data_vertex
+        .windows(2)
+        .map(|w| w[1] - w[0] - 1)
+        .max()
+        .unwrap_or(0);
+    let ends = if closed {
+        vertices - 1 - last + first
+    } else {
+        first.max(vertices - 1 - last)
+    };
+    inner.max(ends)
 }
 
 /// The run-off term (module docs): 0 while `extent` is at most [`RUN_OFF`] × (`data_length` +
@@ -745,6 +798,8 @@ pub(crate) fn certify(
     // and the part of it beyond each vertex's own rounding level (module docs, "the floor").
     let rounding_of = |row: f64| local_rounding(row + terms.stiffness, pass.magnitude);
     let mut excess = 0.0f64;
+    // Σ over the data vertices of their stationarity residual (the arc test's gate).
+    let mut data_sum = 0.0f64;
     let stat = if compact {
         let mut stat = pass.free_stat;
         excess = pass.free_excess;
@@ -758,6 +813,7 @@ pub(crate) fn certify(
             for (h, f) in hi.iter().zip(fi) {
                 raise(&mut m, (h + f).abs());
             }
+            data_sum += hi.iter().zip(fi).map(|(h, f)| (h + f).abs()).sum::<f64>();
             raise(&mut stat, (m - r[i]).max(0.0));
             raise(
                 &mut excess,
@@ -804,6 +860,47 @@ pub(crate) fn certify(
             .energy
             .max(f64::EPSILON * force * length)
             .max(f64::MIN_POSITIVE);
+    // The arc test (crate::arcs): a lower bound on the objective's excess over its optimum
+    // from the net force on runs of vertices, relative to the objective (E, plus smoothing's
+    // penalty) as the gap is to E. Made where no derivative constraint acts (the compact pass),
+    // and only where a bound from the residuals the pass has seen could reach [`ARC_GATE`] of
+    // it: any arc's net force is at most the sum of its vertices' residuals, and its stiffness
+    // at least the least k of a span (the pass's compliance).
+    let energy_scale = (pass.energy + terms.penalty)
+        .max(f64::EPSILON * force * length)
+        .max(f64::MIN_POSITIVE);
+    let arc = if compact {
+        let weights = terms.weights.as_deref();
+        // (Σ over an arc's vertices and coordinates of |residual| bounds its net force in every
+        // coordinate, and the sum of squares that the bound takes.)
+        let (mut sum, translation) = match weights {
+            None => (
+                (longest_run(data_vertex, nv, knots.is_closed()) * d) as f64 * pass.free_stat,
+                0.0,
+            ),
+            Some(w) => (
+                pass.free_sum + data_sum,
+                crate::arcs::translation(&terms.force_data, w, d),
+            ),
+        };
+        sum *= 1.0 + 1e-6;
+        let bound = sum * sum * pass.compliance / 2.0;
+        let runs = if bound > ARC_GATE * energy_scale {
+            crate::arcs::excess(
+                knots,
+                p,
+                data_vertex,
+                &terms.force_data,
+                weights,
+                pass.magnitude,
+            )
+        } else {
+            0.0
+        };
+        runs.max(translation) / energy_scale
+    } else {
+        0.0
+    };
     let values = knots.values();
     let span = values[values.len() - 1] - values[0];
     let run_off = run_off(pass.extent, data_length, terms.reach, span);
@@ -819,6 +916,7 @@ pub(crate) fn certify(
         terms.primal.max(0.0) / data_length,
         terms.primal_rel,
         gap_rel,
+        arc,
         run_off,
     ];
     // (NaN anywhere makes the residual NaN: never accepted. So does a force scale that is not

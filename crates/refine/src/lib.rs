@@ -120,6 +120,7 @@
 //! ```
 
 mod algorithm;
+mod arcs;
 mod backend;
 mod certify;
 mod conic_problem;

@@ -25,7 +25,7 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
     }
     let n = fp.q.len();
     match fp.constraint {
-        Constraint::Interpolate | Constraint::Smoothing(_) => crate::linear::solve(fp),
+        Constraint::Interpolate | Constraint::Smoothing(_) => crate::linear::solve(fp, 1),
         Constraint::Balls(r) => {
             let fixed: Vec<bool> = r.iter().map(|&e| e == 0.0).collect();
             if fixed.iter().all(|&f| f) {
@@ -37,7 +37,7 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
             let mut w: Vec<f64> = fixed.iter().map(|&f| if f { 0.0 } else { 1.0 }).collect();
             let d = fp.q.dim();
             let iters = fp.problem.paper_iterations.max(1);
-            let mut p = crate::linear::linear(fp, &fixed, &w)?;
+            let mut p = crate::linear::linear(fp, &fixed, &w, 1)?;
             for _ in 1..iters {
                 for i in 0..n {
                     if !fixed[i] {
@@ -46,7 +46,7 @@ pub(crate) fn paper(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
                         w[i] = (w[i] * gap / r[i]).max(floor);
                     }
                 }
-                p = crate::linear::linear(fp, &fixed, &w)?;
+                p = crate::linear::linear(fp, &fixed, &w, 1)?;
             }
             let hp = operator::apply_h(fp.knots, &p);
             let multipliers = (0..n)

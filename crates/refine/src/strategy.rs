@@ -11,7 +11,7 @@
 //!
 //! | # | entry | applies to | why |
 //! |---|---|---|---|
-//! | 1 | linear solve | interpolation, smoothing, balls of radius 0; no derivative constraint | a linear system: one banded solve, exact to rounding (certified with the stage) |
+//! | 1 | linear solve | interpolation, smoothing, balls of radius 0; no derivative constraint | a linear system: one banded solve and a step of iterative refinement, exact to rounding where the spans are even (certified with the stage; a smoothing stage refused is solved again with refinement to rounding, `linear::CONVERGED_STEPS`) |
 //! | 2 | linear solve with clamped ends | interpolation, smoothing, balls of radius 0 with clamped ends and no tangent set (`Problem::linear_clamped_ends`), first stage | an equality-constrained quadratic: a bordered system ([`crate::linear::clamped`]), one banded factorization and three solves refined in difference form, or for long interpolations interpolation's own solve and two on 64 spans at the ends — where the interior-point method took a solve per iteration and was held to its size limit |
 //! | 3 | condensed working set | data-vertex sets alone (balls, half-spaces): no derivative constraint, enough constrained points | only the constrained data vertices are variables (O(n) per iteration), on a working set of the active ones; an answer not accepted goes on from its last iterate to the strict tolerance of 4 (starting 4 over took half of a solve with points in boxes of half-spaces) |
 //! | 4 | condensed working set (strict) | as 3 | an active set read off at the default tolerance is sometimes not settled enough for the polish |
@@ -51,7 +51,7 @@ pub(crate) const EXACT: [Strategy; 6] = [
         applies: |fp| fp.kinds().iter().all(|k| k.linear()),
         why: "interpolation and smoothing are linear systems: one banded solve, exact to rounding",
         exact_by_construction: true,
-        run: |fp, _| crate::linear::solve(fp),
+        run: |fp, _| crate::linear::solve(fp, 1),
     },
     Strategy {
         name: "linear solve with clamped ends",

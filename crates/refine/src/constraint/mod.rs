@@ -257,6 +257,12 @@ pub(crate) struct Terms {
     /// per data point (n): a stiff smoothing weight w times u |p_{i_k}| — the stationarity at
     /// that vertex is judged beyond it (module docs of [`crate::certify`]).
     pub rounding_data: Vec<f64>,
+    /// A penalty kind's weight at each data vertex (smoothing), whose force is part of the
+    /// objective's gradient; `None`: the data vertices are constrained (the arc test of
+    /// [`crate::arcs`] ends its arcs there).
+    pub weights: Option<Vec<f64>>,
+    /// A penalty kind's part of the objective, ½ Σ w_i |p_{i_k} − q_i|² (smoothing), beside E.
+    pub penalty: f64,
     /// Whether each data point's constraint is active.
     pub active: Vec<bool>,
     /// Data points that Corollary 3.3's inactive jumps do not concern (smoothing: a penalty,
@@ -282,6 +288,8 @@ impl Terms {
             gap: 0.0,
             stiffness: 0.0,
             rounding_data: vec![0.0; n],
+            weights: None,
+            penalty: 0.0,
             active: vec![false; n],
             no_jump: vec![false; n],
             next_dual: 0,

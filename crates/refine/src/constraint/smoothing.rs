@@ -63,11 +63,13 @@ impl Kind for Smoothing<'_> {
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
         let d = at.q.dim();
+        terms.weights = Some(self.0.to_vec());
         for (i, &v) in at.data_vertex.iter().enumerate() {
             let w = self.0[i];
             let (pv, qi) = (at.p.point(v), at.q.point(i));
             for c in 0..d {
                 terms.force_data[i * d + c] += w * (pv[c] - qi[c]);
+                terms.penalty += 0.5 * w * (pv[c] - qi[c]).powi(2);
             }
             // p_{i_k} is known to half an ulp of the larger of its coordinates and the length
             // scale (the solve runs on centred data and translates back): a weight w turns that
