@@ -533,20 +533,23 @@ fn stage_loop(
         warm: None,
         options: &problem.options,
     };
-    // (The exact solver's certificate, when it computed one to accept the points, is this one.)
-    let (cert, mult) = match s.certificate {
-        Some(c) if problem.solver == Solver::Exact => c,
-        _ => certify(
+    let judge = |points: &Points, multipliers, derivative: &[(Vec<f64>, Vec<f64>)]| {
+        certify(
             fp.knots,
-            &s.points,
+            points,
             q,
             data_vertex,
             &fp.kinds(),
-            s.multipliers,
-            &s.derivative,
+            multipliers,
+            derivative,
             problem.derivative,
             tol,
-        ),
+        )
+    };
+    // (The exact solver's certificate, when it computed one to accept the points, is this one.)
+    let (cert, mult) = match s.certificate {
+        Some(c) if problem.solver == Solver::Exact => c,
+        _ => judge(&s.points, s.multipliers, &s.derivative),
     };
     // A smoothing solve with one step of refinement that its certificate refuses (a cluster of
     // very short spans: `linear::linear`) is solved again, refined until its corrections are at
@@ -559,17 +562,7 @@ fn stage_loop(
         && fp.kinds().iter().all(|k| k.linear())
     {
         if let Ok(r) = crate::linear::solve(&fp, crate::linear::CONVERGED_STEPS) {
-            let (c, m) = certify(
-                fp.knots,
-                &r.points,
-                q,
-                data_vertex,
-                &fp.kinds(),
-                r.multipliers,
-                &r.derivative,
-                problem.derivative,
-                tol,
-            );
+            let (c, m) = judge(&r.points, r.multipliers, &r.derivative);
             if c.kkt_residual < cert.kkt_residual || cert.kkt_residual.is_nan() {
                 return Ok((r.points, m, c));
             }

@@ -116,23 +116,62 @@ pub(crate) fn excess(
 /// The bound of the whole curve's translation under a penalty kind (smoothing): the rows of A
 /// annihilate constants, so N = Σ f over the data vertices and K = Σ w.
 pub(crate) fn translation(forces: &[f64], weights: &[f64], d: usize) -> f64 {
-    let weight: f64 = weights.iter().map(|w| w.max(0.0)).sum();
-    if weight.is_nan() || weight <= 0.0 || d == 0 {
+    if d == 0 {
         return 0.0;
     }
-    let mut sum = vec![(0.0f64, 0.0f64); d];
-    let mut floor = 0.0f64;
-    for f in forces.chunks_exact(d) {
-        for (s, &x) in sum.iter_mut().zip(f) {
+    let mut all = Accumulated::new(d);
+    for (f, &w) in forces.chunks_exact(d).zip(weights) {
+        all.add(f, w);
+    }
+    if all.weight.is_nan() || all.weight <= 0.0 {
+        return 0.0;
+    }
+    let n2: f64 = all
+        .sum
+        .iter()
+        .map(|s| ((s.0 + s.1).abs() - all.floor).max(0.0).powi(2))
+        .sum();
+    n2 / (2.0 * all.weight)
+}
+
+/// A penalty kind's forces summed over data vertices (compensated, Neumaier), with the rounding
+/// allowed the sum and the weights' sum.
+struct Accumulated {
+    sum: Vec<(f64, f64)>,
+    floor: f64,
+    weight: f64,
+}
+
+impl Accumulated {
+    fn new(d: usize) -> Self {
+        Accumulated {
+            sum: vec![(0.0, 0.0); d],
+            floor: 0.0,
+            weight: 0.0,
+        }
+    }
+
+    fn clear(&mut self) {
+        self.sum.iter_mut().for_each(|s| *s = (0.0, 0.0));
+        (self.floor, self.weight) = (0.0, 0.0);
+    }
+
+    /// Adds one data vertex's force `f` (d) and weight `w`; the floor grows by 16 ε |f|_∞.
+    fn add(&mut self, f: &[f64], w: f64) {
+        for (s, &x) in self.sum.iter_mut().zip(f) {
             neumaier(s, x);
         }
-        floor += force_floor(f);
+        self.floor +=
+            ROUNDING_MULTIPLE * f64::EPSILON * f.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        self.weight += w.max(0.0);
     }
-    let n2: f64 = sum
-        .iter()
-        .map(|s| ((s.0 + s.1).abs() - floor).max(0.0).powi(2))
-        .sum();
-    n2 / (2.0 * weight)
+
+    /// u += F.
+    fn add_to(&self, u: &mut [f64]) {
+        for (uc, s) in u.iter_mut().zip(&self.sum) {
+            *uc += s.0 + s.1;
+        }
+    }
 }
 
 /// s += x with Neumaier's compensation (the sum is s.0 + s.1).
@@ -164,6 +203,20 @@ struct Sums<'a> {
     data_vertex: &'a [usize],
     forces: &'a [f64],
     weights: &'a [f64],
+}
+
+impl Sums<'_> {
+    /// Adds the data vertices from the `from`-th on that are at most vertex `j` into `acc`;
+    /// returns the index of the first one not added.
+    fn add_up_to(&self, j: usize, from: usize, acc: &mut Accumulated) -> usize {
+        let d = acc.sum.len();
+        let mut i = from;
+        while i < self.data_vertex.len() && self.data_vertex[i] <= j {
+            acc.add(&self.forces[i * d..(i + 1) * d], self.weights[i]);
+            i += 1;
+        }
+        i
+    }
 }
 
 /// The cuts of one run, in order: a leading cut when given (`Some(None)`: the virtual cut
@@ -201,7 +254,9 @@ struct Scratch {
     c1: Vec<f64>,
     ref_u: Vec<f64>,
     u: Vec<f64>,
-    sum: Vec<(f64, f64)>,
+    /// What is summed up to the reference cut, and up to the current cut of the stream.
+    reference: Accumulated,
+    running: Accumulated,
     /// The vertex whose second difference (and e) `c1` holds, from the last cut.
     carried: Option<(usize, f64)>,
 }
@@ -214,15 +269,10 @@ impl Scratch {
             c1: vec![0.0; d],
             ref_u: vec![0.0; d],
             u: vec![0.0; d],
-            sum: vec![(0.0, 0.0); d],
+            reference: Accumulated::new(d),
+            running: Accumulated::new(d),
         }
     }
-}
-
-/// What is summed up to a cut: F (d, compensated), its floor and Σ w.
-struct Summed {
-    floor: f64,
-    weight: f64,
 }
 
 impl Curve<'_> {
@@ -327,7 +377,6 @@ impl Curve<'_> {
         if len < 3 {
             return 0.0;
         }
-        let d = self.d;
         let mut r = 0;
         let mut k_r = f64::INFINITY;
         for i in 0..len {
@@ -339,43 +388,37 @@ impl Curve<'_> {
         // The reference cut's 2T + F, ρ and sums.
         let mut ref_u = std::mem::take(&mut s.ref_u);
         let rho_r = self.cut(cuts.at(r), &mut ref_u, s);
-        let summed_r = self.summed_at(sums, r, cuts, &mut ref_u, s);
+        s.reference.clear();
+        if let (Some(sm), Some(j), true) = (sums, cuts.at(r), r > 0) {
+            sm.add_up_to(j, 0, &mut s.reference);
+            s.reference.add_to(&mut ref_u);
+        }
         let whole = sums.is_some() && closed;
         let mut worst = 0.0f64;
         let mut u = std::mem::take(&mut s.u);
         // Running sums of the whole-curve run (positions 1 … are cuts 0 … N − 1).
-        for sum in &mut s.sum {
-            *sum = (0.0, 0.0);
-        }
-        let (mut floor, mut weight, mut next) = (0.0f64, 0.0f64, 0usize);
+        s.running.clear();
+        let mut next = 0;
         for b in 0..len {
             let j = cuts.at(b);
             if let (Some(sm), Some(j), true) = (sums, j, b > 0) {
-                while next < sm.data_vertex.len() && sm.data_vertex[next] <= j {
-                    let f = &sm.forces[next * d..(next + 1) * d];
-                    for (acc, &x) in s.sum.iter_mut().zip(f) {
-                        neumaier(acc, x);
-                    }
-                    floor += force_floor(f);
-                    weight += sm.weights[next].max(0.0);
-                    next += 1;
-                }
+                next = sm.add_up_to(j, next, &mut s.running);
             }
             let gap = b.abs_diff(r);
             if gap < 2 || (whole && gap + 2 > self.n) {
                 continue;
             }
-            let k = self.stiffness(j) + k_r + (weight - summed_r.weight).abs();
+            let (running, reference) = (&s.running, &s.reference);
+            let k = self.stiffness(j) + k_r + (running.weight - reference.weight).abs();
             if k.is_nan() || k <= 0.0 {
                 continue;
             }
+            let floors = (running.floor - reference.floor).abs();
             let rho = self.cut(j, &mut u, s);
             if sums.is_some() && b > 0 {
-                for (uc, acc) in u.iter_mut().zip(&s.sum) {
-                    *uc += acc.0 + acc.1;
-                }
+                s.running.add_to(&mut u);
             }
-            let margin = rho + rho_r + (floor - summed_r.floor).abs();
+            let margin = rho + rho_r + floors;
             let n2: f64 = u
                 .iter()
                 .zip(&ref_u)
@@ -387,57 +430,41 @@ impl Curve<'_> {
         s.u = u;
         worst
     }
-
-    /// What is summed up to position `at` of the whole-curve run (nothing at position 0 or
-    /// without `sums`), F added into `u`.
-    fn summed_at(
-        &self,
-        sums: Option<&Sums<'_>>,
-        at: usize,
-        cuts: &RunCuts,
-        u: &mut [f64],
-        s: &mut Scratch,
-    ) -> Summed {
-        let (Some(sm), Some(j), true) = (sums, cuts.at(at), at > 0) else {
-            return Summed {
-                floor: 0.0,
-                weight: 0.0,
-            };
-        };
-        let d = self.d;
-        for acc in &mut s.sum {
-            *acc = (0.0, 0.0);
-        }
-        let (mut floor, mut weight) = (0.0f64, 0.0f64);
-        for (i, &v) in sm
-            .data_vertex
-            .iter()
-            .enumerate()
-            .take_while(|(_, &v)| v <= j)
-        {
-            let _ = v;
-            let f = &sm.forces[i * d..(i + 1) * d];
-            for (acc, &x) in s.sum.iter_mut().zip(f) {
-                neumaier(acc, x);
-            }
-            floor += force_floor(f);
-            weight += sm.weights[i].max(0.0);
-        }
-        for (uc, acc) in u.iter_mut().zip(&s.sum) {
-            *uc += acc.0 + acc.1;
-        }
-        Summed { floor, weight }
-    }
-}
-
-/// The rounding allowed one force in a sum: 16 ε |f|_∞.
-fn force_floor(f: &[f64]) -> f64 {
-    ROUNDING_MULTIPLE * f64::EPSILON * f.iter().fold(0.0f64, |a, x| a.max(x.abs()))
 }
 
 #[cfg(test)]
 mod tests {
     use divdiff::{Knots, Points, Topology};
+
+    /// The curve's second differences are divdiff's (`second_differences`, the definition the
+    /// certificate's pass follows too), open and closed, ends included; computed here from the
+    /// shared reciprocals one vertex at a time instead of into an N × d array.
+    #[test]
+    fn the_second_differences_are_divdiffs() {
+        let mut unif = crate::par::uniform_stream(5);
+        for topo in [Topology::Open, Topology::Closed] {
+            let (n, d) = (9usize, 3usize);
+            let spans = if topo == Topology::Closed { n } else { n - 1 };
+            let mut t = vec![0.0];
+            for j in 0..spans {
+                t.push(t[j] + 1e-3 + unif());
+            }
+            let knots = Knots::new(topo, t).unwrap();
+            let p = Points::new(d, (0..n * d).map(|_| unif() - 0.5).collect()).unwrap();
+            let want = divdiff::second_differences(&knots, &p).unwrap();
+            let curve = super::Curve::new(&knots, &p, 0.0);
+            let mut c = vec![0.0; d];
+            for i in 0..n {
+                curve.second(i, &mut c);
+                for (a, b) in c.iter().zip(want.point(i)) {
+                    assert!(
+                        (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+                        "{topo:?} {i}: {a} {b}"
+                    );
+                }
+            }
+        }
+    }
 
     /// The arc's N and K are the first two derivatives of the energy along the arc's
     /// translation: E(p + t v) − E(p) = t N·e + ½ t² K for v = e on the vertices a + 1 … b,

@@ -811,9 +811,10 @@ pub(crate) fn certify(
             let (hi, fi) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
             let mut m = 0.0;
             for (h, f) in hi.iter().zip(fi) {
-                raise(&mut m, (h + f).abs());
+                let r = (h + f).abs();
+                raise(&mut m, r);
+                data_sum += r;
             }
-            data_sum += hi.iter().zip(fi).map(|(h, f)| (h + f).abs()).sum::<f64>();
             raise(&mut stat, (m - r[i]).max(0.0));
             raise(
                 &mut excess,
@@ -870,7 +871,7 @@ pub(crate) fn certify(
         .max(f64::EPSILON * force * length)
         .max(f64::MIN_POSITIVE);
     let arc = if compact {
-        let weights = terms.weights.as_deref();
+        let weights = kinds.iter().find_map(|k| k.penalty_weights());
         // (Σ over an arc's vertices and coordinates of |residual| bounds its net force in every
         // coordinate, and the sum of squares that the bound takes.)
         let (mut sum, translation) = match weights {

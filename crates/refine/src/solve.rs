@@ -192,12 +192,7 @@ impl Problem {
             })
             .flatten()
         {
-            let (field, reason) = match &self.constraint {
-                crate::Constraint::Balls(_) => ("radii", "the multiplier of this point's constraint overflows (a ball's force over a radius too small to tell from 0 against the data: give that point radius 0 to interpolate it exactly, or a larger radius)"),
-                crate::Constraint::HalfSpaces(_) => ("sets", "the multiplier of this point's half-spaces overflows (the force that holds the point in them is beyond the doubles against the data's scale); loosen them"),
-                crate::Constraint::Smoothing(_) => ("weights", "this point's weight overflows against the curve's stiffness (weights act against ~1/h^3 of the parameter spans h); use a smaller weight, or interpolate the point"),
-                crate::Constraint::Interpolate => ("points", "the reaction at this point overflows (the data's slopes against their parameter spans are beyond the doubles); rescale the data or use another parametrization"),
-            };
+            let (field, reason) = self.constraint.kind().multiplier_overflow();
             return Err(crate::Error::InvalidValue {
                 field,
                 index,

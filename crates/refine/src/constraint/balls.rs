@@ -45,6 +45,10 @@ impl Kind for Balls<'_> {
         self.0.iter().all(|&e| e == 0.0)
     }
 
+    fn multiplier_overflow(&self) -> (&'static str, &'static str) {
+        ("radii", "the multiplier of this point's constraint overflows (a ball's force over a radius too small to tell from 0 against the data: give that point radius 0 to interpolate it exactly, or a larger radius)")
+    }
+
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
         let radii = self.solved_radii(stage.q);
         for (i, &v) in stage.data_vertex.iter().enumerate() {

@@ -53,6 +53,10 @@ impl HalfSpaces<'_> {
 }
 
 impl Kind for HalfSpaces<'_> {
+    fn multiplier_overflow(&self) -> (&'static str, &'static str) {
+        ("sets", "the multiplier of this point's half-spaces overflows (the force that holds the point in them is beyond the doubles against the data's scale); loosen them")
+    }
+
     fn validate(&self, problem: &Problem) -> Result<(), Error> {
         super::check_len("sets", self.0.len(), problem.points.len())?;
         let mut budget = super::farkas::PROBLEM_CANDIDATES;

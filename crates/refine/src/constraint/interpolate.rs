@@ -24,6 +24,10 @@ impl Kind for Interpolate {
         true
     }
 
+    fn multiplier_overflow(&self) -> (&'static str, &'static str) {
+        ("points", "the reaction at this point overflows (the data's slopes against their parameter spans are beyond the doubles); rescale the data or use another parametrization")
+    }
+
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
         for (i, &v) in stage.data_vertex.iter().enumerate() {
             rows.problem.fix(v, stage.q.point(i))?;

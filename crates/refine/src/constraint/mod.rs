@@ -257,10 +257,6 @@ pub(crate) struct Terms {
     /// per data point (n): a stiff smoothing weight w times u |p_{i_k}| — the stationarity at
     /// that vertex is judged beyond it (module docs of [`crate::certify`]).
     pub rounding_data: Vec<f64>,
-    /// A penalty kind's weight at each data vertex (smoothing), whose force is part of the
-    /// objective's gradient; `None`: the data vertices are constrained (the arc test of
-    /// [`crate::arcs`] ends its arcs there).
-    pub weights: Option<Vec<f64>>,
     /// A penalty kind's part of the objective, ½ Σ w_i |p_{i_k} − q_i|² (smoothing), beside E.
     pub penalty: f64,
     /// Whether each data point's constraint is active.
@@ -288,7 +284,6 @@ impl Terms {
             gap: 0.0,
             stiffness: 0.0,
             rounding_data: vec![0.0; n],
-            weights: None,
             penalty: 0.0,
             active: vec![false; n],
             no_jump: vec![false; n],
@@ -343,6 +338,15 @@ pub(crate) trait Kind {
         false
     }
 
+    /// The field a data point's overflowing multiplier is refused naming, and why in this kind's
+    /// words (`Problem::accept`: a multiplier beyond the doubles is no certificate).
+    fn multiplier_overflow(&self) -> (&'static str, &'static str) {
+        (
+            "constraint",
+            "the multiplier of this point's constraint overflows against the data's scale",
+        )
+    }
+
     /// Adds its rows to one stage's conic model.
     ///
     /// # Errors
@@ -395,6 +399,14 @@ pub(crate) trait Kind {
     fn rescale(&self, points: i32, knots: i32, into: &mut Problem) -> Result<(), Error> {
         let _ = (points, knots, into);
         Ok(())
+    }
+
+    /// A penalty kind's weight at each data point (smoothing): its data vertices are free, and
+    /// their forces are part of the objective's gradient. `None` (the default): the data
+    /// vertices are constrained, and the certificate's arc test ([`crate::arcs`]) ends its arcs
+    /// there.
+    fn penalty_weights(&self) -> Option<&[f64]> {
+        None
     }
 
     /// The power of two the multipliers of data point `i` scale by under [`Kind::rescale`]'s

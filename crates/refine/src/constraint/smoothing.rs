@@ -42,6 +42,10 @@ impl Kind for Smoothing<'_> {
         true
     }
 
+    fn multiplier_overflow(&self) -> (&'static str, &'static str) {
+        ("weights", "this point's weight overflows against the curve's stiffness (weights act against ~1/h^3 of the parameter spans h); use a smaller weight, or interpolate the point")
+    }
+
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
         for (i, &v) in stage.data_vertex.iter().enumerate() {
             if self.0[i] > 0.0 {
@@ -63,7 +67,6 @@ impl Kind for Smoothing<'_> {
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
         let d = at.q.dim();
-        terms.weights = Some(self.0.to_vec());
         for (i, &v) in at.data_vertex.iter().enumerate() {
             let w = self.0[i];
             let (pv, qi) = (at.p.point(v), at.q.point(i));
@@ -88,6 +91,10 @@ impl Kind for Smoothing<'_> {
     /// it. Solved unscaled, such a problem came back with the interpolant's points but E = 0 (its
     /// divided differences underflowed) and a certificate of 0 (ROBUSTNESS.md item 39). (Weights
     /// that scale to 0 are left to the solve, which refuses H + W singular naming them.)
+    fn penalty_weights(&self) -> Option<&[f64]> {
+        Some(self.0)
+    }
+
     fn rescale(&self, _: i32, knots: i32, into: &mut Problem) -> Result<(), Error> {
         let weights: Vec<f64> = self
             .0
