@@ -729,9 +729,10 @@ fn run_off(extent: f64, data_length: f64, reach: f64, span: f64) -> f64 {
 
 /// Certifies points `p` for data `q` attached at `data_vertex` under `kinds` (the data kind
 /// first), with the data kind's multipliers in the conventions of
-/// [`crate::Refinement::multipliers`] (`None`: the reactions −(Hp)_{i_k} of interpolation,
-/// computed here) and the derivative kinds' (dual, force) in the order of their rows. Returns
-/// the certificate and the multipliers.
+/// [`crate::Refinement::multipliers`] (`None`: the reactions of interpolation, −(Hp)_{i_k} less
+/// the derivative constraints' forces at the data vertex, computed here) and the derivative
+/// kinds' (dual, force) in the order of their rows. Returns the certificate and the
+/// multipliers.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn certify(
     knots: &Knots,
@@ -786,7 +787,8 @@ pub(crate) fn certify(
     // 1e-10.)
     let data_length = q_extent.max(extent_of(&pass.p_data)).max(f64::MIN_POSITIVE);
     let hp_data = &pass.hp_data;
-    let multipliers = match multipliers {
+    let reactions = multipliers.is_none();
+    let mut multipliers = match multipliers {
         Some(m) => crate::Multipliers::from(m),
         None => crate::Multipliers::uniform(d, n, hp_data.iter().map(|x| -x).collect()),
     };
@@ -805,6 +807,18 @@ pub(crate) fn certify(
     };
     for k in kinds {
         k.certify(&at, &mut terms);
+    }
+    // A fixed data vertex's reaction balances every other force there: where a derivative
+    // constraint's stencil reaches a data vertex (a clamped end's), its force too.
+    if let (true, Some(all)) = (reactions, &terms.force_all) {
+        let m = multipliers.values_mut();
+        for (i, &v) in data_vertex.iter().enumerate() {
+            for c in 0..d {
+                let f = all[v * d + c];
+                m[i * d + c] -= f;
+                terms.force_data[i * d + c] -= f;
+            }
+        }
     }
     // The force scale F (module docs): the largest |Hp|, no smaller than the rounding level R
     // over ROUNDING_COUNTS_AS.

@@ -230,7 +230,9 @@ fn assemble(
 /// definite when the two stencils' free parts are independent), and per coordinate
 /// λ = S⁻¹(L x₀ − v), p = x₀ − Yλ: stationarity Kp + Lᵀλ = b at the free vertices, the end
 /// conditions exact. λ_s, λ_e are the ends' forces (the certificate's derivative terms);
-/// interpolation's data multipliers are the reactions −(Hp)_v less those forces.
+/// interpolation's data multipliers are the reactions −(Hp)_v less those forces, which the
+/// certificate computes from its own Hp (`certify`, given none; from the α-rows here they were a
+/// tenth of a clamped interpolation of 10⁵ points).
 ///
 /// x₀ and Y come from one factorization of K and three solves ([`whole_curve`]); for
 /// interpolation on at least 4 × [`WINDOW_SPANS`] spans, x₀ is interpolation's own O(N) solve
@@ -334,29 +336,10 @@ pub(crate) fn clamped(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error> {
         )?;
     }
     let points = Points::new(d, x)?;
-    let multipliers = match w {
-        Some(w) => smoothing_multipliers(w),
-        None => {
-            // The reactions: −(Hp)_v less the ends' forces there.
-            (0..n)
-                .map(|i| {
-                    let v = fp.data_vertex[i];
-                    let mut r = vec![0.0; d];
-                    crate::operator::add_hp_at(fp.knots, &points, v, &mut r);
-                    for (st, l) in stencils.iter().zip(&lambda) {
-                        for &(_, c) in st.iter().filter(|&&(u, _)| u == v) {
-                            for (rk, lk) in r.iter_mut().zip(l) {
-                                *rk += c * lk;
-                            }
-                        }
-                    }
-                    r.iter_mut().for_each(|x| *x = -*x);
-                    r
-                })
-                .collect()
-        }
-    };
-    let mut sol = FixedSolution::new(points, Some(multipliers), 1);
+    // Interpolation's reactions, −(Hp)_v less the ends' forces there, are computed by the
+    // certificate (`certify`, given none) from its own Hp.
+    let multipliers = w.map(smoothing_multipliers);
+    let mut sol = FixedSolution::new(points, multipliers, 1);
     // (cone dual, force) of each end's zero-cone rows s = F y + g with F = I: ζ = −λ.
     sol.derivative = lambda
         .into_iter()

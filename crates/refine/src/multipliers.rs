@@ -82,6 +82,11 @@ impl Multipliers {
         &self.values
     }
 
+    /// Every value, row after row, to change in place.
+    pub(crate) fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
     /// Every value, row after row, without a copy.
     pub fn into_values(self) -> Vec<f64> {
         self.values

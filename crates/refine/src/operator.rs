@@ -40,23 +40,6 @@ pub(crate) fn vertex_row(t: &[f64], v: usize, nv: usize, closed: bool) -> [f64; 
     }
 }
 
-/// Adds (Hp)_v = Σ_i α_{i, v−i+2} (Ap)_i over the rows i = v − 1, v, v + 1 of A ([`vertex_row`];
-/// (Ap)_i in difference form, as [`Stencil::apply_a`]) to `out`, in O(1): H p at a few vertices
-/// of a long curve without the N-row stencil.
-pub(crate) fn add_hp_at(knots: &Knots, p: &Points, v: usize, out: &mut [f64]) {
-    let (t, n, closed) = (knots.values(), p.len(), knots.is_closed());
-    // Rows v − 1, v, v + 1 (mod N; an open curve's end rows are zero), where v is column 2, 1, 0.
-    for (col, off) in [(2, n - 1), (1, 0), (0, 1)] {
-        let i = (v + off) % n;
-        let a = vertex_row(t, i, n, closed);
-        let (l, r) = ((i + n - 1) % n, (i + 1) % n);
-        let (pl, pm, pr) = (p.point(l), p.point(i), p.point(r));
-        for (k, o) in out.iter_mut().enumerate() {
-            *o += a[col] * (a[0] * (pl[k] - pm[k]) + a[2] * (pr[k] - pm[k]));
-        }
-    }
-}
-
 impl Stencil {
     pub(crate) fn new(knots: &Knots) -> Self {
         let t = knots.values();

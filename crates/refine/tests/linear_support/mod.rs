@@ -23,14 +23,16 @@ fn hp(knots: &Knots, x: &DVector<f64>) -> DVector<f64> {
     out
 }
 
-/// The optimum's vertices (vertex-major, d per vertex); module docs.
-pub fn dense_optimum(
+/// The optimum's vertices (vertex-major, d per vertex; module docs) and the multipliers λ of the constraint rows
+/// (row-major, d per row: interpolation's data rows first, in data order, then the start and
+/// end rows), H p + W p + Cᵀλ = W q.
+pub fn dense_kkt(
     r: &Refinement,
     q: &Points,
     weights: Option<&[f64]>,
     rule: DerivativeRule,
     ends: Option<[&[f64]; 2]>,
-) -> Vec<f64> {
+) -> (Vec<f64>, Vec<f64>) {
     let (nv, d) = (r.points.len(), q.dim());
     // The constraint rows C (vertex, coefficient) and, per coordinate, their targets.
     let mut rows: Vec<Vec<(usize, f64)>> = Vec::new();
@@ -70,6 +72,7 @@ pub fn dense_optimum(
     }
     let lu = k.lu();
     let mut out = vec![0.0; nv * d];
+    let mut lambda = vec![0.0; m * d];
     for c in 0..d {
         let mut b = DVector::zeros(nv + m);
         if weights.is_some() {
@@ -99,8 +102,11 @@ pub fn dense_optimum(
         for v in 0..nv {
             out[v * d + c] = x[v];
         }
+        for j in 0..m {
+            lambda[j * d + c] = x[nv + j];
+        }
     }
-    out
+    (out, lambda)
 }
 
 /// The largest coordinate difference between two point arrays.
