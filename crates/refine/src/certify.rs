@@ -808,18 +808,6 @@ pub(crate) fn certify(
     for k in kinds {
         k.certify(&at, &mut terms);
     }
-    // A fixed data vertex's reaction balances every other force there: where a derivative
-    // constraint's stencil reaches a data vertex (a clamped end's), its force too.
-    if let (true, Some(all)) = (reactions, &terms.force_all) {
-        let m = multipliers.values_mut();
-        for (i, &v) in data_vertex.iter().enumerate() {
-            for c in 0..d {
-                let f = all[v * d + c];
-                m[i * d + c] -= f;
-                terms.force_data[i * d + c] -= f;
-            }
-        }
-    }
     // The force scale F (module docs): the largest |Hp|, no smaller than the rounding level R
     // over ROUNDING_COUNTS_AS.
     let mut hp_max = if compact { pass.free_stat } else { 0.0 };
@@ -859,14 +847,28 @@ pub(crate) fn certify(
         }
         stat
     } else {
-        // Summed into Hp's own buffer (Hp is not needed after this).
+        // Hp's own buffer takes the residual (Hp is not needed after this): at the data vertices
+        // first, their derivative forces then cleared, and at every vertex, Hp + the derivative
+        // forces, in one pass that also takes the maxima.
         let mut r = std::mem::take(&mut pass.hp);
-        if let Some(all) = &terms.force_all {
-            for (rc, f) in r.iter_mut().zip(all) {
-                *rc += f;
-            }
-        }
+        let all: &mut [f64] = terms.force_all.as_deref_mut().unwrap_or_default();
+        let derivative = !all.is_empty();
+        let reaction = multipliers.values_mut();
         for (i, &v) in data_vertex.iter().enumerate() {
+            // A fixed data vertex's reaction balances every other force there: where a
+            // derivative constraint's stencil reaches a data vertex (a clamped end's), its force
+            // too.
+            if derivative {
+                for c in 0..d {
+                    let f = all[v * d + c];
+                    if reactions {
+                        reaction[i * d + c] -= f;
+                        terms.force_data[i * d + c] -= f;
+                    }
+                    r[v * d + c] += f;
+                    all[v * d + c] = 0.0;
+                }
+            }
             for (rc, f) in r[v * d..(v + 1) * d]
                 .iter_mut()
                 .zip(&terms.force_data[i * d..(i + 1) * d])
@@ -879,14 +881,38 @@ pub(crate) fn certify(
                 *rc = (rc.abs() - rounding).max(0.0);
             }
         }
-        // (the residual and its part beyond each vertex's level in one pass over it)
-        let mut stat = 0.0f64;
-        for (rj, &row) in r.chunks_exact(d).zip(&pass.rows) {
-            let level = rounding_of(row);
-            for x in rj {
-                stat = stat.max(x.abs());
-                excess = excess.max(x.abs() - level);
+        // The residual (Hp + the derivative forces, as the data vertices' are now), its largest
+        // component and that component's part beyond the vertex's level, four vertices at a
+        // time in independent running maxima.
+        let rows = &pass.rows;
+        let force = |k: usize| if derivative { all[k] } else { 0.0 };
+        let largest = |j: usize| {
+            let mut m = 0.0f64;
+            for (k, x) in (j * d..).zip(&r[j * d..(j + 1) * d]) {
+                raise(&mut m, (x + force(k)).abs());
             }
+            m
+        };
+        let (mut stat_lanes, mut excess_lanes) = ([0.0f64; 4], [0.0f64; 4]);
+        let mut fold = |l: usize, j: usize| {
+            let m = largest(j);
+            raise(&mut stat_lanes[l], m);
+            raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
+        };
+        let vertices = rows.len().min(r.len() / d);
+        let whole = vertices - vertices % 4;
+        for j in (0..whole).step_by(4) {
+            for l in 0..4 {
+                fold(l, j + l);
+            }
+        }
+        for j in whole..vertices {
+            fold(0, j);
+        }
+        let mut stat = 0.0f64;
+        for l in 0..4 {
+            raise(&mut stat, stat_lanes[l]);
+            raise(&mut excess, excess_lanes[l]);
         }
         stat
     };
