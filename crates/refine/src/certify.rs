@@ -96,6 +96,7 @@
 use divdiff::{DerivativeRule, Knots, Points};
 
 use crate::constraint::{At, Kind, Terms};
+use crate::lanes::{by_lanes, raise, raise_abs, raise_over, sum_over};
 
 /// The multiple of ε ‖H‖_∞ max|p| that bounds the rounding in Hp (module docs).
 pub(crate) const ROUNDING_MULTIPLE: f64 = 16.0;
@@ -263,74 +264,6 @@ struct Chunk {
 /// and points streaming through (at N = 8·10⁵, d = 2, one thread: 6.5 ms for the pass in blocks
 /// of 256, 5.4 ms in blocks of 128 or 64, 6.9 ms in blocks of 32; medians of 60).
 const BLOCK: usize = 128;
-
-/// m ← max(m, v) for m not NaN: what `f64::max` gives (a NaN v leaves m), as one compare and
-/// select instead of `max`'s NaN handling.
-#[inline(always)]
-fn raise(m: &mut f64, v: f64) {
-    if v > *m {
-        *m = v;
-    }
-}
-
-/// max(m, max_k |x_k − mid|), a NaN passed over as [`raise`] does; four independent maxima,
-/// so that the compares of consecutive elements do not wait for each other. (Over arrays of
-/// four, `as_chunks`: `chunks_exact` re-split the slice at every step, a fifth of the
-/// certificate's samples at N = 8·10⁵.)
-#[inline(always)]
-fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
-    let mut lanes = [0.0f64; 4];
-    let (quads, rest) = x.as_chunks::<4>();
-    for q in quads {
-        for l in 0..4 {
-            raise(&mut lanes[l], (q[l] - mid).abs());
-        }
-    }
-    for v in rest {
-        raise(&mut lanes[0], (v - mid).abs());
-    }
-    for l in lanes {
-        raise(m, l);
-    }
-}
-
-/// Σ_i f(i) over i in 0 .. n in four independent sums (i mod 4), so that the additions do not
-/// wait for each other (one running sum of |Hp| over the free vertices was a sixth of the pass's
-/// samples at N = 8·10⁵).
-#[inline(always)]
-fn sum_over(n: usize, f: impl Fn(usize) -> f64) -> f64 {
-    let mut lanes = [0.0f64; 4];
-    let whole = n - n % 4;
-    for i in (0..whole).step_by(4) {
-        for (l, lane) in lanes.iter_mut().enumerate() {
-            *lane += f(i + l);
-        }
-    }
-    for i in whole..n {
-        lanes[0] += f(i);
-    }
-    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
-}
-
-/// max(m, max_i f(i)) over i in 0 .. n, a NaN passed over as [`raise`] does, in four independent
-/// lanes (i mod 4), so that the compares do not wait for each other. The maximum does not
-/// round, so it is the one a running fold gives.
-#[inline(always)]
-fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
-    let mut lanes = [*m; 4];
-    let whole = n - n % 4;
-    for i in (0..whole).step_by(4) {
-        for (l, lane) in lanes.iter_mut().enumerate() {
-            raise(lane, f(i + l));
-        }
-    }
-    for i in whole..n {
-        raise(&mut lanes[0], f(i));
-    }
-    for l in lanes {
-        raise(m, l);
-    }
-}
 
 /// Where a sweep writes Hp: every vertex's, or (given the data vertices) the data vertices' and
 /// their points.
@@ -894,21 +827,11 @@ pub(crate) fn certify(
             m
         };
         let (mut stat_lanes, mut excess_lanes) = ([0.0f64; 4], [0.0f64; 4]);
-        let mut fold = |l: usize, j: usize| {
+        by_lanes(rows.len().min(r.len() / d), |l, j| {
             let m = largest(j);
             raise(&mut stat_lanes[l], m);
             raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
-        };
-        let vertices = rows.len().min(r.len() / d);
-        let whole = vertices - vertices % 4;
-        for j in (0..whole).step_by(4) {
-            for l in 0..4 {
-                fold(l, j + l);
-            }
-        }
-        for j in whole..vertices {
-            fold(0, j);
-        }
+        });
         let mut stat = 0.0f64;
         for l in 0..4 {
             raise(&mut stat, stat_lanes[l]);

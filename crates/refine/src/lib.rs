@@ -129,6 +129,7 @@ mod degenerate;
 mod error;
 mod fast;
 mod freeknots;
+mod lanes;
 mod limit;
 mod linear;
 mod multipliers;

@@ -1,0 +1,72 @@
+//! Reductions in four independent lanes: sums and maxima over long arrays whose running value,
+//! carried in one register, made each step wait for the one before (a chain of dependent adds or
+//! compares: the certificate's sums and maxima over 8·10⁵ vertices, `crate::certify`). The four
+//! partial results are combined at the end; a maximum does not round, so it is the one a running
+//! fold gives, while a sum is the same up to the order of its additions.
+
+/// Calls `f(lane, i)` for i in 0 .. n: i in whole groups of four in lanes 0, 1, 2, 3 (i mod 4),
+/// the rest in lane 0.
+#[inline(always)]
+pub(crate) fn by_lanes(n: usize, mut f: impl FnMut(usize, usize)) {
+    let whole = n - n % 4;
+    for i in (0..whole).step_by(4) {
+        for l in 0..4 {
+            f(l, i + l);
+        }
+    }
+    for i in whole..n {
+        f(0, i);
+    }
+}
+
+/// m ← max(m, v) for m not NaN: what `f64::max` gives (a NaN v leaves m), as one compare and
+/// select instead of `max`'s NaN handling.
+#[inline(always)]
+pub(crate) fn raise(m: &mut f64, v: f64) {
+    if v > *m {
+        *m = v;
+    }
+}
+
+/// max(m, max_k |x_k − mid|), a NaN passed over as [`raise`] does; four independent maxima,
+/// so that the compares of consecutive elements do not wait for each other. (Over arrays of
+/// four, `as_chunks`: `chunks_exact` re-split the slice at every step, a fifth of the
+/// certificate's samples at N = 8·10⁵.)
+#[inline(always)]
+pub(crate) fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
+    let mut lanes = [0.0f64; 4];
+    let (quads, rest) = x.as_chunks::<4>();
+    for q in quads {
+        for l in 0..4 {
+            raise(&mut lanes[l], (q[l] - mid).abs());
+        }
+    }
+    for v in rest {
+        raise(&mut lanes[0], (v - mid).abs());
+    }
+    for l in lanes {
+        raise(m, l);
+    }
+}
+
+/// Σ_i f(i) over i in 0 .. n in four independent sums (i mod 4), so that the additions do not
+/// wait for each other (one running sum of |Hp| over the free vertices was a sixth of the pass's
+/// samples at N = 8·10⁵).
+#[inline(always)]
+pub(crate) fn sum_over(n: usize, f: impl Fn(usize) -> f64) -> f64 {
+    let mut lanes = [0.0f64; 4];
+    by_lanes(n, |l, i| lanes[l] += f(i));
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
+}
+
+/// max(m, max_i f(i)) over i in 0 .. n, a NaN passed over as [`raise`] does, in four independent
+/// lanes (i mod 4), so that the compares do not wait for each other. The maximum does not
+/// round, so it is the one a running fold gives.
+#[inline(always)]
+pub(crate) fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
+    let mut lanes = [*m; 4];
+    by_lanes(n, |l, i| raise(&mut lanes[l], f(i)));
+    for l in lanes {
+        raise(m, l);
+    }
+}
