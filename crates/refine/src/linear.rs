@@ -4,6 +4,7 @@
 use divdiff::Points;
 use energy::{Hessian, System};
 
+use crate::lanes::raise_abs;
 use crate::operator::Stencil;
 use crate::stage::{FixedProblem, FixedSolution};
 use crate::Error;
@@ -54,7 +55,7 @@ pub(crate) fn linear(
     let (sys, mut x) = Factored::new(fp, fixed, w)?;
     let d = fp.q.dim();
     let mut last = f64::INFINITY;
-    for _ in 0..steps {
+    for taken in 1..=steps {
         let step = sys.refine(
             &mut x,
             d,
@@ -62,7 +63,13 @@ pub(crate) fn linear(
             |_, _| {},
             |_, _, r| sys.factor.solve_flat(r).map_err(Error::from),
         )?;
-        let size = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        // (After the last step there is nothing to decide: the exact solver's one step does not
+        // pay for the size of x.)
+        if taken == steps {
+            break;
+        }
+        let mut size = 0.0;
+        raise_abs(&mut size, &x, 0.0);
         if !(step > SETTLED * f64::EPSILON * size && step < 0.9 * last) {
             break;
         }
@@ -168,16 +175,17 @@ impl Factored {
                 *rk = if fixed { 0.0 } else { bk - *rk };
             }
         }
-        let size = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut size = 0.0;
+        raise_abs(&mut size, &r, 0.0);
         if !size.is_finite() || size == 0.0 {
             return Ok(0.0);
         }
         correct(state, x, &mut r)?;
-        let mut step = 0.0f64;
         for (xv, dv) in x.iter_mut().zip(&r) {
             *xv += dv;
-            step = step.max(dv.abs());
         }
+        let mut step = 0.0;
+        raise_abs(&mut step, &r, 0.0);
         Ok(step)
     }
 }
