@@ -436,6 +436,15 @@ fn stage_loop(
             update_knots(knots, points, param, stage)?;
             iterations.knot_updates += 1;
         }
+        // The last answer's points, when no warm start reads them (no multipliers), are the
+        // next solve's to write into.
+        let recycled = match sol.take() {
+            Some(s) if s.multipliers.is_none() => Some(s.points),
+            kept => {
+                sol = kept;
+                None
+            }
+        };
         let fp = FixedProblem {
             knots,
             q,
@@ -445,11 +454,12 @@ fn stage_loop(
             derivatives: stage == 0,
             stride,
             // Until the first knot update the knots are those of `split_knots`.
-            uniform_spans: sol.is_none(),
+            uniform_spans: knot_iteration == 0,
             // The last solution starts the next solve (its active set, or all of it).
             warm: sol
                 .as_ref()
                 .and_then(|s| Some((&s.points, s.multipliers.as_deref()?))),
+            recycled: std::sync::Mutex::new(recycled),
             options: &problem.options,
         };
         let s = match first.take() {
@@ -531,6 +541,7 @@ fn stage_loop(
         stride,
         uniform_spans: false,
         warm: None,
+        recycled: Default::default(),
         options: &problem.options,
     };
     let judge = |points: &Points, multipliers, derivative: &[(Vec<f64>, Vec<f64>)]| {

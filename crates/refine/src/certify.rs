@@ -1043,6 +1043,7 @@ mod tests {
             stride: k + 1,
             uniform_spans: true,
             warm: None,
+            recycled: Default::default(),
             options: &options,
         };
         let sol = crate::linear::clamped(&fp).unwrap();

@@ -459,7 +459,12 @@ impl Condensation {
 /// # Errors
 /// [`Error::Energy`] (`Singular`) naming a vertex whose pivot is not of the sign and size the
 /// structure guarantees (impossible for valid knots; reported rather than assumed).
-pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Points, Error> {
+pub(crate) fn interpolate(
+    knots: &Knots,
+    q: &Points,
+    stride: usize,
+    recycled: Option<Points>,
+) -> Result<Points, Error> {
     let (data_rows, s) = data_row_values(knots, q, stride)?;
     let (d, n) = (q.dim(), q.len());
     let nv = knots.vertex_count();
@@ -476,6 +481,7 @@ pub(crate) fn interpolate(knots: &Knots, q: &Points, stride: usize) -> Result<Po
     let p = crate::par::points_by_units(
         d,
         nv,
+        recycled,
         stride * LANES,
         || SpanBlock::new(k),
         |block, unit, x| {
@@ -515,32 +521,39 @@ fn data_row_values(
     let t = knots.values();
     let k = stride - 1;
     // Pass 1: per span [G, X, Y, c0 g0, c1 g_{k−1}, c0 h0, c1 h_{k−1}] (as `Condensation`) and
-    // the α-row of its first (data) vertex, blocks of spans in parallel chunks (`crate::par`),
-    // each chunk writing its own slice, with its own block buffer. (An open curve's last data
+    // the α-row of its first (data) vertex, a block of LANES spans at a time in parallel runs of
+    // blocks (`crate::par`), each run with its own block buffer. (An open curve's last data
     // row is a zero row, as its first.)
-    let per_chunk = crate::par::units_per_chunk(stride * LANES) * LANES;
-    let mut span = vec![[0.0; 7]; spans];
-    let mut data_rows = vec![[0.0; 3]; n];
-    let chunks: Vec<_> = span
-        .chunks_mut(per_chunk)
-        .zip(data_rows[..spans].chunks_mut(per_chunk))
-        .enumerate()
-        .map(|(c, (out, rows))| (c * per_chunk, out, rows))
-        .collect();
-    let failed = crate::par::map(chunks, |(first, out, rows)| {
-        crate::par::vectorized(Summaries {
-            t,
-            stride,
-            closed,
-            first,
-            out,
-            rows,
-            block: SpanBlock::new(k),
-        })
-    });
-    if let Some(v) = failed.into_iter().flatten().next() {
-        return Err(singular(v));
+    let blocks = spans.div_ceil(LANES);
+    let per_run = crate::par::units_per_chunk(stride * LANES);
+    let failed = std::sync::atomic::AtomicUsize::new(usize::MAX);
+    let (span, data_rows) = crate::par::unzip_blocks(
+        blocks,
+        per_run,
+        1,
+        || SpanBlock::new(k),
+        |block, b| {
+            let i0 = b * LANES;
+            crate::par::vectorized(Summaries {
+                t,
+                stride,
+                closed,
+                i0,
+                count: LANES.min(spans - i0),
+                block,
+                failed: &failed,
+            })
+        },
+    );
+    let failed = failed.into_inner();
+    if failed != usize::MAX {
+        return Err(singular(failed));
     }
+    let mut span = span.into_flattened();
+    span.truncate(spans);
+    let mut data_rows = data_rows.into_flattened();
+    data_rows.truncate(spans);
+    data_rows.resize(n, [0.0; 3]);
     // T and K y (K's rows in difference form, as `Condensation::apply_k`), assembled straight
     // into the band and the right-hand side, rows in parallel chunks: each row is its own
     // formula ([`data_row`]).
@@ -750,47 +763,43 @@ impl SpanBlock {
     }
 }
 
-/// Pass 1 of [`interpolate`] on one chunk of spans (from span `first`), as
-/// [`crate::par::vectorized`] runs it: the spans' summaries into `out` and their data rows into
-/// `rows`, or the vertex of the first bad pivot.
+/// Pass 1 of [`interpolate`] on one block of spans (`count` ≤ [`LANES`] from span `i0`), as
+/// [`crate::par::vectorized`] runs it: the spans' summaries and their data rows (the lanes past
+/// `count`, and every lane of a block whose factorization failed, zero), the vertex of a bad
+/// pivot folded into `failed` (the smallest: the first in span order).
 struct Summaries<'a> {
     t: &'a [f64],
     stride: usize,
     closed: bool,
-    first: usize,
-    out: &'a mut [[f64; 7]],
-    rows: &'a mut [[f64; 3]],
-    block: SpanBlock,
+    i0: usize,
+    count: usize,
+    block: &'a mut SpanBlock,
+    failed: &'a std::sync::atomic::AtomicUsize,
 }
 
 impl pulp::WithSimd for Summaries<'_> {
-    type Output = Option<usize>;
+    type Output = ([[f64; 7]; LANES], [[f64; 3]; LANES]);
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
         let Summaries {
             t,
             stride,
             closed,
-            first,
-            out,
-            rows,
-            mut block,
+            i0,
+            count,
+            block,
+            failed,
         } = self;
-        for (b, (out, rows)) in out
-            .chunks_mut(LANES)
-            .zip(rows.chunks_mut(LANES))
-            .enumerate()
-        {
-            let (i0, count) = (first + b * LANES, out.len());
-            if let Err(v) = block.factor(t, i0 * stride, stride, count) {
-                return Some(v);
-            }
-            for (lane, o) in out.iter_mut().enumerate() {
-                *o = block.summary(lane);
-            }
-            block.data_rows(t, i0 * stride, stride, closed, rows);
+        let (mut out, mut rows) = ([[0.0; 7]; LANES], [[0.0; 3]; LANES]);
+        if let Err(v) = block.factor(t, i0 * stride, stride, count) {
+            failed.fetch_min(v, std::sync::atomic::Ordering::Relaxed);
+            return (out, rows);
         }
-        None
+        for (lane, o) in out.iter_mut().take(count).enumerate() {
+            *o = block.summary(lane);
+        }
+        block.data_rows(t, i0 * stride, stride, closed, &mut rows[..count]);
+        (out, rows)
     }
 }
 
@@ -1164,10 +1173,19 @@ mod tests {
             }
             let knots = if closed { Knots::closed(t) } else { Knots::open(t) }.unwrap();
             let q = Points::new(d, (0..n * d).map(|_| 4.0 * unif() - 2.0).collect()).unwrap();
-            let streamed = super::interpolate(&knots, &q, stride).unwrap();
+            let streamed = super::interpolate(&knots, &q, stride, None).unwrap();
             let reference =
                 super::interpolate_condensed(&knots, &Stencil::new(&knots), &q, stride).unwrap();
             prop_assert_eq!(streamed.coords(), reference.coords());
+            // Written into the points of an earlier solve (here NaN everywhere, and of the
+            // wrong size), every coordinate is the same.
+            let nv = knots.vertex_count();
+            for len in [nv, nv + 1] {
+                let mut old = Points::zeros(len, d);
+                old.coords_mut().fill(f64::NAN);
+                let recycled = super::interpolate(&knots, &q, stride, Some(old)).unwrap();
+                prop_assert_eq!(recycled.coords(), reference.coords());
+            }
         }
     }
 }

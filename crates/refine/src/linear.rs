@@ -501,7 +501,8 @@ pub(crate) fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error>
             1,
         ));
     }
-    let p = crate::fast::interpolate(fp.knots, fp.q, fp.stride)?;
+    let recycled = fp.recycled.lock().ok().and_then(|mut r| r.take());
+    let p = crate::fast::interpolate(fp.knots, fp.q, fp.stride, recycled)?;
     Ok(FixedSolution::new(p, None, 1))
 }
 

@@ -132,6 +132,7 @@ impl Problem {
             stride,
             uniform_spans: true,
             warm: None,
+            recycled: Default::default(),
             options: &self.options,
         };
         let mut rows = crate::constraint::Rows::new(&fp)?;
@@ -383,6 +384,7 @@ pub(crate) fn solve_stage0_on(
         stride,
         uniform_spans: false,
         warm: None,
+        recycled: Default::default(),
         options: &problem.options,
     };
     let s = strategy::exact(&fp)?;

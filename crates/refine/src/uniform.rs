@@ -166,7 +166,9 @@ fn from_spans(h: &[f64], closed: bool, q: &Points, m: usize) -> Result<Points, E
                     }
                 };
             let scratch = || (vec![0.0; d], vec![0.0; d], vec![0.0; d]);
-            Ok(crate::par::points_by_units(d, total, m, scratch, fill)?)
+            Ok(crate::par::points_by_units(
+                d, total, None, m, scratch, fill,
+            )?)
         }
     }
 }
@@ -316,7 +318,7 @@ mod tests {
             let knots = split_knots(&u, m, closed);
             let ours = interpolate(&knots, &q, m).unwrap();
             let reference = crate::fast::interpolate_condensed(&knots, &Stencil::new(&knots), &q, m).unwrap();
-            let streamed = crate::fast::interpolate(&knots, &q, m).unwrap();
+            let streamed = crate::fast::interpolate(&knots, &q, m, None).unwrap();
             // The streaming passes do the condensation's arithmetic operation for operation.
             prop_assert_eq!(streamed.coords(), reference.coords());
             prop_assert_eq!(ours.len(), reference.len());
