@@ -66,6 +66,7 @@ pub(crate) fn unzip_blocks<S, A: Send, B: Send>(
             .unzip_into_vecs(&mut a, &mut b);
         return (a, b);
     }
+    let _ = per_run;
     a.reserve_exact(count);
     let mut state = init();
     for block in 0..count {
