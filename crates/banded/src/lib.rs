@@ -14,6 +14,8 @@
 //!   by A and Aᵀ.
 //! - [`vector`]: [`vector::dot`], [`vector::norm`] and [`vector::dist`] (scaled, no overflow or
 //!   underflow, as LAPACK's `dnrm2`), [`vector::axpy`].
+//! - [`lanes`]: sums and maxima over long arrays in four independent lanes, so that each step
+//!   does not wait for the one before.
 //!
 //! Every factorization is O(n) in time and memory for a fixed bandwidth, tests each pivot
 //! against the diagonal of its own row ([`PIVOT_RTOL`], [`FactorOptions::pivot_rtol`]) and
@@ -115,6 +117,7 @@ mod block;
 mod border;
 mod dense;
 mod error;
+pub mod lanes;
 mod scalar;
 #[cfg(test)]
 mod tests;

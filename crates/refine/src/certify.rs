@@ -96,7 +96,7 @@
 use divdiff::{DerivativeRule, Knots, Points};
 
 use crate::constraint::{At, Kind, Terms};
-use crate::lanes::{by_lanes, raise, raise_abs, raise_over, sum_over};
+use banded::lanes::{by_lanes, raise, raise_abs, raise_all, raise_over, sum_over, total};
 
 /// The multiple of ε ‖H‖_∞ max|p| that bounds the rounding in Hp (module docs).
 pub(crate) const ROUNDING_MULTIPLE: f64 = 16.0;
@@ -833,10 +833,8 @@ pub(crate) fn certify(
             raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
         });
         let mut stat = 0.0f64;
-        for l in 0..4 {
-            raise(&mut stat, stat_lanes[l]);
-            raise(&mut excess, excess_lanes[l]);
-        }
+        raise_all(&mut stat, stat_lanes);
+        raise_all(&mut excess, excess_lanes);
         stat
     };
     // The duality gap bounds E(p) − E* for a feasible p; relative to E (or, for E ≈ 0, to the
@@ -865,7 +863,7 @@ pub(crate) fn certify(
                 0.0,
             ),
             Some(w) => (
-                pass.free_sum + (data_sums[0] + data_sums[1]) + (data_sums[2] + data_sums[3]),
+                pass.free_sum + total(data_sums),
                 crate::arcs::translation(&terms.force_data, w, d),
             ),
         };

@@ -129,7 +129,6 @@ mod degenerate;
 mod error;
 mod fast;
 mod freeknots;
-mod lanes;
 mod limit;
 mod linear;
 mod multipliers;

@@ -4,10 +4,10 @@
 use divdiff::Points;
 use energy::{Hessian, System};
 
-use crate::lanes::raise_abs;
 use crate::operator::Stencil;
 use crate::stage::{FixedProblem, FixedSolution};
 use crate::Error;
+use banded::lanes::max_abs;
 
 /// The system H ⊗ I_d of the Hessian `h` (its bands moved in).
 pub(crate) fn hessian_system(h: Hessian, dim: usize) -> Result<System, Error> {
@@ -68,8 +68,7 @@ pub(crate) fn linear(
         if taken == steps {
             break;
         }
-        let mut size = 0.0;
-        raise_abs(&mut size, &x, 0.0);
+        let size = max_abs(&x);
         if !(step > SETTLED * f64::EPSILON * size && step < 0.9 * last) {
             break;
         }
@@ -175,8 +174,7 @@ impl Factored {
                 *rk = if fixed { 0.0 } else { bk - *rk };
             }
         }
-        let mut size = 0.0;
-        raise_abs(&mut size, &r, 0.0);
+        let size = max_abs(&r);
         if !size.is_finite() || size == 0.0 {
             return Ok(0.0);
         }
@@ -184,9 +182,7 @@ impl Factored {
         for (xv, dv) in x.iter_mut().zip(&r) {
             *xv += dv;
         }
-        let mut step = 0.0;
-        raise_abs(&mut step, &r, 0.0);
-        Ok(step)
+        Ok(max_abs(&r))
     }
 }
 

@@ -1,13 +1,20 @@
 //! Reductions in four independent lanes: sums and maxima over long arrays whose running value,
 //! carried in one register, made each step wait for the one before (a chain of dependent adds or
-//! compares: the certificate's sums and maxima over 8·10⁵ vertices, `crate::certify`). The four
-//! partial results are combined at the end; a maximum does not round, so it is the one a running
-//! fold gives, while a sum is the same up to the order of its additions.
+//! compares: refine's certificate sums and maximizes over 8·10⁵ vertices, [`crate::vector::max_dist`]
+//! over every data point). The four partial results are combined at the end ([`total`],
+//! [`raise_all`]); a maximum does not round, so it is the one a running fold gives, while a sum is
+//! the same up to the order of its additions.
+//!
+//! ```
+//! use banded::lanes::{max_abs, sum_over};
+//! assert_eq!(max_abs(&[1.0, -7.0, 3.0, 2.0, -5.0]), 7.0);
+//! assert_eq!(sum_over(5, |i| i as f64), 10.0);
+//! ```
 
 /// Calls `f(lane, i)` for i in 0 .. n: i in whole groups of four in lanes 0, 1, 2, 3 (i mod 4),
 /// the rest in lane 0.
 #[inline(always)]
-pub(crate) fn by_lanes(n: usize, mut f: impl FnMut(usize, usize)) {
+pub fn by_lanes(n: usize, mut f: impl FnMut(usize, usize)) {
     let whole = n - n % 4;
     for i in (0..whole).step_by(4) {
         for l in 0..4 {
@@ -22,7 +29,7 @@ pub(crate) fn by_lanes(n: usize, mut f: impl FnMut(usize, usize)) {
 /// m ← max(m, v) for m not NaN: what `f64::max` gives (a NaN v leaves m), as one compare and
 /// select instead of `max`'s NaN handling.
 #[inline(always)]
-pub(crate) fn raise(m: &mut f64, v: f64) {
+pub fn raise(m: &mut f64, v: f64) {
     if v > *m {
         *m = v;
     }
@@ -33,7 +40,7 @@ pub(crate) fn raise(m: &mut f64, v: f64) {
 /// four, `as_chunks`: `chunks_exact` re-split the slice at every step, a fifth of the
 /// certificate's samples at N = 8·10⁵.)
 #[inline(always)]
-pub(crate) fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
+pub fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
     let mut lanes = [0.0f64; 4];
     let (quads, rest) = x.as_chunks::<4>();
     for q in quads {
@@ -44,6 +51,26 @@ pub(crate) fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
     for v in rest {
         raise(&mut lanes[0], (v - mid).abs());
     }
+    raise_all(m, lanes);
+}
+
+/// max_k |x_k|, 0 for no elements ([`raise_abs`] from 0).
+#[inline(always)]
+pub fn max_abs(x: &[f64]) -> f64 {
+    let mut m = 0.0;
+    raise_abs(&mut m, x, 0.0);
+    m
+}
+
+/// The four lanes' sums added, pairwise: (s₀ + s₁) + (s₂ + s₃).
+#[inline(always)]
+pub fn total(lanes: [f64; 4]) -> f64 {
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
+}
+
+/// m ← max(m, the four lanes' maxima), NaNs passed over as [`raise`] does.
+#[inline(always)]
+pub fn raise_all(m: &mut f64, lanes: [f64; 4]) {
     for l in lanes {
         raise(m, l);
     }
@@ -53,20 +80,18 @@ pub(crate) fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
 /// wait for each other (one running sum of |Hp| over the free vertices was a sixth of the pass's
 /// samples at N = 8·10⁵).
 #[inline(always)]
-pub(crate) fn sum_over(n: usize, f: impl Fn(usize) -> f64) -> f64 {
+pub fn sum_over(n: usize, f: impl Fn(usize) -> f64) -> f64 {
     let mut lanes = [0.0f64; 4];
     by_lanes(n, |l, i| lanes[l] += f(i));
-    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
+    total(lanes)
 }
 
 /// max(m, max_i f(i)) over i in 0 .. n, a NaN passed over as [`raise`] does, in four independent
 /// lanes (i mod 4), so that the compares do not wait for each other. The maximum does not
 /// round, so it is the one a running fold gives.
 #[inline(always)]
-pub(crate) fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
+pub fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
     let mut lanes = [*m; 4];
     by_lanes(n, |l, i| raise(&mut lanes[l], f(i)));
-    for l in lanes {
-        raise(m, l);
-    }
+    raise_all(m, lanes);
 }
