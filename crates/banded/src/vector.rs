@@ -59,19 +59,25 @@ pub fn norm(x: &[f64]) -> f64 {
 /// usual and overflow only if they exceed `f64::MAX`).
 #[inline]
 pub fn dist(a: &[f64], b: &[f64]) -> f64 {
+    dist_of(a.len().min(b.len()), |c| a[c] - b[c])
+}
+
+/// [`dist`] of the `d` differences `diff(c)`.
+#[inline(always)]
+fn dist_of(d: usize, diff: impl Fn(usize) -> f64) -> f64 {
     // The common case first, without the three-range branches: when every difference is 0 or
     // in the middle range, Blue's sum is the naive one bit for bit (module docs). NaN fails the
     // range test and goes the long way, which propagates it.
     let (mut sum, mut middle) = (0.0, true);
-    for (x, y) in a.iter().zip(b) {
-        let v = (x - y).abs();
+    for c in 0..d {
+        let v = diff(c).abs();
         middle &= v == 0.0 || (SMALL..=BIG).contains(&v);
         sum += v * v;
     }
     if middle {
         sum.sqrt()
     } else {
-        scaled_norm(a.iter().zip(b).map(|(x, y)| x - y))
+        scaled_norm((0..d).map(diff))
     }
 }
 
@@ -169,16 +175,11 @@ pub fn max_dist(a: &[f64], b: &[f64], d: usize) -> f64 {
         return 0.0;
     }
     let rows = (a.len() / d).min(b.len() / d);
-    max_row_dist(
-        rows,
-        d,
-        |i, c| a[i * d + c] - b[i * d + c],
-        a.chunks_exact(d).zip(b.chunks_exact(d)),
-    )
+    max_row_dist(rows, d, |i, c| a[i * d + c] - b[i * d + c])
 }
 
 /// The largest [`dist`] from `point` to the rows of `a` (rows of `point.len()` values), as
-/// [`max_dist`] defines it.
+/// [`max_dist`] computes it.
 ///
 /// ```
 /// use banded::vector::max_dist_from;
@@ -189,31 +190,20 @@ pub fn max_dist_from(a: &[f64], point: &[f64]) -> f64 {
     if d == 0 {
         return 0.0;
     }
-    max_row_dist(
-        a.len() / d,
-        d,
-        |i, c| a[i * d + c] - point[c],
-        a.chunks_exact(d).map(|r| (r, point)),
-    )
+    max_row_dist(a.len() / d, d, |i, c| a[i * d + c] - point[c])
 }
 
 /// [`max_dist`] over `rows` pairs of rows of `d` values, `diff(i, c)` the difference of pair i
-/// in coordinate c and `pairs` the same pairs as slices (for the rows through [`dist`]). The
-/// branch-free pass takes four rows at a time into four running maxima, so that the compares do
-/// not wait for each other (one running maximum was ~2 ns a row, three times per solve over the
-/// data points).
+/// in coordinate c. The branch-free pass takes four rows at a time into four running maxima
+/// ([`crate::lanes`]), so that the compares do not wait for each other (one running maximum was
+/// ~2 ns a row, three times per solve over the data points).
 #[inline]
-fn max_row_dist<'a>(
-    rows: usize,
-    d: usize,
-    diff: impl Fn(usize, usize) -> f64,
-    pairs: impl Iterator<Item = (&'a [f64], &'a [f64])>,
-) -> f64 {
-    const LANES: usize = 4;
-    let (mut largest, mut middle) = ([0.0f64; LANES], true);
-    let whole = rows - rows % LANES;
-    for i in (0..whole).step_by(LANES) {
-        let mut sum = [0.0f64; LANES];
+fn max_row_dist(rows: usize, d: usize, diff: impl Fn(usize, usize) -> f64) -> f64 {
+    use crate::lanes::{raise, raise_all};
+    let (mut largest, mut middle) = ([0.0f64; 4], true);
+    let whole = rows - rows % 4;
+    for i in (0..whole).step_by(4) {
+        let mut sum = [0.0f64; 4];
         for c in 0..d {
             for (lane, s) in sum.iter_mut().enumerate() {
                 let v = diff(i + lane, c).abs();
@@ -221,11 +211,9 @@ fn max_row_dist<'a>(
                 *s += v * v;
             }
         }
+        // (a NaN sum is passed over, as `f64::max` passes it over; it also clears `middle`)
         for (m, s) in largest.iter_mut().zip(sum) {
-            // (a NaN sum is passed over, as `f64::max` passes it over; it also clears `middle`)
-            if s > *m {
-                *m = s;
-            }
+            raise(m, s);
         }
     }
     for i in whole..rows {
@@ -235,12 +223,14 @@ fn max_row_dist<'a>(
             middle &= (v == 0.0) | (SMALL..=BIG).contains(&v);
             sum += v * v;
         }
-        largest[0] = largest[0].max(sum);
+        raise(&mut largest[0], sum);
     }
     if middle {
-        largest.iter().fold(0.0f64, |a, &m| a.max(m)).sqrt()
+        let mut m = 0.0;
+        raise_all(&mut m, largest);
+        m.sqrt()
     } else {
-        pairs.fold(0.0, |m, (x, y)| m.max(dist(x, y)))
+        (0..rows).fold(0.0, |m, i| m.max(dist_of(d, |c| diff(i, c))))
     }
 }
 
