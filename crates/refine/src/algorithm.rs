@@ -438,13 +438,7 @@ fn stage_loop(
         }
         // The last answer's points, when no warm start reads them (no multipliers), are the
         // next solve's to write into.
-        let recycled = match sol.take() {
-            Some(s) if s.multipliers.is_none() => Some(s.points),
-            kept => {
-                sol = kept;
-                None
-            }
-        };
+        let recycled = sol.take_if(|s| s.multipliers.is_none()).map(|s| s.points);
         let fp = FixedProblem {
             knots,
             q,
@@ -459,7 +453,7 @@ fn stage_loop(
             warm: sol
                 .as_ref()
                 .and_then(|s| Some((&s.points, s.multipliers.as_deref()?))),
-            recycled: std::sync::Mutex::new(recycled),
+            recycled: std::cell::Cell::new(recycled),
             options: &problem.options,
         };
         let s = match first.take() {

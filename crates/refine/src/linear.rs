@@ -497,8 +497,7 @@ pub(crate) fn interpolate(fp: &FixedProblem<'_>) -> Result<FixedSolution, Error>
             1,
         ));
     }
-    let recycled = fp.recycled.lock().ok().and_then(|mut r| r.take());
-    let p = crate::fast::interpolate(fp.knots, fp.q, fp.stride, recycled)?;
+    let p = crate::fast::interpolate(fp.knots, fp.q, fp.stride, fp.recycled.take())?;
     Ok(FixedSolution::new(p, None, 1))
 }
 

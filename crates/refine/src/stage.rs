@@ -34,7 +34,7 @@ pub(crate) struct FixedProblem<'a> {
     /// allocator zeroes first (the streaming interpolation of [`crate::fast`]: zeroing its
     /// 8·10⁵ points was ~7 % of the default three knot updates at n = 10⁵, k = 7). Empty:
     /// none.
-    pub recycled: std::sync::Mutex<Option<Points>>,
+    pub recycled: std::cell::Cell<Option<Points>>,
     /// The tuning of the solvers.
     pub options: &'a SolveOptions,
 }
