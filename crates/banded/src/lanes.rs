@@ -95,3 +95,27 @@ pub fn raise_over(m: &mut f64, n: usize, f: impl Fn(usize) -> f64) {
     by_lanes(n, |l, i| raise(&mut lanes[l], f(i)));
     raise_all(m, lanes);
 }
+
+/// Σ_i |x_i| in four independent sums, as [`sum_over`] takes them (i mod 4, the rest in lane 0;
+/// the same bits), from arrays of four (`as_chunks`), which the compiler vectorizes: through
+/// `sum_over`'s closure, each element's bounds check kept the loop scalar.
+///
+/// ```
+/// use banded::lanes::{sum_abs, sum_over};
+/// let x = [1.0, -2.5, 3.0, -4.0, 0.5, -1e-3];
+/// assert_eq!(sum_abs(&x).to_bits(), sum_over(x.len(), |i| x[i].abs()).to_bits());
+/// ```
+#[inline(always)]
+pub fn sum_abs(x: &[f64]) -> f64 {
+    let mut lanes = [0.0f64; 4];
+    let (quads, rest) = x.as_chunks::<4>();
+    for q in quads {
+        for l in 0..4 {
+            lanes[l] += q[l].abs();
+        }
+    }
+    for v in rest {
+        lanes[0] += v.abs();
+    }
+    total(lanes)
+}

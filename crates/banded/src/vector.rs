@@ -175,7 +175,14 @@ pub fn max_dist(a: &[f64], b: &[f64], d: usize) -> f64 {
         return 0.0;
     }
     let rows = (a.len() / d).min(b.len() / d);
-    max_row_dist(rows, d, |i, c| a[i * d + c] - b[i * d + c])
+    let (a, b) = (&a[..rows * d], &b[..rows * d]);
+    // (Literal d = 1, 2, 3: the inlined body is specialized, its indexing and loops fixed.)
+    match d {
+        1 => max_row_dist(rows, 1, |i, c| a[i + c] - b[i + c]),
+        2 => max_row_dist(rows, 2, |i, c| a[i * 2 + c] - b[i * 2 + c]),
+        3 => max_row_dist(rows, 3, |i, c| a[i * 3 + c] - b[i * 3 + c]),
+        _ => max_row_dist(rows, d, |i, c| a[i * d + c] - b[i * d + c]),
+    }
 }
 
 /// The largest [`dist`] from `point` to the rows of `a` (rows of `point.len()` values), as
@@ -190,14 +197,21 @@ pub fn max_dist_from(a: &[f64], point: &[f64]) -> f64 {
     if d == 0 {
         return 0.0;
     }
-    max_row_dist(a.len() / d, d, |i, c| a[i * d + c] - point[c])
+    let rows = a.len() / d;
+    let a = &a[..rows * d];
+    match *point {
+        [x] => max_row_dist(rows, 1, |i, _| a[i] - x),
+        [x, y] => max_row_dist(rows, 2, |i, c| a[i * 2 + c] - [x, y][c]),
+        [x, y, z] => max_row_dist(rows, 3, |i, c| a[i * 3 + c] - [x, y, z][c]),
+        _ => max_row_dist(rows, d, |i, c| a[i * d + c] - point[c]),
+    }
 }
 
 /// [`max_dist`] over `rows` pairs of rows of `d` values, `diff(i, c)` the difference of pair i
 /// in coordinate c. The branch-free pass takes four rows at a time into four running maxima
 /// ([`crate::lanes`]), so that the compares do not wait for each other (one running maximum was
 /// ~2 ns a row, three times per solve over the data points).
-#[inline]
+#[inline(always)]
 fn max_row_dist(rows: usize, d: usize, diff: impl Fn(usize, usize) -> f64) -> f64 {
     use crate::lanes::{raise, raise_all};
     let (mut largest, mut middle) = ([0.0f64; 4], true);
