@@ -165,8 +165,10 @@ pub(crate) struct Pass {
 /// was most of a large interpolation's certified solve); a missing span or second difference
 /// (the ends of an open curve) has reciprocal 0, so its terms vanish without a branch.
 ///
-/// Given the data vertices (strictly increasing), Hp is kept only there and its largest size over
-/// the other vertices is returned instead (`hp_data`, `free_stat`): no N × d buffer.
+/// Given the vertices to keep (strictly increasing: the data vertices, and the derivative
+/// constraints' stencils beside them), Hp is kept only there and its largest size over the
+/// other vertices is returned instead (`hp_data`, `free_stat`): no N × d buffer. (`Pass`'s
+/// "data vertices" are these kept vertices.)
 pub(crate) fn pass(knots: &Knots, p: &Points, center: &[f64], data: Option<&[usize]>) -> Pass {
     let (n, d) = (p.len(), p.dim());
     let mut hp = vec![0.0; if data.is_some() { 0 } else { n * d }];
@@ -656,6 +658,32 @@ fn sweep(
 /// (a thousandth of the acceptance: skipped, it could not have refused).
 const ARC_GATE: f64 = 1e-12;
 
+/// The stationarity maxima over the vertices j of `r` (points of D coordinates, stored flat):
+/// `stat` ← max(`stat`, m_j), `excess` ← max(`excess`, m_j − `rounding_of`(`rows`_j)), where
+/// m_j is the largest |r_jc|, NaNs passed over as [`raise`] does. Maxima do not round, so any
+/// order gives the same bits; this one takes the vertices into four lanes, with the dimension
+/// a constant and no bounds checks in the loop.
+#[inline(always)]
+fn residual_maxima<const D: usize>(
+    r: &[f64],
+    rows: &[f64],
+    rounding_of: impl Fn(f64) -> f64,
+    stat: &mut f64,
+    excess: &mut f64,
+) {
+    let (mut s, mut e) = ([0.0f64; 4], [0.0f64; 4]);
+    for (j, (x, &row)) in r.as_chunks::<D>().0.iter().zip(rows).enumerate() {
+        let mut m = 0.0f64;
+        for x in x {
+            raise(&mut m, x.abs());
+        }
+        raise(&mut s[j % 4], m);
+        raise(&mut e[j % 4], m - rounding_of(row));
+    }
+    raise_all(stat, s);
+    raise_all(excess, e);
+}
+
 /// The most free vertices between two consecutive data vertices (open: also before the first and
 /// after the last; closed: across the wrap), `data_vertex` strictly increasing.
 fn longest_run(data_vertex: &[usize], vertices: usize, closed: bool) -> usize {
@@ -713,12 +741,70 @@ pub(crate) fn certify(
         .map(|c| sum_over(n, |i| qc[i * d + c]) / n as f64)
         .collect();
     let derivative_kinds = kinds.iter().any(|k| k.on_derivatives());
-    // Without derivative forces, stationarity away from the data vertices is |Hp| alone, so the
-    // pass keeps Hp only at the data vertices (when they are in order, as every stage's are).
-    let compact = !derivative_kinds
-        && data_vertex.windows(2).all(|w| w[0] < w[1])
-        && data_vertex.last().is_none_or(|&v| v < nv);
-    let mut pass = pass(knots, p, &centroid, compact.then_some(data_vertex));
+    // Away from the data vertices and the derivative constraints' stencils, stationarity is
+    // |Hp| alone, so the pass keeps Hp only at those vertices (when the data vertices are in
+    // order, as every stage's are) and takes the maxima over the others itself.
+    let compact =
+        data_vertex.windows(2).all(|w| w[0] < w[1]) && data_vertex.last().is_none_or(|&v| v < nv);
+    // The stencils' vertices that are not data vertices, in order.
+    let stencil: Vec<usize> = if compact && derivative_kinds {
+        let mut s: Vec<usize> = kinds
+            .iter()
+            .flat_map(|k| k.derivative_vertices(data_vertex, nv))
+            .filter_map(|v| divdiff::derivative_stencil(knots, v, rule).ok())
+            .flat_map(|st| st.map(|(u, _)| u))
+            .filter(|u| data_vertex.binary_search(u).is_err())
+            .collect();
+        s.sort_unstable();
+        s.dedup();
+        s
+    } else {
+        Vec::new()
+    };
+    // The data vertices with the stencils' among them, in order; where each stencil vertex went.
+    let mut at_kept = Vec::with_capacity(stencil.len());
+    let kept: std::borrow::Cow<'_, [usize]> = if stencil.is_empty() {
+        data_vertex.into()
+    } else {
+        let mut k = Vec::with_capacity(n + stencil.len());
+        let mut from = 0;
+        for &s in &stencil {
+            let to = data_vertex.partition_point(|&v| v < s);
+            k.extend_from_slice(&data_vertex[from..to]);
+            at_kept.push(k.len());
+            k.push(s);
+            from = to;
+        }
+        k.extend_from_slice(&data_vertex[from..]);
+        k.into()
+    };
+    let mut pass = pass(knots, p, &centroid, compact.then_some(&kept[..]));
+    // Hp and the row sums at the stencils' vertices (s × d, s), split from the data vertices'.
+    let (mut stencil_hp, mut stencil_rows): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+    if !stencil.is_empty() {
+        let (hp_kept, p_kept, rows_kept) = (
+            std::mem::take(&mut pass.hp_data),
+            std::mem::take(&mut pass.p_data),
+            std::mem::take(&mut pass.rows_data),
+        );
+        let s = stencil.len();
+        (stencil_hp, stencil_rows) = (Vec::with_capacity(s * d), Vec::with_capacity(s));
+        pass.hp_data = Vec::with_capacity(n * d);
+        pass.p_data = Vec::with_capacity(n * d);
+        pass.rows_data = Vec::with_capacity(n);
+        // (the runs of data vertices between the stencils' vertices, copied whole)
+        let mut from = 0;
+        for &j in at_kept.iter().chain([&kept.len()]) {
+            pass.hp_data.extend_from_slice(&hp_kept[from * d..j * d]);
+            pass.p_data.extend_from_slice(&p_kept[from * d..j * d]);
+            pass.rows_data.extend_from_slice(&rows_kept[from..j]);
+            if j < kept.len() {
+                stencil_hp.extend_from_slice(&hp_kept[j * d..(j + 1) * d]);
+                stencil_rows.push(rows_kept[j]);
+            }
+            from = j + 1;
+        }
+    }
     // The largest coordinate distance from the centroid of n points stored flat (d each).
     let extent_of = |x: &[f64]| {
         let mut e = 0.0f64;
@@ -730,14 +816,17 @@ pub(crate) fn certify(
     let q_extent = extent_of(qc);
     let length = pass.extent.max(q_extent).max(f64::MIN_POSITIVE);
     if !compact {
-        pass.hp_data = data_vertex
-            .iter()
-            .flat_map(|&v| pass.hp[v * d..(v + 1) * d].iter().copied())
-            .collect();
-        pass.p_data = data_vertex
-            .iter()
-            .flat_map(|&v| p.point(v).iter().copied())
-            .collect();
+        // (Sized up front: collected through `flat_map`, whose length is unknown, the two
+        // took 2.5 ms for 10⁵ data vertices.)
+        let at_data = |x: &[f64]| {
+            let mut out = Vec::with_capacity(data_vertex.len() * d);
+            for &v in data_vertex {
+                out.extend_from_slice(&x[v * d..(v + 1) * d]);
+            }
+            out
+        };
+        pass.hp_data = at_data(&pass.hp);
+        pass.p_data = at_data(p.coords());
     }
     // L_data: the data vertices' and data points' largest coordinate distance from the
     // centroid, the scale of the data constraints' violations. (L itself also counts the other
@@ -751,7 +840,7 @@ pub(crate) fn certify(
         Some(m) => crate::Multipliers::from(m),
         None => crate::Multipliers::uniform(d, n, hp_data.iter().map(|x| -x).collect()),
     };
-    let mut terms = Terms::new(n, d, nv, derivative_kinds);
+    let mut terms = Terms::new(n, d);
     let at = At {
         p,
         data_points: &pass.p_data,
@@ -771,6 +860,7 @@ pub(crate) fn certify(
     // over ROUNDING_COUNTS_AS.
     let mut hp_max = if compact { pass.free_stat } else { 0.0 };
     raise_abs(&mut hp_max, if compact { hp_data } else { &pass.hp }, 0.0);
+    raise_abs(&mut hp_max, &stencil_hp, 0.0);
     let rounding =
         ROUNDING_MULTIPLE * f64::EPSILON * (pass.h_norm + terms.stiffness) * pass.magnitude;
     let force = hp_max
@@ -786,12 +876,50 @@ pub(crate) fn certify(
     let stat = if compact {
         let mut stat = pass.free_stat;
         excess = pass.free_excess;
+        // The derivative forces: at a data vertex, into its Hp (and out of its reaction, which
+        // balances every other force there: a clamped end's), at a stencil's other vertices
+        // beside their Hp; at a vertex the pass did not keep (never: `derivative_vertices`
+        // names every stencil), unbalanced.
+        let mut at_data: Vec<(usize, usize, f64)> = Vec::new();
+        let mut stencil_force = vec![0.0; stencil_hp.len()];
+        let reaction = multipliers.values_mut();
+        for (k, f) in terms.derivative_forces() {
+            let (v, c) = (k / d, k % d);
+            if let Ok(i) = data_vertex.binary_search(&v) {
+                if reactions {
+                    reaction[i * d + c] -= f;
+                    terms.force_data[i * d + c] -= f;
+                }
+                at_data.push((i, c, f));
+            } else if let Ok(s) = stencil.binary_search(&v) {
+                stencil_force[s * d + c] = f;
+            } else {
+                stat = f64::INFINITY;
+            }
+        }
+        for (s, (hp, &row)) in stencil_hp.chunks_exact(d).zip(&stencil_rows).enumerate() {
+            let mut m = 0.0f64;
+            for (h, f) in hp.iter().zip(&stencil_force[s * d..(s + 1) * d]) {
+                raise(&mut m, (h + f).abs());
+            }
+            raise(&mut stat, m);
+            raise(&mut excess, m - rounding_of(row));
+        }
         let (h, f, r) = (hp_data, &terms.force_data, &terms.rounding_data);
         let rows = (h.len() / d).min(f.len() / d).min(r.len());
+        let mut forced = at_data.iter().peekable();
+        let mut with_force = vec![0.0; d];
         // (what one rounding of a stiffly weighted vertex exerts is not a residual; the
         // residual past the vertex's own level too, from the same largest component)
         for i in 0..rows {
-            let (hi, fi) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
+            let (mut hi, fi) = (&h[i * d..(i + 1) * d], &f[i * d..(i + 1) * d]);
+            if forced.peek().is_some_and(|&&(j, _, _)| j == i) {
+                with_force.copy_from_slice(hi);
+                while let Some((_, c, f)) = forced.next_if(|&&(j, _, _)| j == i) {
+                    with_force[*c] += f;
+                }
+                hi = &with_force;
+            }
             let mut m = 0.0;
             for (h, f) in hi.iter().zip(fi) {
                 let r = (h + f).abs();
@@ -807,25 +935,25 @@ pub(crate) fn certify(
         stat
     } else {
         // Hp's own buffer takes the residual (Hp is not needed after this): at the data vertices
-        // first, their derivative forces then cleared, and at every vertex, Hp + the derivative
-        // forces, in one pass that also takes the maxima.
+        // first, their derivative forces then spent, then the rest of the derivative forces at
+        // their vertices, and at every vertex the maxima.
         let mut r = std::mem::take(&mut pass.hp);
-        let all: &mut [f64] = terms.force_all.as_deref_mut().unwrap_or_default();
-        let derivative = !all.is_empty();
+        let mut forces = terms.derivative_forces();
         let reaction = multipliers.values_mut();
         for (i, &v) in data_vertex.iter().enumerate() {
             // A fixed data vertex's reaction balances every other force there: where a
             // derivative constraint's stencil reaches a data vertex (a clamped end's), its force
             // too.
-            if derivative {
-                for c in 0..d {
-                    let f = all[v * d + c];
+            for c in 0..d {
+                let k = v * d + c;
+                if let Ok(j) = forces.binary_search_by_key(&k, |&(k, _)| k) {
+                    let f = forces[j].1;
                     if reactions {
                         reaction[i * d + c] -= f;
                         terms.force_data[i * d + c] -= f;
                     }
-                    r[v * d + c] += f;
-                    all[v * d + c] = 0.0;
+                    r[k] += f;
+                    forces[j].1 = 0.0;
                 }
             }
             for (rc, f) in r[v * d..(v + 1) * d]
@@ -840,27 +968,45 @@ pub(crate) fn certify(
                 *rc = (rc.abs() - rounding).max(0.0);
             }
         }
-        // The residual (Hp + the derivative forces, as the data vertices' are now), its largest
-        // component and that component's part beyond the vertex's level, four vertices at a
-        // time in independent running maxima.
+        for &(k, f) in &forces {
+            r[k] += f;
+        }
+        // The residual's largest component at every vertex and that component's part beyond
+        // the vertex's level: maxima, the same bits in any order, so chunk by chunk in
+        // parallel (`crate::par`; the arrays are 19 MB at N = 8·10⁵, d = 2, more than one core
+        // streams in the time).
         let rows = &pass.rows;
-        let force = |k: usize| if derivative { all[k] } else { 0.0 };
-        let largest = |j: usize| {
-            let mut m = 0.0f64;
-            for (k, x) in (j * d..).zip(&r[j * d..(j + 1) * d]) {
-                raise(&mut m, (x + force(k)).abs());
-            }
-            m
-        };
-        let (mut stat_lanes, mut excess_lanes) = ([0.0f64; 4], [0.0f64; 4]);
-        by_lanes(rows.len().min(r.len() / d), |l, j| {
-            let m = largest(j);
-            raise(&mut stat_lanes[l], m);
-            raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
-        });
+        let vertices = rows.len().min(r.len() / d);
+        let parts = crate::par::map(
+            crate::par::ranges(vertices, crate::par::CHUNK_VERTICES),
+            |range| {
+                let (r, rows) = (&r[range.start * d..range.end * d], &rows[range]);
+                let (mut stat, mut excess) = (0.0f64, 0.0f64);
+                match d {
+                    2 => residual_maxima::<2>(r, rows, rounding_of, &mut stat, &mut excess),
+                    3 => residual_maxima::<3>(r, rows, rounding_of, &mut stat, &mut excess),
+                    _ => {
+                        let (mut stat_lanes, mut excess_lanes) = ([0.0f64; 4], [0.0f64; 4]);
+                        by_lanes(rows.len(), |l, j| {
+                            let mut m = 0.0f64;
+                            for x in &r[j * d..(j + 1) * d] {
+                                raise(&mut m, x.abs());
+                            }
+                            raise(&mut stat_lanes[l], m);
+                            raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
+                        });
+                        raise_all(&mut stat, stat_lanes);
+                        raise_all(&mut excess, excess_lanes);
+                    }
+                }
+                (stat, excess)
+            },
+        );
         let mut stat = 0.0f64;
-        raise_all(&mut stat, stat_lanes);
-        raise_all(&mut excess, excess_lanes);
+        for (s, e) in parts {
+            raise(&mut stat, s);
+            raise(&mut excess, e);
+        }
         stat
     };
     // The duality gap bounds E(p) − E* for a feasible p; relative to E (or, for E ≈ 0, to the
@@ -872,14 +1018,14 @@ pub(crate) fn certify(
             .max(f64::MIN_POSITIVE);
     // The arc test (crate::arcs): a lower bound on the objective's excess over its optimum
     // from the net force on runs of vertices, relative to the objective (E, plus smoothing's
-    // penalty) as the gap is to E. Made where no derivative constraint acts (the compact pass),
+    // penalty) as the gap is to E. Made where no derivative constraint acts (in the compact pass),
     // and only where a bound from the residuals the pass has seen could reach [`ARC_GATE`] of
     // it: any arc's net force is at most the sum of its vertices' residuals, and its stiffness
     // at least the least k of a span (the pass's compliance).
     let energy_scale = (pass.energy + terms.penalty)
         .max(f64::EPSILON * force * length)
         .max(f64::MIN_POSITIVE);
-    let arc = if compact {
+    let arc = if compact && !derivative_kinds {
         let weights = kinds.iter().find_map(|k| k.penalty_weights());
         // (Σ over an arc's vertices and coordinates of |residual| bounds its net force in every
         // coordinate, and the sum of squares that the bound takes.)
@@ -1032,6 +1178,85 @@ mod tests {
     /// vertex, as before L_data, the miss read as ~1e-13 and the curve was certified: the FAR
     /// sweep of `xtask/sweeps/refine.py` (seed 1, case 444) met such a curve, its data vertices
     /// 1e53 outside their balls, certified at 5e-20.
+    /// The compact pass with derivative constraints keeps Hp at the clamped ends' stencils
+    /// (vertices 0, 1, 2 and the last three; 1, 2 and their mirrors are not data vertices) and
+    /// balances it there by the ends' forces: the linear solve's answer is certified; the same
+    /// answer with one vertex moved by 1e-4 is refused; and so is the answer with the ends'
+    /// forces 0.1 % off and the data vertices' reactions recomputed (they absorb the error at
+    /// the end vertices, so only the stencils' other vertices can show it). Fails if the
+    /// stencils' forces are dropped (the answer refused) or their vertices left unchecked (the
+    /// wrong forces certified).
+    #[test]
+    fn the_compact_pass_checks_the_derivative_stencils() {
+        use crate::{Boundary, Constraint, Problem, SolveOptions};
+        let (n, k) = (40, 3);
+        let q: Vec<f64> = (0..n)
+            .flat_map(|i| {
+                let t = i as f64 * 0.3;
+                [t.cos() * (1.0 + 0.1 * (i % 3) as f64), t.sin()]
+            })
+            .collect();
+        let q = Points::new(2, q).unwrap();
+        let ends = Boundary::Clamped {
+            start: vec![0.5, 2.0],
+            end: vec![-1.0, -0.5],
+        };
+        let problem = Problem::new(q.clone())
+            .with_topology(Topology::Open)
+            .with_k(k)
+            .with_boundary(ends);
+        let (_, knots) = crate::split::split(&q, &problem.data_knots().unwrap(), k).unwrap();
+        let dv: Vec<usize> = (0..n).map(|i| crate::split::data_vertex(i, k)).collect();
+        let options = SolveOptions::default();
+        let fp = crate::stage::FixedProblem {
+            knots: &knots,
+            q: &q,
+            data_vertex: &dv,
+            constraint: &Constraint::Interpolate,
+            problem: &problem,
+            derivatives: true,
+            stride: k + 1,
+            uniform_spans: true,
+            warm: None,
+            recycled: Default::default(),
+            options: &options,
+        };
+        let sol = crate::linear::clamped(&fp).unwrap();
+        let judged = |p: &Points, multipliers: Option<Vec<Vec<f64>>>, derivative| {
+            let (c, _) = super::certify(
+                &knots,
+                p,
+                &q,
+                &dv,
+                &fp.kinds(),
+                multipliers,
+                derivative,
+                problem.derivative,
+                options.active_rtol,
+            );
+            c.kkt_residual
+        };
+        let own = judged(&sol.points, sol.multipliers.clone(), &sol.derivative);
+        assert!(own <= 1e-9, "the clamped answer scores {own:e}");
+        let reactions = judged(&sol.points, None, &sol.derivative);
+        assert!(
+            reactions <= 1e-9,
+            "with its reactions it scores {reactions:e}"
+        );
+        let last = sol.points.len() - 1;
+        for v in [1, 2, last - 1, last - 2, 13] {
+            let mut moved = sol.points.clone();
+            moved.point_mut(v)[1] += 1e-4;
+            let score = judged(&moved, sol.multipliers.clone(), &sol.derivative);
+            assert!(score > 1e-6, "vertex {v} moved scores {score:e}");
+        }
+        let off: Vec<(Vec<f64>, Vec<f64>)> = (sol.derivative.iter())
+            .map(|(dual, force)| (dual.clone(), force.iter().map(|f| f * 1.001).collect()))
+            .collect();
+        let score = judged(&sol.points, None, &off);
+        assert!(score > 1e-6, "forces 0.1 % off score {score:e}");
+    }
+
     #[test]
     fn a_curve_running_off_with_its_data_vertices_off_the_data_is_refused() {
         use crate::{Boundary, Constraint, Problem, SolveOptions};

@@ -66,11 +66,18 @@ impl Problem {
         // (Centring rounds: points distinct before may coincide after; refused, not solved.)
         centred.validate()?;
         let mut r = run_rescaled(&centred)?;
-        for x in r.points.coords_mut().chunks_exact_mut(d) {
-            for (x, c) in x.iter_mut().zip(&centroid) {
-                *x += c;
+        // (In parallel chunks: at N = 8·10⁵, d = 2, one core took ~1 ms over the 12.8 MB.)
+        let chunks = r
+            .points
+            .coords_mut()
+            .chunks_mut(crate::par::CHUNK_VERTICES * d);
+        crate::par::map(chunks.collect(), |chunk| {
+            for x in chunk.chunks_exact_mut(d) {
+                for (x, c) in x.iter_mut().zip(&centroid) {
+                    *x += c;
+                }
             }
-        }
+        });
         self.accept(r)
     }
 
@@ -227,11 +234,28 @@ impl Problem {
 
 /// The largest span of `knots` over the smallest (∞ when a span is 0).
 fn span_ratio(knots: &divdiff::Knots) -> f64 {
-    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-    for w in knots.values().windows(2) {
-        lo = lo.min(w[1] - w[0]);
-        hi = hi.max(w[1] - w[0]);
+    // (four spans at a time into four lanes, from arrays of four: one running minimum and
+    // maximum waited on each other's compares, ~1 ms at N = 8·10⁵; both are exact, so the same
+    // in any order)
+    let t = knots.values();
+    let spans = t.len().saturating_sub(1);
+    let (a, b) = (&t[..spans], t.get(1..).unwrap_or_default());
+    let ((a, a_rest), (b, b_rest)) = (a.as_chunks::<4>(), b.as_chunks::<4>());
+    let (mut lo, mut hi) = ([f64::INFINITY; 4], [0.0f64; 4]);
+    let mut take = |l: usize, h: f64| {
+        lo[l] = lo[l].min(h);
+        hi[l] = hi[l].max(h);
+    };
+    for (a, b) in a.iter().zip(b) {
+        for l in 0..4 {
+            take(l, b[l] - a[l]);
+        }
     }
+    for (a, b) in a_rest.iter().zip(b_rest) {
+        take(0, b - a);
+    }
+    let lo = lo.into_iter().fold(f64::INFINITY, f64::min);
+    let hi = hi.into_iter().fold(0.0f64, f64::max);
     if lo > 0.0 {
         hi / lo
     } else {

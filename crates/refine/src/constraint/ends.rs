@@ -79,6 +79,15 @@ impl Kind for Ends<'_> {
         Ok(())
     }
 
+    fn derivative_vertices(&self, _: &[usize], vertices: usize) -> Vec<usize> {
+        let last = vertices - 1;
+        [0, last]
+            .into_iter()
+            .zip(self.sets())
+            .map(|(v, _)| v)
+            .collect()
+    }
+
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
         let last = at.knots.vertex_count() - 1;
         let far = super::far_derivative_threshold(at.q, at.knots, at.data_vertex);

@@ -237,8 +237,11 @@ impl At<'_> {
 pub(crate) struct Terms {
     /// Σ (constraint gradient × multiplier) at the data vertices (n × d).
     pub force_data: Vec<f64>,
-    /// Σ L_cᵀ z_c of derivative constraints at every vertex (N × d), when any.
-    pub force_all: Option<Vec<f64>>,
+    /// The derivative constraints' forces L_cᵀ z_c at their stencils' vertices: (u·d + k,
+    /// coefficient × force_k) for vertex u and coordinate k, in the order added (sum them with
+    /// [`Terms::derivative_forces`]). Sparse: a few vertices each, where a dense N × d array
+    /// cost a clamped curve of 8·10⁵ vertices 0.8 ms to clear and more to read.
+    pub derivative: Vec<(usize, f64)>,
     /// Largest violation, in length units.
     pub primal: f64,
     /// Largest violation relative to the constraint's own scale (derivative constraints).
@@ -273,10 +276,10 @@ pub(crate) struct Terms {
 }
 
 impl Terms {
-    pub(crate) fn new(n: usize, d: usize, nv: usize, derivative: bool) -> Self {
+    pub(crate) fn new(n: usize, d: usize) -> Self {
         Terms {
             force_data: vec![0.0; n * d],
-            force_all: derivative.then(|| vec![0.0; nv * d]),
+            derivative: Vec::new(),
             primal: 0.0,
             primal_rel: 0.0,
             dual: 0.0,
@@ -290,6 +293,23 @@ impl Terms {
             next_dual: 0,
             reach: 0.0,
         }
+    }
+
+    /// The derivative forces summed per vertex coordinate: (u·d + k, Σ) sorted by u·d + k, each
+    /// sum from 0 in the order the terms were added (as a dense array cleared to 0 and
+    /// accumulated in that order gives it, bit for bit).
+    pub(crate) fn derivative_forces(&self) -> Vec<(usize, f64)> {
+        let mut terms = self.derivative.clone();
+        // (stable: equal indices keep the order they were added in)
+        terms.sort_by_key(|&(k, _)| k);
+        let mut out: Vec<(usize, f64)> = Vec::with_capacity(terms.len());
+        for (k, f) in terms {
+            match out.last_mut() {
+                Some((last, sum)) if *last == k => *sum += f,
+                _ => out.push((k, 0.0 + f)),
+            }
+        }
+        out
     }
 }
 
@@ -325,6 +345,14 @@ pub(crate) trait Kind {
     /// the knots enter the constraint).
     fn on_derivatives(&self) -> bool {
         false
+    }
+
+    /// The vertices v whose derivative stencils [`Kind::certify`] checks (what it passes
+    /// [`certify_derivative`]), given the data vertices and the number of vertices: the
+    /// certificate keeps Hp at their stencils' vertices beside the data vertices'. None for a
+    /// kind that does not act on derivatives.
+    fn derivative_vertices(&self, _data_vertex: &[usize], _vertices: usize) -> Vec<usize> {
+        Vec::new()
     }
 
     /// Whether it may need the full-vertex backend on the whole first stage (then
@@ -598,10 +626,11 @@ pub(crate) const FAR_DERIVATIVE_BOUND: f64 = 1e6;
 /// [`derivative_rows`] and [`certify_derivative`]).
 pub(crate) fn far_derivative_threshold(q: &Points, knots: &Knots, data_vertex: &[usize]) -> f64 {
     let (t, dv) = (knots.values(), data_vertex);
-    let slope = (1..q.len()).fold(0.0f64, |a, i| {
-        let chord = banded::vector::dist(q.point(i), q.point(i - 1));
-        a.max(chord / (t[dv[i]] - t[dv[i - 1]]))
-    });
+    // (the chords four at a time, as `dist` gives them: one at a time they were most of it)
+    let mut chords = vec![0.0; q.len().saturating_sub(1)];
+    banded::vector::consecutive_dists(q.coords(), q.dim(), &mut chords);
+    let slope = (chords.iter().zip(dv.windows(2)))
+        .fold(0.0f64, |a, (chord, v)| a.max(chord / (t[v[1]] - t[v[0]])));
     FAR_DERIVATIVE_BOUND * slope
 }
 
@@ -700,7 +729,6 @@ fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
     let Some((stencil, y)) = derivative_violation(at, terms, v, set) else {
         return;
     };
-    let x = at.p.coords();
     let (zeta, force) = match at.duals.get(terms.next_dual) {
         Some(z) => z,
         None => {
@@ -710,10 +738,9 @@ fn derivative_terms(at: &At<'_>, terms: &mut Terms, v: usize, set: &ConvexSet) {
     };
     terms.next_dual += 1;
     let cmax = stencil.iter().fold(0.0f64, |a, &(_, c)| a.max(c.abs()));
-    let all = terms.force_all.get_or_insert_with(|| vec![0.0; x.len()]);
     for &(u, c) in stencil.iter() {
-        for k in 0..d {
-            all[u * d + k] += c * force[k];
+        for (k, f) in force[..d].iter().enumerate() {
+            terms.derivative.push((u * d + k, c * f));
         }
     }
     let rows = crate::backend::full::set_rows(set, d);

@@ -118,6 +118,13 @@ impl Kind for Tangents<'_> {
         Ok(())
     }
 
+    fn derivative_vertices(&self, data_vertex: &[usize], _: usize) -> Vec<usize> {
+        // (the data points `sets` yields a set for)
+        (self.0.iter().zip(data_vertex))
+            .filter_map(|(t, &v)| t.as_ref().map(|_| v))
+            .collect()
+    }
+
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
         let far = super::far_derivative_threshold(at.q, at.knots, at.data_vertex);
         for (i, set) in self.sets(at.q.dim()) {
