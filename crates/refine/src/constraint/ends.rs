@@ -19,6 +19,12 @@ use crate::Error;
 pub(crate) struct Ends<'a>(pub &'a Boundary);
 
 impl Ends<'_> {
+    /// The vertices the two sets constrain the derivative at, of `count` vertices: the first
+    /// and the last (the one place rows, certificate and [`Kind::derivative_vertices`] read).
+    fn vertices(count: usize) -> [usize; 2] {
+        [0, count - 1]
+    }
+
     /// The set at each end (0 = start, 1 = end).
     fn sets(&self) -> [ConvexSet; 2] {
         match self.0 {
@@ -71,27 +77,22 @@ impl Kind for Ends<'_> {
     }
 
     fn rows(&self, stage: &FixedProblem<'_>, rows: &mut Rows) -> Result<(), Error> {
-        let last = stage.knots.vertex_count() - 1;
         let far = super::far_derivative_threshold(stage.q, stage.knots, stage.data_vertex);
-        for (k, (v, set)) in [0, last].into_iter().zip(self.sets()).enumerate() {
+        let ends = Self::vertices(stage.knots.vertex_count());
+        for (k, (v, set)) in ends.into_iter().zip(self.sets()).enumerate() {
             super::derivative_rows(stage, rows, ("boundary", k), v, set, far)?;
         }
         Ok(())
     }
 
     fn derivative_vertices(&self, _: &[usize], vertices: usize) -> Vec<usize> {
-        let last = vertices - 1;
-        [0, last]
-            .into_iter()
-            .zip(self.sets())
-            .map(|(v, _)| v)
-            .collect()
+        Self::vertices(vertices).to_vec()
     }
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
-        let last = at.knots.vertex_count() - 1;
         let far = super::far_derivative_threshold(at.q, at.knots, at.data_vertex);
-        for (v, set) in [0, last].into_iter().zip(self.sets()) {
+        let ends = Self::vertices(at.knots.vertex_count());
+        for (v, set) in ends.into_iter().zip(self.sets()) {
             super::certify_derivative(at, terms, v, set, far);
         }
     }

@@ -28,12 +28,18 @@ fn unit(v: &[f64]) -> Vec<f64> {
 }
 
 impl Tangents<'_> {
-    /// Each constraint's data point and set (on the stencil at its data vertex).
-    fn sets(&self, d: usize) -> impl Iterator<Item = (usize, ConvexSet)> + '_ {
+    /// Each constraint's data point and tangent (the one place rows, certificate and
+    /// [`Kind::derivative_vertices`] read which data points carry one).
+    fn constrained(&self) -> impl Iterator<Item = (usize, &Tangent)> + '_ {
         self.0
             .iter()
             .enumerate()
-            .filter_map(move |(i, t)| Some((i, set(t.as_ref()?, d))))
+            .filter_map(|(i, t)| Some((i, t.as_ref()?)))
+    }
+
+    /// Each constraint's data point and set (on the stencil at its data vertex).
+    fn sets(&self, d: usize) -> impl Iterator<Item = (usize, ConvexSet)> + '_ {
+        self.constrained().map(move |(i, t)| (i, set(t, d)))
     }
 }
 
@@ -119,10 +125,7 @@ impl Kind for Tangents<'_> {
     }
 
     fn derivative_vertices(&self, data_vertex: &[usize], _: usize) -> Vec<usize> {
-        // (the data points `sets` yields a set for)
-        (self.0.iter().zip(data_vertex))
-            .filter_map(|(t, &v)| t.as_ref().map(|_| v))
-            .collect()
+        self.constrained().map(|(i, _)| data_vertex[i]).collect()
     }
 
     fn certify(&self, at: &At<'_>, terms: &mut Terms) {
