@@ -658,32 +658,6 @@ fn sweep(
 /// (a thousandth of the acceptance: skipped, it could not have refused).
 const ARC_GATE: f64 = 1e-12;
 
-/// The stationarity maxima over the vertices j of `r` (points of D coordinates, stored flat):
-/// `stat` ← max(`stat`, m_j), `excess` ← max(`excess`, m_j − `rounding_of`(`rows`_j)), where
-/// m_j is the largest |r_jc|, NaNs passed over as [`raise`] does. Maxima do not round, so any
-/// order gives the same bits; this one takes the vertices into four lanes, with the dimension
-/// a constant and no bounds checks in the loop.
-#[inline(always)]
-fn residual_maxima<const D: usize>(
-    r: &[f64],
-    rows: &[f64],
-    rounding_of: impl Fn(f64) -> f64,
-    stat: &mut f64,
-    excess: &mut f64,
-) {
-    let (mut s, mut e) = ([0.0f64; 4], [0.0f64; 4]);
-    for (j, (x, &row)) in r.as_chunks::<D>().0.iter().zip(rows).enumerate() {
-        let mut m = 0.0f64;
-        for x in x {
-            raise(&mut m, x.abs());
-        }
-        raise(&mut s[j % 4], m);
-        raise(&mut e[j % 4], m - rounding_of(row));
-    }
-    raise_all(stat, s);
-    raise_all(excess, e);
-}
-
 /// The most free vertices between two consecutive data vertices (open: also before the first and
 /// after the last; closed: across the wrap), `data_vertex` strictly increasing.
 fn longest_run(data_vertex: &[usize], vertices: usize, closed: bool) -> usize {
@@ -883,7 +857,7 @@ pub(crate) fn certify(
         let mut at_data: Vec<(usize, usize, f64)> = Vec::new();
         let mut stencil_force = vec![0.0; stencil_hp.len()];
         let reaction = multipliers.values_mut();
-        for (k, f) in terms.derivative_forces() {
+        for (k, f) in Terms::derivative_forces(std::mem::take(&mut terms.derivative)) {
             let (v, c) = (k / d, k % d);
             if let Ok(i) = data_vertex.binary_search(&v) {
                 if reactions {
@@ -938,7 +912,7 @@ pub(crate) fn certify(
         // first, their derivative forces then spent, then the rest of the derivative forces at
         // their vertices, and at every vertex the maxima.
         let mut r = std::mem::take(&mut pass.hp);
-        let mut forces = terms.derivative_forces();
+        let mut forces = Terms::derivative_forces(std::mem::take(&mut terms.derivative));
         let reaction = multipliers.values_mut();
         for (i, &v) in data_vertex.iter().enumerate() {
             // A fixed data vertex's reaction balances every other force there: where a
@@ -972,41 +946,21 @@ pub(crate) fn certify(
             r[k] += f;
         }
         // The residual's largest component at every vertex and that component's part beyond
-        // the vertex's level: maxima, the same bits in any order, so chunk by chunk in
-        // parallel (`crate::par`; the arrays are 19 MB at N = 8·10⁵, d = 2, more than one core
-        // streams in the time).
+        // the vertex's level, four vertices at a time in independent running maxima. (Only data
+        // vertices out of order come here: every stage's take the compact pass.)
         let rows = &pass.rows;
-        let vertices = rows.len().min(r.len() / d);
-        let parts = crate::par::map(
-            crate::par::ranges(vertices, crate::par::CHUNK_VERTICES),
-            |range| {
-                let (r, rows) = (&r[range.start * d..range.end * d], &rows[range]);
-                let (mut stat, mut excess) = (0.0f64, 0.0f64);
-                match d {
-                    2 => residual_maxima::<2>(r, rows, rounding_of, &mut stat, &mut excess),
-                    3 => residual_maxima::<3>(r, rows, rounding_of, &mut stat, &mut excess),
-                    _ => {
-                        let (mut stat_lanes, mut excess_lanes) = ([0.0f64; 4], [0.0f64; 4]);
-                        by_lanes(rows.len(), |l, j| {
-                            let mut m = 0.0f64;
-                            for x in &r[j * d..(j + 1) * d] {
-                                raise(&mut m, x.abs());
-                            }
-                            raise(&mut stat_lanes[l], m);
-                            raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
-                        });
-                        raise_all(&mut stat, stat_lanes);
-                        raise_all(&mut excess, excess_lanes);
-                    }
-                }
-                (stat, excess)
-            },
-        );
+        let (mut stat_lanes, mut excess_lanes) = ([0.0f64; 4], [0.0f64; 4]);
+        by_lanes(rows.len().min(r.len() / d), |l, j| {
+            let mut m = 0.0f64;
+            for x in &r[j * d..(j + 1) * d] {
+                raise(&mut m, x.abs());
+            }
+            raise(&mut stat_lanes[l], m);
+            raise(&mut excess_lanes[l], m - rounding_of(rows[j]));
+        });
         let mut stat = 0.0f64;
-        for (s, e) in parts {
-            raise(&mut stat, s);
-            raise(&mut excess, e);
-        }
+        raise_all(&mut stat, stat_lanes);
+        raise_all(&mut excess, excess_lanes);
         stat
     };
     // The duality gap bounds E(p) − E* for a feasible p; relative to E (or, for E ≈ 0, to the

@@ -295,11 +295,10 @@ impl Terms {
         }
     }
 
-    /// The derivative forces summed per vertex coordinate: (u·d + k, Σ) sorted by u·d + k, each
-    /// sum from 0 in the order the terms were added (as a dense array cleared to 0 and
-    /// accumulated in that order gives it, bit for bit).
-    pub(crate) fn derivative_forces(&self) -> Vec<(usize, f64)> {
-        let mut terms = self.derivative.clone();
+    /// The derivative forces `terms` (taken from [`Terms::derivative`]) summed per vertex
+    /// coordinate: (u·d + k, Σ) sorted by u·d + k, each sum from 0 in the order the terms were
+    /// added (as a dense array cleared to 0 and accumulated in that order gives it, bit for bit).
+    pub(crate) fn derivative_forces(mut terms: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
         // (stable: equal indices keep the order they were added in)
         terms.sort_by_key(|&(k, _)| k);
         let mut out: Vec<(usize, f64)> = Vec::with_capacity(terms.len());
