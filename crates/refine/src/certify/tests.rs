@@ -70,13 +70,61 @@ fn pass_is_the_jumps_in(n: usize, d: usize) {
     }
 }
 
-/// A curve whose data vertices miss the data, carried far away elsewhere, is refused: the
-/// exact answer for eight points moved up by 0.05 (clamped ends of 1e12, which put its other
-/// vertices ~1e11 away) is certified for the moved points and refused for the points as
-/// given, its miss over the data's length scale (~0.05 / 4). Over the length scale of every
-/// vertex, as before L_data, the miss read as ~1e-13 and the curve was certified: the FAR
-/// sweep of `xtask/sweeps/refine.py` (seed 1, case 444) met such a curve, its data vertices
-/// 1e53 outside their balls, certified at 5e-20.
+/// The certificate's score of points `p` for data `q`, with these multipliers and derivative
+/// forces, on a clamped stage ([`with_clamped_stage`]).
+type Judge<'a> =
+    dyn Fn(&Points, &Points, Option<Vec<Vec<f64>>>, &[(Vec<f64>, Vec<f64>)]) -> f64 + 'a;
+
+/// The first stage of clamped interpolation of `data` (open, level `k`, its data knots, no
+/// update), solved by the linear clamped solve: `check` gets the answer and a [`Judge`] on that
+/// stage.
+fn with_clamped_stage(
+    data: &Points,
+    k: usize,
+    ends: crate::Boundary,
+    check: impl FnOnce(&crate::stage::FixedSolution, &Judge<'_>),
+) {
+    use crate::{Constraint, Problem, SolveOptions};
+    let problem = Problem::new(data.clone())
+        .with_topology(Topology::Open)
+        .with_k(k)
+        .with_boundary(ends);
+    let (_, knots) = crate::split::split(data, &problem.data_knots().unwrap(), k).unwrap();
+    let dv: Vec<usize> = (0..data.len())
+        .map(|i| crate::split::data_vertex(i, k))
+        .collect();
+    let options = SolveOptions::default();
+    let fp = crate::stage::FixedProblem {
+        knots: &knots,
+        q: data,
+        data_vertex: &dv,
+        constraint: &Constraint::Interpolate,
+        problem: &problem,
+        derivatives: true,
+        stride: k + 1,
+        uniform_spans: true,
+        warm: None,
+        recycled: Default::default(),
+        options: &options,
+    };
+    let sol = crate::linear::clamped(&fp).unwrap();
+    let judge = |p: &Points, q: &Points, multipliers, derivative: &[(Vec<f64>, Vec<f64>)]| {
+        let (c, _) = super::certify(
+            &knots,
+            p,
+            q,
+            &dv,
+            &fp.kinds(),
+            multipliers,
+            derivative,
+            problem.derivative,
+            options.active_rtol,
+        );
+        c.kkt_residual
+    };
+    check(&sol, &judge);
+}
+
 /// The compact pass with derivative constraints keeps Hp at the clamped ends' stencils
 /// (vertices 0, 1, 2 and the last three; 1, 2 and their mirrors are not data vertices) and
 /// balances it there by the ends' forces: the linear solve's answer is certified; the same
@@ -87,8 +135,7 @@ fn pass_is_the_jumps_in(n: usize, d: usize) {
 /// wrong forces certified).
 #[test]
 fn the_compact_pass_checks_the_derivative_stencils() {
-    use crate::{Boundary, Constraint, Problem, SolveOptions};
-    let (n, k) = (40, 3);
+    let n = 40;
     let q: Vec<f64> = (0..n)
         .flat_map(|i| {
             let t = i as f64 * 0.3;
@@ -96,70 +143,45 @@ fn the_compact_pass_checks_the_derivative_stencils() {
         })
         .collect();
     let q = Points::new(2, q).unwrap();
-    let ends = Boundary::Clamped {
+    let ends = crate::Boundary::Clamped {
         start: vec![0.5, 2.0],
         end: vec![-1.0, -0.5],
     };
-    let problem = Problem::new(q.clone())
-        .with_topology(Topology::Open)
-        .with_k(k)
-        .with_boundary(ends);
-    let (_, knots) = crate::split::split(&q, &problem.data_knots().unwrap(), k).unwrap();
-    let dv: Vec<usize> = (0..n).map(|i| crate::split::data_vertex(i, k)).collect();
-    let options = SolveOptions::default();
-    let fp = crate::stage::FixedProblem {
-        knots: &knots,
-        q: &q,
-        data_vertex: &dv,
-        constraint: &Constraint::Interpolate,
-        problem: &problem,
-        derivatives: true,
-        stride: k + 1,
-        uniform_spans: true,
-        warm: None,
-        recycled: Default::default(),
-        options: &options,
-    };
-    let sol = crate::linear::clamped(&fp).unwrap();
-    let judged = |p: &Points, multipliers: Option<Vec<Vec<f64>>>, derivative| {
-        let (c, _) = super::certify(
-            &knots,
-            p,
-            &q,
-            &dv,
-            &fp.kinds(),
-            multipliers,
-            derivative,
-            problem.derivative,
-            options.active_rtol,
+    with_clamped_stage(&q, 3, ends, |sol, judge| {
+        let judged =
+            |p: &Points, multipliers, derivative: &[_]| judge(p, &q, multipliers, derivative);
+        let own = judged(&sol.points, sol.multipliers.clone(), &sol.derivative);
+        assert!(own <= 1e-9, "the clamped answer scores {own:e}");
+        let reactions = judged(&sol.points, None, &sol.derivative);
+        assert!(
+            reactions <= 1e-9,
+            "with its reactions it scores {reactions:e}"
         );
-        c.kkt_residual
-    };
-    let own = judged(&sol.points, sol.multipliers.clone(), &sol.derivative);
-    assert!(own <= 1e-9, "the clamped answer scores {own:e}");
-    let reactions = judged(&sol.points, None, &sol.derivative);
-    assert!(
-        reactions <= 1e-9,
-        "with its reactions it scores {reactions:e}"
-    );
-    let last = sol.points.len() - 1;
-    for v in [1, 2, last - 1, last - 2, 13] {
-        let mut moved = sol.points.clone();
-        moved.point_mut(v)[1] += 1e-4;
-        let score = judged(&moved, sol.multipliers.clone(), &sol.derivative);
-        assert!(score > 1e-6, "vertex {v} moved scores {score:e}");
-    }
-    let off: Vec<(Vec<f64>, Vec<f64>)> = (sol.derivative.iter())
-        .map(|(dual, force)| (dual.clone(), force.iter().map(|f| f * 1.001).collect()))
-        .collect();
-    let score = judged(&sol.points, None, &off);
-    assert!(score > 1e-6, "forces 0.1 % off score {score:e}");
+        let last = sol.points.len() - 1;
+        for v in [1, 2, last - 1, last - 2, 13] {
+            let mut moved = sol.points.clone();
+            moved.point_mut(v)[1] += 1e-4;
+            let score = judged(&moved, sol.multipliers.clone(), &sol.derivative);
+            assert!(score > 1e-6, "vertex {v} moved scores {score:e}");
+        }
+        let off: Vec<(Vec<f64>, Vec<f64>)> = (sol.derivative.iter())
+            .map(|(dual, force)| (dual.clone(), force.iter().map(|f| f * 1.001).collect()))
+            .collect();
+        let score = judged(&sol.points, None, &off);
+        assert!(score > 1e-6, "forces 0.1 % off score {score:e}");
+    });
 }
 
+/// A curve whose data vertices miss the data, carried far away elsewhere, is refused: the
+/// exact answer for eight points moved up by 0.05 (clamped ends of 1e12, which put its other
+/// vertices ~1e11 away) is certified for the moved points and refused for the points as
+/// given, its miss over the data's length scale (~0.05 / 4). Over the length scale of every
+/// vertex, as before L_data, the miss read as ~1e-13 and the curve was certified: the FAR
+/// sweep of `xtask/sweeps/refine.py` (seed 1, case 444) met such a curve, its data vertices
+/// 1e53 outside their balls, certified at 5e-20.
 #[test]
 fn a_curve_running_off_with_its_data_vertices_off_the_data_is_refused() {
-    use crate::{Boundary, Constraint, Problem, SolveOptions};
-    let (n, k) = (8, 3);
+    let n = 8;
     let given: Vec<f64> = (0..n).flat_map(|i| [i as f64, (i as f64).sin()]).collect();
     let moved: Vec<f64> = given
         .iter()
@@ -170,53 +192,21 @@ fn a_curve_running_off_with_its_data_vertices_off_the_data_is_refused() {
         Points::new(2, given).unwrap(),
         Points::new(2, moved).unwrap(),
     );
-    let ends = Boundary::Clamped {
+    let ends = crate::Boundary::Clamped {
         start: vec![1e12, 0.0],
         end: vec![0.0, 1e12],
     };
-    let problem = Problem::new(moved.clone())
-        .with_topology(Topology::Open)
-        .with_k(k)
-        .with_boundary(ends);
-    let (_, knots) = crate::split::split(&moved, &problem.data_knots().unwrap(), k).unwrap();
-    let dv: Vec<usize> = (0..n).map(|i| crate::split::data_vertex(i, k)).collect();
-    let options = SolveOptions::default();
-    let fp = crate::stage::FixedProblem {
-        knots: &knots,
-        q: &moved,
-        data_vertex: &dv,
-        constraint: &Constraint::Interpolate,
-        problem: &problem,
-        derivatives: true,
-        stride: k + 1,
-        uniform_spans: true,
-        warm: None,
-        recycled: Default::default(),
-        options: &options,
-    };
-    let sol = crate::linear::clamped(&fp).unwrap();
-    let far = sol
-        .points
-        .iter()
-        .fold(0.0f64, |a, x| a.max(x[0].abs().max(x[1].abs())));
-    assert!(far > 1e10, "the curve runs {far} far");
-    let judged = |q: &Points| {
-        let (c, _) = super::certify(
-            &knots,
-            &sol.points,
-            q,
-            &dv,
-            &fp.kinds(),
-            sol.multipliers.clone(),
-            &sol.derivative,
-            problem.derivative,
-            options.active_rtol,
-        );
-        c.kkt_residual
-    };
-    let (own, other) = (judged(&moved), judged(&given));
-    assert!(own <= 1e-9, "certified for its own data: {own}");
-    assert!(other >= 1e-3, "refused for the data it misses: {other}");
+    with_clamped_stage(&moved, 3, ends, |sol, judge| {
+        let far = sol
+            .points
+            .iter()
+            .fold(0.0f64, |a, x| a.max(x[0].abs().max(x[1].abs())));
+        assert!(far > 1e10, "the curve runs {far} far");
+        let judged = |q: &Points| judge(&sol.points, q, sol.multipliers.clone(), &sol.derivative);
+        let (own, other) = (judged(&moved), judged(&given));
+        assert!(own <= 1e-9, "certified for its own data: {own}");
+        assert!(other >= 1e-3, "refused for the data it misses: {other}");
+    });
 }
 
 /// The run-off term: 0 within RUN_OFF times what the data and the derivative bounds reach
