@@ -26,6 +26,11 @@
 //! 6. **Files a reader can hold**: no source file over [`MAX_LINES`] lines unless its module
 //!    docs contain a paragraph starting `One piece:` that says why.
 //! 7. **Documented numbers are the code's** (the `constants` block).
+//! 8. **Every saved proptest case is replayed**: each `crates/C/proptest-regressions/P.txt`
+//!    (proptest's file beside the source, `FileFailurePersistence::SourceParallel`) belongs to a
+//!    source file `crates/C/src/P.rs`, and each `crates/C/tests/X.proptest-regressions` to
+//!    `crates/C/tests/X.rs`, that holds a `proptest!` block. A test module moved to another file
+//!    leaves its saved cases behind, where proptest no longer reads them.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -61,6 +66,7 @@ pub fn run(_args: &[String]) -> anyhow::Result<bool> {
     }
     check_sizes(&mut problems)?;
     check_constants(&inv, &mut problems)?;
+    check_regressions(Path::new("crates"), &mut problems)?;
     for p in &problems {
         println!("tidy: {p}");
     }
@@ -296,6 +302,40 @@ fn check_sizes(problems: &mut Vec<String>) -> anyhow::Result<()> {
                  (a module-doc paragraph starting `One piece:`)",
                 path.display()
             ));
+        }
+    }
+    Ok(())
+}
+
+/// Check 8: the saved proptest cases under each crate's `proptest-regressions/` belong to a
+/// source file with property tests (the file proptest derives their path from).
+fn check_regressions(crates: &Path, problems: &mut Vec<String>) -> anyhow::Result<()> {
+    for entry in std::fs::read_dir(crates)? {
+        let krate = entry?.path();
+        let saved = krate.join("proptest-regressions");
+        let mut pairs = Vec::new();
+        for file in files_with(&saved, "txt")? {
+            let source = krate
+                .join("src")
+                .join(file.strip_prefix(&saved)?.with_extension("rs"));
+            pairs.push((file, source));
+        }
+        // An integration test's cases sit beside it: `tests/X.proptest-regressions`.
+        for file in files_with(&krate.join("tests"), "proptest-regressions")? {
+            let source = file.with_extension("rs");
+            pairs.push((file, source));
+        }
+        for (file, source) in pairs {
+            let replayed =
+                std::fs::read_to_string(&source).is_ok_and(|text| text.contains("proptest!"));
+            if !replayed {
+                problems.push(format!(
+                    "{}: saved proptest cases that no test replays ({} holds no `proptest!`); \
+                     move the file beside the tests' source",
+                    file.display(),
+                    source.display()
+                ));
+            }
         }
     }
     Ok(())
@@ -615,6 +655,12 @@ fn walk_modules(path: &Path, owns_dir: bool, problems: &mut Vec<String>) -> anyh
 }
 
 fn rust_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    files_with(dir, "rs")
+}
+
+/// The files under `dir` (recursively, sorted) whose extension is `ext`; none when `dir` does
+/// not exist.
+fn files_with(dir: &Path, ext: &str) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     if !dir.exists() {
         return Ok(out);
@@ -624,8 +670,8 @@ fn rust_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     for entry in entries {
         let path = entry.path();
         if path.is_dir() {
-            out.extend(rust_files(&path)?);
-        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.extend(files_with(&path, ext)?);
+        } else if path.extension().is_some_and(|e| e == ext) {
             out.push(path);
         }
     }
@@ -635,6 +681,34 @@ fn rust_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A saved case beside a source file without property tests (the tests moved away) is
+    /// reported; beside one with them, or a nested module's (`a/tests.rs`), it is not.
+    #[test]
+    fn saved_cases_must_sit_beside_their_tests() {
+        let root = std::env::temp_dir().join(format!("tidy-regressions-{}", std::process::id()));
+        let krate = root.join("k");
+        std::fs::create_dir_all(krate.join("src/a")).unwrap();
+        std::fs::create_dir_all(krate.join("proptest-regressions/a")).unwrap();
+        std::fs::write(krate.join("src/a.rs"), "mod tests;").unwrap();
+        std::fs::write(krate.join("src/a/tests.rs"), "proptest! {}").unwrap();
+        std::fs::write(krate.join("proptest-regressions/a/tests.txt"), "cc 1").unwrap();
+        let mut problems = Vec::new();
+        check_regressions(&root, &mut problems).unwrap();
+        assert!(problems.is_empty(), "{problems:?}");
+        std::fs::create_dir_all(krate.join("tests")).unwrap();
+        std::fs::write(krate.join("tests/t.rs"), "proptest! {}").unwrap();
+        std::fs::write(krate.join("tests/t.proptest-regressions"), "cc 3").unwrap();
+        check_regressions(&root, &mut problems).unwrap();
+        assert!(problems.is_empty(), "{problems:?}");
+        std::fs::write(krate.join("proptest-regressions/a.txt"), "cc 2").unwrap();
+        std::fs::write(krate.join("tests/gone.proptest-regressions"), "cc 4").unwrap();
+        check_regressions(&root, &mut problems).unwrap();
+        std::fs::remove_dir_all(&root).unwrap();
+        assert_eq!(problems.len(), 2, "{problems:?}");
+        assert!(problems[0].contains("a.txt"), "{problems:?}");
+        assert!(problems[1].contains("gone.proptest"), "{problems:?}");
+    }
 
     fn problems_in(src: &str) -> Vec<String> {
         let file = syn::parse_file(src).unwrap();
