@@ -173,6 +173,16 @@ pub struct PolishOptions {
     /// steps and active-set changes that follow cost more than a fresh solve (refine's warm
     /// starts after a knot update set it).
     pub abandon_first: Option<f64>,
+    /// When the polish's matrix does not factor, factor it again with a static regularization
+    /// (default false: the polish then returns what it has). The matrix is singular where the
+    /// optimum is a face rather than a point (P's null space orthogonal to every active normal:
+    /// a curve free to slide between the faces of its boxes), and the shifted factorization
+    /// only preconditions the refinement against the exact system. refine's condensed working
+    /// set sets it (its ROBUSTNESS.md item 41); its full-vertex route leaves it off, where on
+    /// hard derivative constraints the shifted steps ended on worse points than a refusal of the
+    /// polish and the method's own later iterates (two fixtures of refine's error messages then
+    /// went from certified to refused).
+    pub shift_singular: bool,
 }
 
 impl Default for PolishOptions {
@@ -190,6 +200,7 @@ impl Default for PolishOptions {
             apex: false,
             fixed_normals: true,
             abandon_first: None,
+            shift_singular: false,
         }
     }
 }

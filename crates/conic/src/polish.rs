@@ -519,7 +519,12 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
             }
             weights.set_diagonal(bi, &theta);
         }
-        if kkt.factor(&weights, 0.0).is_err() {
+        let factored = if po.shift_singular {
+            factor_or_shift(kkt, &weights, &opts.regularization, po.penalty)
+        } else {
+            kkt.factor(&weights, 0.0)
+        };
+        if factored.is_err() {
             return best;
         }
         // Stationarity R = g + Aᵀz.
@@ -735,6 +740,41 @@ pub(crate) fn polish<K: KktSystem + ?Sized>(
     }
     best
 }
+
+/// Factors the polish's matrix, or, when it is singular (and the caller asks for it,
+/// [`crate::PolishOptions::shift_singular`]), the same with a static regularization
+/// σ D̂ (the method's, [`KktSystem::factor`]): σ from [`crate::Regularization::static_shift`],
+/// grown by `static_growth` up to the first σ above the rounding of the penalty's weights,
+/// [`SHIFT_ABOVE_ROUNDING`] ε / `penalty` (those weights are 1/`penalty` times the diagonal
+/// scale, and a factorization rounds at ε times its largest entries). The matrix is singular
+/// where the active set leaves a direction of the optimum free: P's null space (a translation
+/// of the curve, which the energy does not see) orthogonal to every active normal, a face of
+/// optimal points rather than one point. The steps' refinement runs against the exact system
+/// ([`saddle_solve`]), so σ only preconditions it; the right-hand sides have no part along such
+/// a direction (neither P nor the active normals see it), and the steps leave the point there
+/// but for rounding.
+fn factor_or_shift<K: KktSystem + ?Sized>(
+    kkt: &mut K,
+    weights: &Weights,
+    reg: &crate::Regularization,
+    penalty: f64,
+) -> Result<(), crate::Error> {
+    let mut result = kkt.factor(weights, 0.0);
+    let last = SHIFT_ABOVE_ROUNDING * f64::EPSILON / penalty.max(f64::MIN_POSITIVE);
+    let mut sigma = reg.static_shift;
+    while result.is_err() && sigma.is_finite() && sigma > 0.0 {
+        result = kkt.factor(weights, sigma);
+        if sigma >= last {
+            break;
+        }
+        sigma *= reg.static_growth.max(2.0);
+    }
+    result
+}
+
+/// How far above the rounding of the penalty's weights the last static shift of
+/// [`factor_or_shift`] lies.
+const SHIFT_ABOVE_ROUNDING: f64 = 1e3;
 
 /// The multiple of ε F that bounds the rounding in g + Aᵀz (F with its floor: the size of the
 /// terms the residual is summed from).

@@ -44,6 +44,8 @@ pub(super) fn polish_rounds<C>(
     let mut opts = conic_opts.clone();
     if let Some(po) = opts.polish.as_mut() {
         po.penalty = po.penalty.max(CONDENSED_PENALTY);
+        // A singular polish matrix is a face of optimal points (ROBUSTNESS.md item 41).
+        po.shift_singular = true;
     }
     let conic_opts = &opts;
     while calls < POLISH_ROUNDS {
