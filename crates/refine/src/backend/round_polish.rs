@@ -24,7 +24,8 @@ pub(super) struct Certified<C> {
 /// (`None`: not certified yet): each polished curve is judged (`judge`: the constraints outside
 /// W) and certified, and the calls go on from the polished point while the certificate is above
 /// `target` and falls, and the method's residual fell in the call, at most [`POLISH_ROUNDS`].
-/// `None` when a polished curve left a constraint outside W.
+/// `None` when a polished curve left a constraint outside W. `first`: `sol` already evaluated
+/// on `be` ([`conic::polish::evaluate`]), for the first call.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn polish_rounds<C>(
     be: &mut Condensed<'_>,
@@ -38,6 +39,7 @@ pub(super) fn polish_rounds<C>(
     judge: &mut dyn FnMut(&Points) -> bool,
     certify: Certify<'_, C>,
     left: Option<&mut Option<(conic::Solution, Points)>>,
+    mut first: Option<&conic::polish::Evaluated>,
 ) -> Result<Option<Polished<C>>, Error> {
     let mut calls = 0;
     let mut settled = false;
@@ -52,7 +54,11 @@ pub(super) fn polish_rounds<C>(
         if best.as_ref().is_some_and(|b| b.k <= target) || conic_opts.polish.is_none() {
             break;
         }
-        let Some(p) = conic::polish::polish_solution(be, &sol, conic_opts) else {
+        let polished = match first.take() {
+            Some(ev) => conic::polish::polish_evaluated(be, ev, conic_opts),
+            None => conic::polish::polish_solution(be, &sol, conic_opts),
+        };
+        let Some(p) = polished else {
             break;
         };
         calls += 1;
@@ -159,13 +165,15 @@ impl<'c> ActivePolish<'_, 'c> {
         }
     }
 
-    /// Whether the polish from `sol` would run on a condensation onto W's active points (W of
-    /// balls alone, a fifth or more of it inactive).
-    pub(super) fn prefers_subset(&mut self, sol: &conic::Solution) -> bool {
+    /// Whether the polish from the solution `ev` evaluates would run on a condensation onto
+    /// W's active points (W of balls alone, a fifth or more of it inactive).
+    pub(super) fn prefers_subset(&mut self, ev: Option<&conic::polish::Evaluated>) -> bool {
         if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
             return false;
         }
-        let Some(active) = conic::polish::active_blocks(self.be, sol, self.conic_opts) else {
+        let Some(active) =
+            ev.and_then(|ev| conic::polish::active_blocks_of(self.be, ev, self.conic_opts))
+        else {
             return false;
         };
         let inactive = active.iter().filter(|a| !**a).count();
@@ -173,10 +181,12 @@ impl<'c> ActivePolish<'_, 'c> {
     }
 
     /// The polish calls from `sol` ([`polish_rounds`], none certified yet), on W or on its
-    /// active points; `None` when a polished curve left a constraint it does not hold.
+    /// active points; `None` when a polished curve left a constraint it does not hold. `ev`:
+    /// `sol` evaluated on W's backend ([`conic::polish::evaluate`]; `None`: it could not be).
     pub(super) fn run<C>(
         self,
         sol: &conic::Solution,
+        ev: Option<&conic::polish::Evaluated>,
         judge: &mut dyn FnMut(&Points) -> bool,
         certify: Certify<'_, C>,
     ) -> Result<Option<Polished<C>>, Error> {
@@ -193,7 +203,7 @@ impl<'c> ActivePolish<'_, 'c> {
             target,
         } = self;
         let vars = be.variables().to_vec();
-        let active = conic::polish::active_blocks(be, sol, conic_opts);
+        let active = ev.and_then(|ev| conic::polish::active_blocks_of(be, ev, conic_opts));
         let balls = wsets.iter().all(|s| !matches!(s, PointSet::Faces(_)));
         let n_w = wsets.len();
         // W's positions kept: the interpolated and active points, and the ends the
@@ -242,6 +252,7 @@ impl<'c> ActivePolish<'_, 'c> {
                 judge,
                 certify,
                 None,
+                ev,
             );
         }
         let mut var_of = vec![usize::MAX; n_w];
@@ -321,6 +332,7 @@ impl<'c> ActivePolish<'_, 'c> {
                 &mut judge_sub,
                 &mut certify_sub,
                 Some(&mut left),
+                None,
             )?;
             if polished.is_some() || violated.is_empty() || attempt == SUBSET_ATTEMPTS {
                 // The multipliers returned are W's, as on W's own backend: a knot update's warm
@@ -531,6 +543,7 @@ mod tests {
                 0.0,
                 &mut |_| true,
                 &mut certify,
+                None,
                 None,
             )
             .unwrap()

@@ -379,6 +379,7 @@ fn polish_from_warm<C>(
     if let Some(po) = opts.polish.as_mut() {
         po.abandon_first = Some(WARM_ABANDON);
     }
+    let ev = conic::polish::evaluate(&mut be, &from);
     let polished = ActivePolish {
         be: &mut be,
         cond: &cond,
@@ -391,7 +392,7 @@ fn polish_from_warm<C>(
         margin: WorkingSetOptions::default().margin,
         target: accept,
     }
-    .run(&from, &mut |_| true, certify)?;
+    .run(&from, ev.as_ref(), &mut |_| true, certify)?;
     Ok(match polished {
         Some(Polished {
             best: Some(best),
@@ -694,6 +695,7 @@ fn run_round<C>(
         // it does not get there (or its curve leaves a constraint outside W), the method
         // resumes from the iterate.
         if early && conic_opts.polish.is_some() {
+            let ev = conic::polish::evaluate(&mut be, &sol);
             let on_active = ActivePolish {
                 be: &mut be,
                 cond,
@@ -710,7 +712,7 @@ fn run_round<C>(
                 best: Some(b),
                 settled,
                 ..
-            }) = on_active.run(&sol, &mut |p| judge(p, near), certify)?
+            }) = on_active.run(&sol, ev.as_ref(), &mut |p| judge(p, near), certify)?
             {
                 if b.k <= aim.target || (settled && b.k <= aim.accept) {
                     return Ok(Round {
@@ -844,10 +846,16 @@ fn finish_round<C>(
     // a fifth of W or more is inactive (`ActivePolish`); on W when that polish leaves a point of
     // W it dropped.
     let polish = round.conic_opts.polish.is_some();
-    if certified.k > round.target && polish && round.prefers_subset(sol) {
+    // (Evaluated once for the choice of route and the first polish call on either.)
+    let ev = if certified.k > round.target && polish {
+        conic::polish::evaluate(round.be, sol)
+    } else {
+        None
+    };
+    if ev.is_some() && round.prefers_subset(ev.as_ref()) {
         if let Some(p) = round
             .reborrow()
-            .run(sol, &mut |p| judge(p, near), certify)?
+            .run(sol, ev.as_ref(), &mut |p| judge(p, near), certify)?
         {
             return Ok(Some(match p.best {
                 Some(b) if b.k < certified.k => b,
@@ -868,6 +876,7 @@ fn finish_round<C>(
         &mut |p| judge(p, near),
         certify,
         None,
+        ev.as_ref(),
     )?;
     Ok(polished.and_then(|p| p.best))
 }
