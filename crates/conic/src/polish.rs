@@ -198,7 +198,7 @@ pub fn polish_solution<K: KktSystem + ?Sized>(
 }
 
 /// A solution as the polish starts from it: its point, its residuals and the backend's floors
-/// ([`evaluate`]). A caller that asks for the active set ([`active_blocks_of`]) and then
+/// ([`evaluate`]). A caller that asks for the active set ([`active_blocks`]) and then
 /// polishes ([`polish_evaluated`]) from the same solution evaluates it once (on refine's
 /// condensed backend an evaluation costs about a third of a Newton step).
 #[derive(Clone)]
@@ -208,18 +208,6 @@ pub struct Evaluated {
     floors: crate::Scales,
     iterations: usize,
     status: Status,
-}
-
-/// `sol` evaluated on `kkt` for the polish; `None` when its vectors do not fit the program.
-pub fn evaluate<K: KktSystem + ?Sized>(kkt: &mut K, sol: &Solution) -> Option<Evaluated> {
-    let (pt, res, floors) = evaluated(kkt, sol)?;
-    Some(Evaluated {
-        pt,
-        res,
-        floors,
-        iterations: sol.iterations,
-        status: sol.status,
-    })
 }
 
 /// [`polish_solution`] from the solution `ev` was evaluated at (on the same `kkt`).
@@ -233,12 +221,9 @@ pub fn polish_evaluated<K: KktSystem + ?Sized>(
     Some(out)
 }
 
-/// `sol` as an iterate of `kkt` with its residuals and the backend's floors; `None` when its
-/// vectors do not fit the program.
-fn evaluated<K: KktSystem + ?Sized>(
-    kkt: &mut K,
-    sol: &Solution,
-) -> Option<(Point, Residuals, crate::Scales)> {
+/// `sol` evaluated on `kkt` for the polish (its residuals and the backend's floors); `None` when
+/// its vectors do not fit the program.
+pub fn evaluate<K: KktSystem + ?Sized>(kkt: &mut K, sol: &Solution) -> Option<Evaluated> {
     let (n, m) = (kkt.num_vars(), kkt.cones().rows());
     if sol.x.len() != n || sol.s.len() != m || sol.z.len() != m {
         return None;
@@ -251,7 +236,13 @@ fn evaluated<K: KktSystem + ?Sized>(
     };
     let mut w = crate::ipm::Work::new(n, m);
     let (res, _) = crate::ipm::evaluate(kkt, &pt, &mut w, floors);
-    Some((pt, res, floors))
+    Some(Evaluated {
+        pt,
+        res,
+        floors,
+        iterations: sol.iterations,
+        status: sol.status,
+    })
 }
 
 /// The active set the polish starts from (module docs): the constraints, sorted by block and
@@ -459,23 +450,11 @@ fn push_apex(
     }
 }
 
-/// Which blocks hold a constraint of the active set the polish would start from at `sol`
-/// (its x, s and z; module docs), `None` when it cannot be formed (a second-order block at its
-/// apex without [`crate::PolishOptions::apex`], a malformed solution, no polish options). A
-/// caller may pose the polish's problem on those blocks alone. ([`evaluate`] then
-/// [`active_blocks_of`].)
+/// Which blocks hold a constraint of the active set the polish would start from at the
+/// solution `ev` evaluates (on the same `kkt`; module docs), `None` when it cannot be formed (a
+/// second-order block at its apex without [`crate::PolishOptions::apex`], no polish options). A
+/// caller may pose the polish's problem on those blocks alone.
 pub fn active_blocks<K: KktSystem + ?Sized>(
-    kkt: &mut K,
-    sol: &Solution,
-    opts: &Options,
-) -> Option<Vec<bool>> {
-    opts.polish.as_ref()?;
-    let ev = evaluate(kkt, sol)?;
-    active_blocks_of(kkt, &ev, opts)
-}
-
-/// [`active_blocks`] of the solution `ev` was evaluated at (on the same `kkt`).
-pub fn active_blocks_of<K: KktSystem + ?Sized>(
     kkt: &K,
     ev: &Evaluated,
     opts: &Options,

@@ -167,12 +167,12 @@ impl<'c> ActivePolish<'_, 'c> {
 
     /// Whether the polish from the solution `ev` evaluates would run on a condensation onto
     /// W's active points (W of balls alone, a fifth or more of it inactive).
-    pub(super) fn prefers_subset(&mut self, ev: Option<&conic::polish::Evaluated>) -> bool {
+    pub(super) fn prefers_subset(&self, ev: Option<&conic::polish::Evaluated>) -> bool {
         if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
             return false;
         }
         let Some(active) =
-            ev.and_then(|ev| conic::polish::active_blocks_of(self.be, ev, self.conic_opts))
+            ev.and_then(|ev| conic::polish::active_blocks(self.be, ev, self.conic_opts))
         else {
             return false;
         };
@@ -203,7 +203,7 @@ impl<'c> ActivePolish<'_, 'c> {
             target,
         } = self;
         let vars = be.variables().to_vec();
-        let active = ev.and_then(|ev| conic::polish::active_blocks_of(be, ev, conic_opts));
+        let active = ev.and_then(|ev| conic::polish::active_blocks(be, ev, conic_opts));
         let balls = wsets.iter().all(|s| !matches!(s, PointSet::Faces(_)));
         let n_w = wsets.len();
         // W's positions kept: the interpolated and active points, and the ends the

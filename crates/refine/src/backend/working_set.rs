@@ -852,7 +852,7 @@ fn finish_round<C>(
     } else {
         None
     };
-    if ev.is_some() && round.prefers_subset(ev.as_ref()) {
+    if round.prefers_subset(ev.as_ref()) {
         if let Some(p) = round
             .reborrow()
             .run(sol, ev.as_ref(), &mut |p| judge(p, near), certify)?
