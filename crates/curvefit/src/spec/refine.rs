@@ -453,7 +453,10 @@ fn run(prob: refine::Problem) -> Result<RefineResult, InputError> {
         } => match tiny_ball(&prob) {
             Some(ball) => tiny_ball_refusal(
                 ball,
-                &format!("after knot update {update} (the solve before it was certified: knot_iterations 0 stops there), "),
+                &format!(
+                    "after knot update {update} (the solve before it was certified: knot_iterations {} stops there), ",
+                    update - 1
+                ),
                 solver,
                 iterations,
                 residual,
