@@ -400,8 +400,8 @@ impl<'a> Condensed<'a> {
     /// (the Python bench's noisy star, n = 10⁴, k = 3: 14 iterations, now 11). Measured with the
     /// binary on 36 ball problems at n = 2000 and 10⁴ (the star with radii × 0.5 … 4, open, in
     /// R³, radii over five decades, the wavy circle, random walks; `knot_iterations` 0 and 3):
-    /// 810 iterations in all against 883, none more; on the 633 ball problems of eleven
-    /// `refine.py` sweeps: 15 036 against 15 285, and one more answered (none fewer).
+    /// 810 iterations in all against 883, none more; on the 633 ball problems of twelve
+    /// `refine.py` sweep runs: 15 036 against 15 285, and one more answered (none fewer).
     pub(crate) fn ball_start(&mut self) -> Option<conic::Start> {
         let d = self.d;
         if self
@@ -437,8 +437,9 @@ impl<'a> Condensed<'a> {
             let r = self.rows(v);
             s[r.start] = eps;
             // (A radius of 0 has no interior: the test below refuses it.)
+            // (max/min, not clamp: neither panics on a non-finite F.)
             z[r.start] = if eps > 0.0 {
-                (mu / eps).clamp(START_FORCE_RANGE * f, f)
+                (mu / eps).max(START_FORCE_RANGE * f).min(f)
             } else {
                 f
             };
