@@ -147,6 +147,18 @@ pub(super) struct ActivePolish<'e, 'c> {
 /// At most this fraction of W's variables inactive: the polish runs on W's own backend.
 const POLISH_ON_W: f64 = 0.2;
 
+/// A solution as the polish of a round starts from it ([`ActivePolish::start`]).
+pub(super) struct PolishStart<'s> {
+    /// The interior-point iterate (or warm point) polished.
+    sol: &'s conic::Solution,
+    /// `sol` evaluated on W's backend ([`conic::polish::evaluate`]; `None`: its vectors do not
+    /// fit), for the first polish call.
+    pub(super) ev: Option<conic::polish::Evaluated>,
+    /// W's variables in the active set the polish starts from ([`conic::polish::active_blocks`];
+    /// `None`: it cannot be formed).
+    active: Option<Vec<bool>>,
+}
+
 impl<'c> ActivePolish<'_, 'c> {
     /// The same polish borrowing this one's backend for a shorter while ([`ActivePolish::run`]
     /// consumes it; the caller goes on with the backend afterwards).
@@ -165,31 +177,39 @@ impl<'c> ActivePolish<'_, 'c> {
         }
     }
 
-    /// Whether the polish from the solution `ev` evaluates would run on a condensation onto
-    /// W's active points (W of balls alone, a fifth or more of it inactive).
-    pub(super) fn prefers_subset(&self, ev: Option<&conic::polish::Evaluated>) -> bool {
+    /// `sol` as the polish starts from it ([`PolishStart`]): evaluated on W's backend and its
+    /// active set read off, once for the choice of route and the calls on either.
+    pub(super) fn start<'s>(&mut self, sol: &'s conic::Solution) -> PolishStart<'s> {
+        let ev = conic::polish::evaluate(self.be, sol);
+        let active = ev
+            .as_ref()
+            .and_then(|ev| conic::polish::active_blocks(self.be, ev, self.conic_opts));
+        PolishStart { sol, ev, active }
+    }
+
+    /// Whether the polish from `start` runs on a condensation onto W's active points (W of
+    /// balls alone, a fifth or more of it inactive).
+    pub(super) fn prefers_subset(&self, start: &PolishStart<'_>) -> bool {
         if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
             return false;
         }
-        let Some(active) =
-            ev.and_then(|ev| conic::polish::active_blocks(self.be, ev, self.conic_opts))
-        else {
+        let Some(active) = &start.active else {
             return false;
         };
         let inactive = active.iter().filter(|a| !**a).count();
         inactive as f64 > POLISH_ON_W * active.len() as f64
     }
 
-    /// The polish calls from `sol` ([`polish_rounds`], none certified yet), on W or on its
-    /// active points; `None` when a polished curve left a constraint it does not hold. `ev`:
-    /// `sol` evaluated on W's backend ([`conic::polish::evaluate`]; `None`: it could not be).
+    /// The polish calls from `start` ([`polish_rounds`], none certified yet), on W or on its
+    /// active points ([`ActivePolish::prefers_subset`]); `None` when a polished curve left a
+    /// constraint it does not hold.
     pub(super) fn run<C>(
         self,
-        sol: &conic::Solution,
-        ev: Option<&conic::polish::Evaluated>,
+        start: &PolishStart<'_>,
         judge: &mut dyn FnMut(&Points) -> bool,
         certify: Certify<'_, C>,
     ) -> Result<Option<Polished<C>>, Error> {
+        let subset = self.prefers_subset(start);
         let ActivePolish {
             be,
             cond,
@@ -202,9 +222,8 @@ impl<'c> ActivePolish<'_, 'c> {
             margin,
             target,
         } = self;
+        let sol = start.sol;
         let vars = be.variables().to_vec();
-        let active = ev.and_then(|ev| conic::polish::active_blocks(be, ev, conic_opts));
-        let balls = wsets.iter().all(|s| !matches!(s, PointSet::Faces(_)));
         let n_w = wsets.len();
         // W's positions kept: the interpolated and active points, and the ends the
         // condensation starts at.
@@ -216,13 +235,11 @@ impl<'c> ActivePolish<'_, 'c> {
         if !cond.closed {
             keep[n_w - 1] = true;
         }
-        let mut inactive = 0;
-        if let Some(active) = &active {
+        if let Some(active) = &start.active {
             for (v, &j) in vars.iter().enumerate() {
                 if active[v] {
                     keep[j] = true;
                 } else {
-                    inactive += 1;
                     // A point the iterate does not count as active but that nearly leaves its
                     // set is kept too (the polish decides; see SUBSET_NEAR).
                     let near = wsets[j].closeness(
@@ -235,11 +252,7 @@ impl<'c> ActivePolish<'_, 'c> {
             }
         }
         let need = if cond.closed { 2 } else { 3 };
-        if active.is_none()
-            || !balls
-            || inactive as f64 <= POLISH_ON_W * vars.len() as f64
-            || keep.iter().filter(|&&k| k).count() < need
-        {
+        if !subset || keep.iter().filter(|&&k| k).count() < need {
             return polish_rounds(
                 be,
                 stencil,
@@ -252,7 +265,7 @@ impl<'c> ActivePolish<'_, 'c> {
                 judge,
                 certify,
                 None,
-                ev,
+                start.ev.as_ref(),
             );
         }
         let mut var_of = vec![usize::MAX; n_w];

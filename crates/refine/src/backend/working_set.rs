@@ -379,8 +379,7 @@ fn polish_from_warm<C>(
     if let Some(po) = opts.polish.as_mut() {
         po.abandon_first = Some(WARM_ABANDON);
     }
-    let ev = conic::polish::evaluate(&mut be, &from);
-    let polished = ActivePolish {
+    let mut polish = ActivePolish {
         be: &mut be,
         cond: &cond,
         knots,
@@ -391,8 +390,9 @@ fn polish_from_warm<C>(
         conic_opts: &opts,
         margin: WorkingSetOptions::default().margin,
         target: accept,
-    }
-    .run(&from, ev.as_ref(), &mut |_| true, certify)?;
+    };
+    let start = polish.start(&from);
+    let polished = polish.run(&start, &mut |_| true, certify)?;
     Ok(match polished {
         Some(Polished {
             best: Some(best),
@@ -695,8 +695,7 @@ fn run_round<C>(
         // it does not get there (or its curve leaves a constraint outside W), the method
         // resumes from the iterate.
         if early && conic_opts.polish.is_some() {
-            let ev = conic::polish::evaluate(&mut be, &sol);
-            let on_active = ActivePolish {
+            let mut on_active = ActivePolish {
                 be: &mut be,
                 cond,
                 knots,
@@ -708,11 +707,12 @@ fn run_round<C>(
                 margin: options.margin,
                 target: aim.target,
             };
+            let start = on_active.start(&sol);
             if let Some(Polished {
                 best: Some(b),
                 settled,
                 ..
-            }) = on_active.run(&sol, ev.as_ref(), &mut |p| judge(p, near), certify)?
+            }) = on_active.run(&start, &mut |p| judge(p, near), certify)?
             {
                 if b.k <= aim.target || (settled && b.k <= aim.accept) {
                     return Ok(Round {
@@ -847,15 +847,11 @@ fn finish_round<C>(
     // W it dropped.
     let polish = round.conic_opts.polish.is_some();
     // (Evaluated once for the choice of route and the first polish call on either.)
-    let ev = if certified.k > round.target && polish {
-        conic::polish::evaluate(round.be, sol)
-    } else {
-        None
-    };
-    if round.prefers_subset(ev.as_ref()) {
+    let start = (certified.k > round.target && polish).then(|| round.start(sol));
+    if let Some(start) = start.as_ref().filter(|s| round.prefers_subset(s)) {
         if let Some(p) = round
             .reborrow()
-            .run(sol, ev.as_ref(), &mut |p| judge(p, near), certify)?
+            .run(start, &mut |p| judge(p, near), certify)?
         {
             return Ok(Some(match p.best {
                 Some(b) if b.k < certified.k => b,
@@ -876,7 +872,7 @@ fn finish_round<C>(
         &mut |p| judge(p, near),
         certify,
         None,
-        ev.as_ref(),
+        start.as_ref().and_then(|s| s.ev.as_ref()),
     )?;
     Ok(polished.and_then(|p| p.best))
 }
