@@ -22,11 +22,7 @@ fn on_a_line() -> DenseProblem {
 #[test]
 fn a_face_of_optimal_points_is_polished() {
     let mut p = on_a_line();
-    let loose = Options {
-        tolerance: 1e-5,
-        polish: None,
-        ..Options::default()
-    };
+    let loose = Options::default().with_tolerance(1e-5).with_polish(None);
     let sol = conic::solve(&mut p, &loose).unwrap();
     let off = (sol.x[0] + sol.x[1] - 1.0).abs();
     assert!(
@@ -35,13 +31,10 @@ fn a_face_of_optimal_points_is_polished() {
     );
     // Without the shift the polish gives up on the singular matrix.
     assert!(conic::polish::polish_solution(&mut p, &sol, &Options::default()).is_none());
-    let shifted = Options {
-        polish: Some(PolishOptions {
-            shift_singular: true,
-            ..PolishOptions::default()
-        }),
-        ..Options::default()
-    };
+    let shifted = Options::default().with_polish(Some(PolishOptions {
+        shift_singular: true,
+        ..PolishOptions::default()
+    }));
     let polished = conic::polish::polish_solution(&mut p, &sol, &shifted)
         .expect("a polished point on the singular system");
     let (x, z) = (&polished.x, &polished.z);
