@@ -427,7 +427,7 @@ impl<'a> Condensed<'a> {
         let forces: Vec<f64> = self
             .var_point
             .iter()
-            .map(|&j| dot(&self.g[j * d..(j + 1) * d], &self.g[j * d..(j + 1) * d]).sqrt())
+            .map(|&j| banded::vector::norm(&self.g[j * d..(j + 1) * d]))
             .collect();
         let typical = median(forces).filter(|&m| m > 0.0).unwrap_or(f);
         let mu = typical * median(radii.clone()).unwrap_or(0.0);
