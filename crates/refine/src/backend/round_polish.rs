@@ -157,6 +157,9 @@ pub(super) struct PolishStart<'s> {
     /// W's variables in the active set the polish starts from ([`conic::polish::active_blocks`];
     /// `None`: it cannot be formed).
     active: Option<Vec<bool>>,
+    /// Whether the polish runs on a condensation onto W's active points: W of balls alone, more
+    /// than [`POLISH_ON_W`] of it inactive.
+    pub(super) subset: bool,
 }
 
 impl<'c> ActivePolish<'_, 'c> {
@@ -177,39 +180,36 @@ impl<'c> ActivePolish<'_, 'c> {
         }
     }
 
-    /// `sol` as the polish starts from it ([`PolishStart`]): evaluated on W's backend and its
-    /// active set read off, once for the choice of route and the calls on either.
+    /// `sol` as the polish starts from it ([`PolishStart`]): evaluated on W's backend, its
+    /// active set read off and the route chosen, once for the choice and the calls on either.
     pub(super) fn start<'s>(&mut self, sol: &'s conic::Solution) -> PolishStart<'s> {
         let ev = conic::polish::evaluate(self.be, sol);
         let active = ev
             .as_ref()
             .and_then(|ev| conic::polish::active_blocks(self.be, ev, self.conic_opts));
-        PolishStart { sol, ev, active }
-    }
-
-    /// Whether the polish from `start` runs on a condensation onto W's active points (W of
-    /// balls alone, a fifth or more of it inactive).
-    pub(super) fn prefers_subset(&self, start: &PolishStart<'_>) -> bool {
-        if self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_))) {
-            return false;
+        let balls = !self.wsets.iter().any(|s| matches!(s, PointSet::Faces(_)));
+        let subset = balls
+            && active.as_ref().is_some_and(|active| {
+                let inactive = active.iter().filter(|a| !**a).count();
+                inactive as f64 > POLISH_ON_W * active.len() as f64
+            });
+        PolishStart {
+            sol,
+            ev,
+            active,
+            subset,
         }
-        let Some(active) = &start.active else {
-            return false;
-        };
-        let inactive = active.iter().filter(|a| !**a).count();
-        inactive as f64 > POLISH_ON_W * active.len() as f64
     }
 
     /// The polish calls from `start` ([`polish_rounds`], none certified yet), on W or on its
-    /// active points ([`ActivePolish::prefers_subset`]); `None` when a polished curve left a
-    /// constraint it does not hold.
+    /// active points ([`PolishStart::subset`]); `None` when a polished curve left a constraint
+    /// it does not hold.
     pub(super) fn run<C>(
         self,
         start: &PolishStart<'_>,
         judge: &mut dyn FnMut(&Points) -> bool,
         certify: Certify<'_, C>,
     ) -> Result<Option<Polished<C>>, Error> {
-        let subset = self.prefers_subset(start);
         let ActivePolish {
             be,
             cond,
@@ -252,7 +252,7 @@ impl<'c> ActivePolish<'_, 'c> {
             }
         }
         let need = if cond.closed { 2 } else { 3 };
-        if !subset || keep.iter().filter(|&&k| k).count() < need {
+        if !start.subset || keep.iter().filter(|&&k| k).count() < need {
             return polish_rounds(
                 be,
                 stencil,

@@ -848,7 +848,7 @@ fn finish_round<C>(
     let polish = round.conic_opts.polish.is_some();
     // (Evaluated once for the choice of route and the first polish call on either.)
     let start = (certified.k > round.target && polish).then(|| round.start(sol));
-    if let Some(start) = start.as_ref().filter(|s| round.prefers_subset(s)) {
+    if let Some(start) = start.as_ref().filter(|s| s.subset) {
         if let Some(p) = round
             .reborrow()
             .run(start, &mut |p| judge(p, near), certify)?
