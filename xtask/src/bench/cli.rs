@@ -12,11 +12,12 @@
 //! scipy (issue 14's target: ≤ 1.5). `python3` on PATH with numpy and scipy (e.g.
 //! `PATH=/work/venv/bin:$PATH`); without it the ratio is skipped with a message.
 //!
-//! Each run replaces the previous run's output, as a user re-running a command does; the last
-//! row writes `.npy` to a file that does not exist yet (removed before each run). The difference
-//! is the filesystem's: replacing a file by a rename on ext4 (`auto_da_alloc`, the default)
-//! starts writing the new file back to disk inside the rename, to keep the old or the new
-//! contents across a crash — ~0.7 ms per MB of output on the development machine.
+//! Each run replaces the previous run's output, as a user re-running a command does; the starred
+//! row of each format (`json*`, `csv*`, `npy*`) writes to a file that does not exist yet (removed
+//! before each run). The difference is the filesystem's: replacing a file by a rename on ext4
+//! (`auto_da_alloc`, the default) starts writing the new file back to disk inside the rename, to
+//! keep the old or the new contents across a crash — ~0.7 ms per MB of output on the development
+//! machine.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -186,7 +187,9 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
     );
     for (format, fresh) in [
         ("json", false),
+        ("json", true),
         ("csv", false),
+        ("csv", true),
         ("npy", false),
         ("npy", true),
     ] {
@@ -205,7 +208,11 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         let ratio = scipy.map_or("-".to_string(), |s| format!("{:.2}x", total / s));
         println!(
             "  {:>6} {:>9.1} {:>9.1} {:>9.1} {:>11.1} {:>9.1} {:>9.1} {:>14}",
-            if fresh { "npy*" } else { format },
+            if fresh {
+                format!("{format}*")
+            } else {
+                format.to_string()
+            },
             col(0) * 1e3,
             col(1) * 1e3,
             col(2) * 1e3,
@@ -215,7 +222,7 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
             ratio
         );
     }
-    println!("  (npy*: to a new file each run; the others replace the previous run's output)");
+    println!("  (F*: to a new file each run; the others replace the previous run's output)");
     if let Some(s) = scipy {
         println!(
             "  scipy CubicSpline(bc_type=\"periodic\") fit + evaluation of the same {} points, in memory: {:.1} ms (target: p+s+w <= 1.5x)",
