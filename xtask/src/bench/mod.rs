@@ -30,6 +30,25 @@ pub(super) fn uniform(seed: u64) -> impl FnMut() -> f64 {
     }
 }
 
+/// The process's CPU time so far: every thread's, user and system (`CLOCK_PROCESS_CPUTIME_ID`).
+pub fn cpu_time() -> Duration {
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
+    Duration::new(
+        u64::try_from(t.tv_sec).unwrap_or(0),
+        u32::try_from(t.tv_nsec).unwrap_or(0),
+    )
+}
+
+/// [`time_median`] and the cores the runs kept busy: the process's CPU time over the wall time
+/// of all of them, the warm-up included. A pool's worker spinning while it waits for work
+/// counts as busy, as it does for the machine.
+pub fn time_median_cores<T>(reps: usize, f: impl FnMut() -> T) -> (Duration, f64) {
+    let (cpu, wall) = (cpu_time(), Instant::now());
+    let t = time_median(reps, f);
+    let cores = (cpu_time() - cpu).as_secs_f64() / wall.elapsed().as_secs_f64();
+    (t, cores)
+}
+
 /// Median wall time of `reps` runs of `f` (after one warm-up run), back to back.
 pub fn time_median<T>(reps: usize, f: impl FnMut() -> T) -> Duration {
     time_median_idle(reps, Duration::ZERO, f)
