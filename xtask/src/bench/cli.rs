@@ -185,14 +185,10 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         "out MB",
         "(p+s+w)/scipy"
     );
-    for (format, fresh) in [
-        ("json", false),
-        ("json", true),
-        ("csv", false),
-        ("csv", true),
-        ("npy", false),
-        ("npy", true),
-    ] {
+    for (format, fresh) in ["json", "csv", "npy"]
+        .into_iter()
+        .flat_map(|f| [(f, false), (f, true)])
+    {
         let out = dir.join(format!("out.{format}"));
         run_once(&bin, &problem, &out, format)?; // warm-up (page cache, allocator)
         let runs: Vec<[f64; 5]> = (0..reps)
@@ -208,11 +204,7 @@ pub fn run(opts: Opts) -> anyhow::Result<()> {
         let ratio = scipy.map_or("-".to_string(), |s| format!("{:.2}x", total / s));
         println!(
             "  {:>6} {:>9.1} {:>9.1} {:>9.1} {:>11.1} {:>9.1} {:>9.1} {:>14}",
-            if fresh {
-                format!("{format}*")
-            } else {
-                format.to_string()
-            },
+            format!("{format}{}", if fresh { "*" } else { "" }),
             col(0) * 1e3,
             col(1) * 1e3,
             col(2) * 1e3,

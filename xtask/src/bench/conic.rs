@@ -97,7 +97,7 @@ fn table_row(
     let (start, cpu) = (Instant::now(), super::cpu_time());
     let first = p.solve();
     let once = start.elapsed();
-    let cores_once = (super::cpu_time() - cpu).as_secs_f64() / once.as_secs_f64();
+    let cores_once = super::cores_since(cpu, once);
     let sol = match first {
         Ok(s) => s,
         Err(e) => {

@@ -39,14 +39,18 @@ pub fn cpu_time() -> Duration {
     )
 }
 
-/// [`time_median`] and the cores the runs kept busy: the process's CPU time over the wall time
-/// of all of them, the warm-up included. A pool's worker spinning while it waits for work
-/// counts as busy, as it does for the machine.
+/// The cores kept busy since `cpu` (a [`cpu_time`] reading taken `wall` ago): the process's CPU
+/// time since then over the wall time. A pool's worker spinning while it waits for work counts
+/// as busy, as it does for the machine.
+pub fn cores_since(cpu: Duration, wall: Duration) -> f64 {
+    (cpu_time() - cpu).as_secs_f64() / wall.as_secs_f64()
+}
+
+/// [`time_median`] and the cores its runs kept busy ([`cores_since`]), the warm-up included.
 pub fn time_median_cores<T>(reps: usize, f: impl FnMut() -> T) -> (Duration, f64) {
     let (cpu, wall) = (cpu_time(), Instant::now());
     let t = time_median(reps, f);
-    let cores = (cpu_time() - cpu).as_secs_f64() / wall.elapsed().as_secs_f64();
-    (t, cores)
+    (t, cores_since(cpu, wall.elapsed()))
 }
 
 /// Median wall time of `reps` runs of `f` (after one warm-up run), back to back.
