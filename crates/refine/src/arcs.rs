@@ -44,7 +44,9 @@
 //! Not every arc is tried: in each run of cuts between constrained vertices (the whole curve for
 //! smoothing), every arc from the softest cut (least k) to each cut at least two vertices away,
 //! and for smoothing the whole curve's translation (K = Σ w). Derivative constraints act on the
-//! vertices around their data vertex, and the test is not made with them.
+//! vertices around their data vertex, and the test is not made with them (ROBUSTNESS.md item
+//! 45 (b): arcs ending at every stencil vertex would keep the bound, but no answer was found that
+//! it would refuse and the per-vertex test passes).
 
 use divdiff::{Knots, Points};
 
