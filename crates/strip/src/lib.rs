@@ -60,6 +60,11 @@
 //! polyline vertices and unshifted data values as given). Every stopping and feasibility
 //! tolerance is relative to these scales, so the answer does not depend on the units: scaled
 //! problems agree to rounding for c ∈ \[1e-8, 1e8\], λ ∈ \[1e-4, 1e4\] (ROBUSTNESS.md). The
+//! subtraction of the line rounds each value by ~ε|y|, which on very short spans moves f'' (a
+//! slope moves by ε|y|/h): an answer that touches no bound — the natural (or clamped) spline
+//! through the data, by Holladay's theorem — is therefore solved again from the caller's data
+//! themselves, where the divided differences carry one rounding of their own size, and returned
+//! when it keeps to the strip (exact to the doubles: `tests/offset.rs`). The
 //! returned pieces are then checked exactly against the strip in the caller's units: a violation
 //! above [`RESULT_FEASIBILITY_TOL`]·V (+ rounding, [`ROUNDING_TOL`]) is
 //! [`Error::StripViolated`], never an answer ([`Solution::violation`] reports it).
