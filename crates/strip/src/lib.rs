@@ -61,10 +61,12 @@
 //! tolerance is relative to these scales, so the answer does not depend on the units: scaled
 //! problems agree to rounding for c ∈ \[1e-8, 1e8\], λ ∈ \[1e-4, 1e4\] (ROBUSTNESS.md). The
 //! subtraction of the line rounds each value by ~ε|y|, which on very short spans moves f'' (a
-//! slope moves by ε|y|/h): an answer that touches no bound — the natural (or clamped) spline
-//! through the data, by Holladay's theorem — is therefore solved again from the caller's data
-//! themselves, where the divided differences carry one rounding of their own size, and returned
-//! when it keeps to the strip (exact to the doubles: `tests/offset.rs`). The
+//! slope moves by ε|y|/h): an answer that is a spline through points — the natural (or clamped)
+//! spline through the data when it touches no bound, or the exchange's spline through the data
+//! and the points it holds on the bounds — is therefore solved again through the same points in
+//! the caller's frame, where the divided differences carry one rounding of their own size, and
+//! returned when its contacts' multipliers keep their signs and it keeps to the strip (exact to
+//! the doubles: `tests/offset.rs`; the `resolve` module). The
 //! returned pieces are then checked exactly against the strip in the caller's units: a violation
 //! above [`RESULT_FEASIBILITY_TOL`]·V (+ rounding, [`ROUNDING_TOL`]) is
 //! [`Error::StripViolated`], never an answer ([`Solution::violation`] reports it).
@@ -113,6 +115,7 @@ mod piece;
 mod poly;
 mod prepare;
 mod progress;
+mod resolve;
 mod solve;
 mod spline;
 mod strategy;

@@ -6,7 +6,6 @@ use crate::error::{Error, Infeasibility};
 use crate::frame::{scaled, Frame};
 use crate::outer;
 use crate::piece::cubic3;
-use crate::spline::Spline;
 use crate::strategy::{self, CellsOut, Staged};
 use crate::types::{Options, Problem, Solution, RESULT_FEASIBILITY_TOL, ROUNDING_TOL};
 use crate::validate::validate;
@@ -18,8 +17,8 @@ use crate::Progress;
 /// line through the first and last data point subtracted, values divided by the value scale V;
 /// see the crate documentation), so the answer is equivariant under t ↦ t₀ + λt, values ↦ c·v
 /// and adding a line, and every tolerance is relative to V or the site range. An answer that
-/// touches no bound is the spline through the data, and is solved again from them in the
-/// caller's frame (`through_the_data`: the frame's rounding of the values moves f'' on short
+/// is a spline through points (the data, and the exchange's contacts) is solved again through
+/// them in the caller's frame (`resolve`: the frame's rounding of the values moves f'' on short
 /// spans). The returned
 /// pieces are checked against the strip in the caller's frame (exact extrema of every cubic
 /// piece): a violation above [`RESULT_FEASIBILITY_TOL`]·V plus the rounding allowance
@@ -49,7 +48,7 @@ pub fn solve_observed(
     validate(problem)?;
     let frame = Frame::of(problem)?;
     let normalized = frame.forward(problem)?;
-    let sol =
+    let (sol, exchange) =
         solve_normalized(problem, &normalized, &frame, opts, progress).map_err(|e| match e {
             // distances and places in the caller's units
             Error::Infeasible {
@@ -79,10 +78,8 @@ pub fn solve_observed(
     }
     let mut sol = sol;
     let tolerance = RESULT_FEASIBILITY_TOL * frame.scale + ROUNDING_TOL * frame.magnitude;
-    if let Some(direct) = through_the_data(problem, &sol) {
-        if worst_violation(problem, &direct).is_none_or(|(by, _, _)| by <= tolerance) {
-            sol = direct;
-        }
+    if let Some(exact) = crate::resolve::in_callers_frame(problem, &sol, exchange, tolerance) {
+        sol = exact;
     }
     // the pieces must join (each starts at its exact value): coefficients c·v/λ^k that
     // underflow (values tiny against the site scale) break this, and the answer would not
@@ -129,110 +126,6 @@ pub fn solve_observed(
     Ok(sol)
 }
 
-/// A spline's slopes join to this many ε times the size of the terms they are formed from
-/// ([`through_the_data`]).
-const SLOPE_ROUNDING: f64 = 64.0;
-
-/// The answer `sol` as the spline through the caller's own data, when it touches no bound.
-///
-/// With no contact (no extra knot, no value moved inside by Remark 4.2) the optimum is the
-/// natural spline through the data (clamped where end slopes are given): the unconstrained
-/// minimizer of ∫f''² (Holladay), and feasible. The solver found it in the normalized frame,
-/// whose values (y − a) − b(t − t₀) each round by ~ε|y|; over a span h that moves a slope by
-/// ε|y|/h, and on very short spans f'' with it. Solved again from the data themselves, the
-/// divided differences (y_{i+1} − y_i)/h_i carry one rounding of their own size, and the moment
-/// system is diagonally dominant (condition ≤ 3), so the moments are as exact as the doubles
-/// allow. Measured on `xtask/sweeps/strip.py`'s seed 719, case 69 (5000 sites near t = 5·10⁵
-/// with spans from 7.5e-9 to 28): f'' was 54 % off at a span of 1e-7 and ∫f''² 6.7e-7 above
-/// the value in 60-digit arithmetic, which scipy's `CubicSpline` on the same doubles matches to
-/// 12 digits; `tests/offset.rs` checks the moments against exact rationals. `None` when the
-/// answer has a contact, or the spline or its energy is not finite, or its slopes do not join;
-/// the caller keeps it only inside the strip.
-fn through_the_data(problem: &Problem, sol: &Solution) -> Option<Solution> {
-    if !sol.extra_knots.is_empty() || !sol.shifted_data.is_empty() || !sol.uncertified.is_empty() {
-        return None;
-    }
-    let spline = Spline::through(problem.t.clone(), problem.y.clone(), problem.end_slopes);
-    if !spline.m.iter().all(|m| m.is_finite()) {
-        return None;
-    }
-    let energy = spline.energy();
-    let coefficients = spline.to_curve().coeffs;
-    // (On spans of 1e-79 with values ~1, f''² overflows where the normalized frame's energy,
-    // scaled back once, does not: the solver's answer is kept.)
-    if !energy.is_finite() || !coefficients.iter().flatten().all(|c| c.is_finite()) {
-        return None;
-    }
-    let n = problem.t.len();
-    // The slopes must join (and meet the given end slopes) to their rounding: moments that
-    // underflow (values 1e-268 on spans of 1e34, where f'' ~ 1e-336 is no double) leave the
-    // chords' slopes, a polygon that is no spline; the solver's own answer is then kept (there
-    // refused as `Discontinuous`: `tests/conditioning.rs`, `underflowing_coefficients_are_refused`).
-    let (t, m) = (&problem.t, &spline.m);
-    let slope_size = |i: usize| {
-        let h = t[i + 1] - t[i];
-        ((problem.y[i + 1] - problem.y[i]) / h).abs() + h * (m[i].abs() + m[i + 1].abs())
-    };
-    for i in 0..n {
-        let left = match i {
-            0 => problem.end_slopes[0],
-            _ => Some(cubic3(&coefficients[i - 1], t[i] - t[i - 1]).1),
-        };
-        let right = if i + 1 == n {
-            problem.end_slopes[1]
-        } else {
-            Some(coefficients[i][1])
-        };
-        let size = if i > 0 { slope_size(i - 1) } else { 0.0 }
-            + if i + 1 < n { slope_size(i) } else { 0.0 };
-        if let (Some(l), Some(r)) = (left, right) {
-            let by = (l - r).abs();
-            if by.is_nan() || by > SLOPE_ROUNDING * f64::EPSILON * size {
-                return None;
-            }
-        }
-    }
-    let mut slopes: Vec<f64> = coefficients.iter().map(|c| c[1]).collect();
-    let (last, h) = (coefficients[n - 2], problem.t[n - 1] - problem.t[n - 2]);
-    slopes.push(cubic3(&last, h).1);
-    for (k, end) in [0, n - 1].into_iter().enumerate() {
-        if let Some(s) = problem.end_slopes[k] {
-            slopes[end] = s;
-        }
-    }
-    // ∂Φ/∂z_i = 2(f''(t_i−) − f''(t_i+)) at the sites whose slope is free (f''(t_0−) and
-    // f''(t_n+) are 0): the moments' rounding.
-    let second = |j: usize, s: f64| cubic3(&coefficients[j], s).2;
-    let gradient_norm = (0..n)
-        .filter(|&i| !(i == 0 && problem.end_slopes[0].is_some()))
-        .filter(|&i| !(i == n - 1 && problem.end_slopes[1].is_some()))
-        .map(|i| {
-            let left = if i > 0 {
-                second(i - 1, problem.t[i] - problem.t[i - 1])
-            } else {
-                0.0
-            };
-            let right = if i + 1 < n { second(i, 0.0) } else { 0.0 };
-            let g = 2.0 * (left - right);
-            g * g
-        })
-        .sum::<f64>()
-        .sqrt();
-    Some(Solution {
-        breaks: problem.t.clone(),
-        coefficients,
-        slopes,
-        grid: problem.t.clone(),
-        grid_values: problem.y.clone(),
-        energy,
-        norm: energy.sqrt(),
-        gradient_norm,
-        newton_decrement: 0.0,
-        gap: 0.0,
-        ..sol.clone()
-    })
-}
-
 /// How far the values of the pieces over data interval `interval` move when their abscissae move
 /// by one rounding: max |f'| · ε · max |t| there (ε = 2⁻⁵², so ε·|t| is one to two ulps of t).
 /// A bound evaluated at a rounded abscissa is uncertain by as much; see
@@ -253,14 +146,14 @@ fn sites_rounding(problem: &Problem, sol: &Solution, interval: usize) -> f64 {
 }
 
 /// Solves `q`, the normalized form of `problem` in `frame`, and returns the solution in the
-/// caller's frame.
+/// caller's frame, and whether the exchange produced it.
 fn solve_normalized(
     problem: &Problem,
     q: &Problem,
     frame: &Frame,
     opts: &Options,
     progress: &dyn Fn(&Progress),
-) -> Result<Solution, Error> {
+) -> Result<(Solution, bool), Error> {
     let ef = frame.energy_factor();
     let (staged, shifted) = strategy::run(
         q,
@@ -269,6 +162,7 @@ fn solve_normalized(
         ef * frame.lam / frame.c,
         progress,
     )?;
+    let exchange = matches!(staged, Staged::Spline { .. });
     let sol = match staged {
         Staged::Spline { q: qs, ex } => assemble_spline(problem, &qs, frame, &ex, shifted),
         Staged::Cells(CellsOut {
@@ -312,7 +206,7 @@ fn solve_normalized(
             sol
         }
     };
-    Ok(to_caller(problem, frame, sol))
+    Ok((to_caller(problem, frame, sol), exchange))
 }
 
 #[cfg(test)]
