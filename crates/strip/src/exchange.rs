@@ -118,30 +118,6 @@ pub(crate) struct Exchanged {
     pub solves: usize,
 }
 
-/// The bound of `side` at x.
-fn bound_at(q: &Problem, side: Side, x: f64) -> f64 {
-    let b = if side == Side::Lower {
-        &q.lower
-    } else {
-        &q.upper
-    };
-    match b {
-        Bound::None => {
-            if side == Side::Lower {
-                f64::NEG_INFINITY
-            } else {
-                f64::INFINITY
-            }
-        }
-        Bound::Pieces(p) => {
-            let n = q.t.len();
-            let i = q.t.partition_point(|v| *v <= x).clamp(1, n - 1) - 1;
-            crate::piece::cubic3(&p[i], x - q.t[i]).0
-        }
-        Bound::Polyline(v) => crate::types::polyline_at(v, x),
-    }
-}
-
 /// What a knot of the current spline is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Knot {
@@ -317,7 +293,7 @@ impl<'a> State<'a> {
     /// end conditions homogeneous): one solve per step. The knots are split at x
     /// ([`State::seek`]).
     fn add(&mut self, x: f64, side: Side) {
-        let target = bound_at(self.q, side, x);
+        let target = self.q.bound_at(side, x);
         // x becomes a knot with the spline's own value and second derivative (same function)
         let (value, second) = self.cur.at(x);
         let mut p = self.cur.x.partition_point(|u| *u < x);
@@ -685,8 +661,8 @@ pub(crate) fn exchange_within(
             }
             let f = st.cur.at(x).0;
             let by = match side {
-                Side::Lower => bound_at(q, side, x) - f,
-                Side::Upper => f - bound_at(q, side, x),
+                Side::Lower => q.bound_at(side, x) - f,
+                Side::Upper => f - q.bound_at(side, x),
             };
             if by > tol {
                 st.add(x, side);

@@ -33,7 +33,7 @@ use crate::check::worst_violation;
 use crate::piece::cubic3;
 use crate::spline::Spline;
 use crate::strategy::ACCEPT_GAP;
-use crate::types::{polyline_at, Bound, KnotKind, Problem, Side, Solution};
+use crate::types::{KnotKind, Problem, Side, Solution};
 
 /// A spline's slopes join to this many ε times the size of the terms they are formed from.
 const SLOPE_ROUNDING: f64 = 64.0;
@@ -41,22 +41,10 @@ const SLOPE_ROUNDING: f64 = 64.0;
 /// A contact's f''' jump may have the wrong sign by this fraction of the largest |f'''|.
 const SIGN_TOLERANCE: f64 = 1e-9;
 
-/// The bound of `side` at abscissa `x` in data interval `interval`, in the caller's frame.
-fn bound_at(problem: &Problem, side: Side, interval: usize, x: f64) -> Option<f64> {
-    let b = match side {
-        Side::Lower => &problem.lower,
-        Side::Upper => &problem.upper,
-    };
-    match b {
-        Bound::None => None,
-        Bound::Pieces(pc) => Some(cubic3(pc.get(interval)?, x - problem.t[interval]).0),
-        Bound::Polyline(v) => Some(polyline_at(v, x)),
-    }
-}
-
 /// `sol` solved again in the caller's frame (module docs), or `None` where it is not a spline
 /// through points, or the new spline fails a test. `exchange`: whether the exchange produced
 /// `sol` (its contacts are points); `tolerance`: the strip's, as [`crate::solve()`] applies it.
+/// The answer carries its [`Solution::violation`], from the same exact test.
 pub(crate) fn in_callers_frame(
     problem: &Problem,
     sol: &Solution,
@@ -84,7 +72,7 @@ pub(crate) fn in_callers_frame(
             let KnotKind::Touch(side) = k.kind else {
                 return None;
             };
-            values.push(bound_at(problem, side, k.interval, b)?);
+            values.push(problem.bound_at(side, b));
             contacts.push((j, side));
         } else {
             return None;
@@ -126,11 +114,10 @@ pub(crate) fn in_callers_frame(
         }
     }
     // each contact's multiplier, the f''' jump, on its side's sign
-    let third = |j: usize| 6.0 * coefficients[j][3];
-    let f3max = (0..k - 1).fold(0.0f64, |a, j| a.max(third(j).abs()));
+    let f3max = (0..k - 1).fold(0.0f64, |a, j| a.max(spline.third(j).abs()));
     let mut jumps = 0.0;
     for &(j, side) in &contacts {
-        let jump = third(j) - third(j - 1);
+        let jump = spline.jump(j).0;
         let wrong = match side {
             Side::Lower => -jump,
             Side::Upper => jump,
@@ -188,12 +175,13 @@ pub(crate) fn in_callers_frame(
         gap: 0.0,
         ..sol.clone()
     };
-    let excursion = match worst_violation(problem, &out) {
+    // (the strip's test, made here once: the caller takes `violation` from it)
+    out.violation = match worst_violation(problem, &out) {
         Some((by, _, _)) if by.is_nan() || by > tolerance => return None,
-        Some((by, _, _)) => by.max(0.0),
+        Some((by, _, _)) => by,
         None => 0.0,
     };
-    out.newton_decrement = 2.0 * jumps * excursion;
+    out.newton_decrement = 2.0 * jumps * out.violation.max(0.0);
     out.gap = if energy > 0.0 {
         out.newton_decrement / energy
     } else {

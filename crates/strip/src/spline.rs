@@ -99,7 +99,7 @@ impl Spline {
     }
 
     /// f''' on piece k.
-    fn third(&self, k: usize) -> f64 {
+    pub(crate) fn third(&self, k: usize) -> f64 {
         (self.m[k + 1] - self.m[k]) / (self.x[k + 1] - self.x[k])
     }
 

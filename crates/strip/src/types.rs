@@ -123,6 +123,33 @@ pub struct Problem {
     pub end_slopes: [Option<f64>; 2],
 }
 
+impl Problem {
+    /// The bound of `side` at x (the piece of the data interval holding x, the right one at a
+    /// site); −∞ / +∞ where that side has none.
+    pub(crate) fn bound_at(&self, side: Side, x: f64) -> f64 {
+        let b = if side == Side::Lower {
+            &self.lower
+        } else {
+            &self.upper
+        };
+        match b {
+            Bound::None => {
+                if side == Side::Lower {
+                    f64::NEG_INFINITY
+                } else {
+                    f64::INFINITY
+                }
+            }
+            Bound::Pieces(p) => {
+                let n = self.t.len();
+                let i = self.t.partition_point(|v| *v <= x).clamp(1, n - 1) - 1;
+                crate::piece::cubic3(&p[i], x - self.t[i]).0
+            }
+            Bound::Polyline(v) => polyline_at(v, x),
+        }
+    }
+}
+
 /// The outer minimization method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Method {
