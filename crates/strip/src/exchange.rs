@@ -161,6 +161,7 @@ impl<'a> State<'a> {
                 x: q.t.clone(),
                 v: q.y.clone(),
                 m: Vec::new(),
+                low: Vec::new(),
             },
             kind: vec![Knot::Data; q.t.len()],
             tail: Tail::default(),

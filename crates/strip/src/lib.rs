@@ -105,6 +105,7 @@
 mod assemble;
 mod cell;
 mod check;
+mod compensated;
 mod error;
 mod exchange;
 mod frame;

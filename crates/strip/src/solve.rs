@@ -17,9 +17,9 @@ use crate::Progress;
 /// line through the first and last data point subtracted, values divided by the value scale V;
 /// see the crate documentation), so the answer is equivariant under t ↦ t₀ + λt, values ↦ c·v
 /// and adding a line, and every tolerance is relative to V or the site range. An answer that
-/// is a spline through points (the data, and the exchange's contacts) is solved again through
-/// them in the caller's frame (`resolve`: the frame's rounding of the values moves f'' on short
-/// spans). The returned
+/// is a spline through points (the data, and touching points: every contact of the exchange,
+/// Newton on Φ's tangencies and pairs) is solved again through them in the caller's frame
+/// (`resolve`: the frame's rounding of the values moves f'' on short spans). The returned
 /// pieces are checked against the strip in the caller's frame (exact extrema of every cubic
 /// piece): a violation above [`RESULT_FEASIBILITY_TOL`]·V plus the rounding allowance
 /// [`ROUNDING_TOL`]·M (M the magnitude of the values, see [`Solution::violation`]) is an

@@ -127,6 +127,13 @@ impl Problem {
     /// The bound of `side` at x (the piece of the data interval holding x, the right one at a
     /// site); −∞ / +∞ where that side has none.
     pub(crate) fn bound_at(&self, side: Side, x: f64) -> f64 {
+        self.bound_at_compensated(side, x).0
+    }
+
+    /// [`Problem::bound_at`] as its rounded value and the error of that rounding, to first order
+    /// ([`crate::compensated`]: of the piece's Horner scheme or the polyline's interpolation);
+    /// the same rounded value (±∞ and 0 where a side is unbounded).
+    pub(crate) fn bound_at_compensated(&self, side: Side, x: f64) -> (f64, f64) {
         let b = if side == Side::Lower {
             &self.lower
         } else {
@@ -134,18 +141,22 @@ impl Problem {
         };
         match b {
             Bound::None => {
-                if side == Side::Lower {
+                let infinite = if side == Side::Lower {
                     f64::NEG_INFINITY
                 } else {
                     f64::INFINITY
-                }
+                };
+                (infinite, 0.0)
             }
             Bound::Pieces(p) => {
                 let n = self.t.len();
                 let i = self.t.partition_point(|v| *v <= x).clamp(1, n - 1) - 1;
-                crate::piece::cubic3(&p[i], x - self.t[i]).0
+                crate::compensated::cubic(&p[i], self.t[i], x)
             }
-            Bound::Polyline(v) => polyline_at(v, x),
+            Bound::Polyline(v) => {
+                let k = polyline_segment(v, x);
+                crate::compensated::line(v[k - 1], v[k], x)
+            }
         }
     }
 }
@@ -293,7 +304,9 @@ pub struct Solution {
     /// The estimated distance to the optimum in the units of ∫f''²: Newton's decrement
     /// ½ gᵀH⁻¹g (≈ Φ − min Φ, from above), or for the exchange, whose energy lies below the
     /// optimum, what holding every contact up by its remaining excursion would cost
-    /// (2 Σ |f''' jump| × excursion, to first order).
+    /// (2 Σ |f''' jump| × excursion, to first order). An answer formed again through its points
+    /// in the caller's frame (no contact, or touching points only: [`crate::solve()`]) carries
+    /// the latter, whichever method found it.
     pub newton_decrement: f64,
     /// The optimality gap: `newton_decrement` over ∫f''². At most 1e-9 for every answer (a larger
     /// gap is refused with [`Error::NotConverged`](crate::Error::NotConverged) carrying it); measured ≤ 5·10⁻¹¹ on the
@@ -357,7 +370,12 @@ pub const MAX_MAGNITUDE: f64 = 1e100;
 /// The value at t of a polyline (linear interpolation; constant extrapolation of the end
 /// segments' lines outside its range).
 pub(crate) fn polyline_at(p: &[[f64; 2]], t: f64) -> f64 {
-    let k = p.partition_point(|v| v[0] <= t).clamp(1, p.len() - 1);
+    let k = polyline_segment(p, t);
     let (a, b) = (p[k - 1], p[k]);
     a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
+}
+
+/// The segment \[p\[k − 1\], p\[k\]\] of a polyline that [`polyline_at`] evaluates at t.
+fn polyline_segment(p: &[[f64; 2]], t: f64) -> usize {
+    p.partition_point(|v| v[0] <= t).clamp(1, p.len() - 1)
 }

@@ -43,13 +43,19 @@ fn natural_energy_exact(t: &[f64], y: &[f64]) -> BigRational {
     natural_exact(t, y).0
 }
 
+/// A double as the rational it is.
+fn q(x: f64) -> BigRational {
+    BigRational::from_float(x).expect("finite")
+}
+
 /// ∫f''² and the moments f''(t_i) of the natural cubic spline through (t, y), exactly.
 fn natural_exact(t: &[f64], y: &[f64]) -> (BigRational, Vec<BigRational>) {
-    let q = |x: f64| BigRational::from_float(x).expect("finite");
-    let (t, y): (Vec<_>, Vec<_>) = (
-        t.iter().map(|&x| q(x)).collect(),
-        y.iter().map(|&x| q(x)).collect(),
-    );
+    natural_exact_through(t, &y.iter().map(|&x| q(x)).collect::<Vec<_>>())
+}
+
+/// [`natural_exact`] through rational values.
+fn natural_exact_through(t: &[f64], y: &[BigRational]) -> (BigRational, Vec<BigRational>) {
+    let t: Vec<_> = t.iter().map(|&x| q(x)).collect();
     let n = t.len();
     let h: Vec<BigRational> = (0..n - 1).map(|i| &t[i + 1] - &t[i]).collect();
     let s: Vec<BigRational> = (0..n - 1).map(|i| (&y[i + 1] - &y[i]) / &h[i]).collect();
@@ -136,14 +142,14 @@ fn clustered_sites_far_from_the_origin_leave_the_natural_spline_exact() {
     let p = clustered_far_problem();
     let s = solve(&p, &Options::default()).expect("the natural spline");
     assert!(s.extra_knots.is_empty(), "the bounds are far away");
-    assert_through_exactly(&s, &p.t, &p.y);
+    assert_through_exactly(&s, &p.t, &p.y.iter().map(|&y| q(y)).collect::<Vec<_>>());
 }
 
 /// `s` is the natural spline through (x, v) to 1e-12 of ∫f''² and 1e-9 of max |f''| at every
 /// break (from the piece that starts there; the last from the one ending there), against exact
 /// rationals.
-fn assert_through_exactly(s: &strip::Solution, x: &[f64], v: &[f64]) {
-    let (energy, moments) = natural_exact(x, v);
+fn assert_through_exactly(s: &strip::Solution, x: &[f64], v: &[BigRational]) {
+    let (energy, moments) = natural_exact_through(x, v);
     let exact = energy.to_f64().unwrap();
     let rel = (s.energy - exact).abs() / exact;
     assert!(
@@ -166,9 +172,11 @@ fn assert_through_exactly(s: &strip::Solution, x: &[f64], v: &[f64]) {
 /// The same sites in a polyline band of ±1e-4 about the data polygon: the exchange's answer, a
 /// spline through the data and the points it holds on the bounds, is formed through the same
 /// points in the caller's frame. Its ∫f''² and f'' at every break are checked against the spline
-/// through those points (the data, and each contact's bound value) in exact rationals. Before,
-/// the same sites in a band of 0.3 % of the range of `strip.py`'s seed 719, case 69 came back
-/// 6.0e-7 above it, with f'' 54 % off.
+/// through those points (the data, and each contact's bound value, the polyline's exact value at
+/// the contact's abscissa) in exact rationals. Before, the same sites in a band of 0.3 % of the
+/// range of `strip.py`'s seed 719, case 69 came back 6.0e-7 above it, with f'' 54 % off; with the
+/// contacts' values rounded to doubles (item 49's re-solve), f'' came back 1.1e-9 of its size off
+/// the exact bound's spline at a break 1e-8 from the next.
 #[test]
 fn contacts_on_clustered_sites_far_from_the_origin_are_exact() {
     let mut p = clustered_far_problem();
@@ -187,14 +195,14 @@ fn contacts_on_clustered_sites_far_from_the_origin_are_exact() {
         !s.extra_knots.is_empty(),
         "the band is narrow enough to touch"
     );
-    // the value at every break: the data at a site, the polygon ± w at a contact (the same
-    // interpolation formula as the bound's, a + (b − a)(x − x₀)/(x₁ − x₀))
-    let values: Vec<f64> = s
+    // the value at every break: the data at a site, the polygon ± w at a contact, exactly
+    // (a + (b − a)(x − x₀)/(x₁ − x₀) between the bound's vertices, which are doubles)
+    let values: Vec<BigRational> = s
         .breaks
         .iter()
         .map(
             |&x| match p.t.iter().position(|t| t.to_bits() == x.to_bits()) {
-                Some(i) => p.y[i],
+                Some(i) => q(p.y[i]),
                 None => {
                     let k = s.extra_knots.iter().find(|k| k.t.to_bits() == x.to_bits());
                     let k = k.expect("a contact");
@@ -204,11 +212,67 @@ fn contacts_on_clustered_sites_far_from_the_origin_are_exact() {
                         other => panic!("the exchange's contacts are touching points: {other:?}"),
                     };
                     let i = k.interval;
-                    let (a, b) = (p.y[i] + sign * w, p.y[i + 1] + sign * w);
-                    a + (b - a) * (x - p.t[i]) / (p.t[i + 1] - p.t[i])
+                    let (a, b) = (q(p.y[i] + sign * w), q(p.y[i + 1] + sign * w));
+                    let along = (q(x) - q(p.t[i])) / (q(p.t[i + 1]) - q(p.t[i]));
+                    &a + (b - &a) * along
                 }
             },
         )
         .collect();
     assert_through_exactly(&s, &s.breaks, &values);
+}
+
+/// The same sites in bands of constant pieces, each interval's bound its larger (upper) or
+/// smaller (lower) data value ± w: the wave overshoots its sites near its crests and troughs and
+/// touches there. Newton on Φ answers (one sweep) with tangencies, where f' meets the bound's
+/// slope; its answer is the spline through the data and the touching points, and is formed
+/// through the same points in the caller's frame (`resolve`). Before, it came back 1.5e-11 (two
+/// tangencies, w = 1e-3) and 1.3e-11 (one, w = 3e-3) of ∫f''² above the spline through those
+/// points in exact rationals, with f'' 8.4e-9 and 1.6e-8 of its size off.
+#[test]
+fn tangencies_on_clustered_sites_far_from_the_origin_are_exact() {
+    let mut p = clustered_far_problem();
+    let n = p.t.len();
+    for (w, touches) in [(1e-3, 2), (3e-3, 1)] {
+        let bound = |side: f64| {
+            let piece = |i: usize| {
+                let (a, b) = (p.y[i], p.y[i + 1]);
+                [
+                    if side > 0.0 { a.max(b) } else { a.min(b) } + side * w,
+                    0.0,
+                    0.0,
+                    0.0,
+                ]
+            };
+            Bound::Pieces((0..n - 1).map(piece).collect())
+        };
+        (p.lower, p.upper) = (bound(-1.0), bound(1.0));
+        let s = solve(&p, &Options::default()).expect("answered");
+        assert_eq!(s.rounds, 1, "Newton on Φ's answer, not the exchange's");
+        assert_eq!(s.extra_knots.len(), touches, "w = {w}: {:?}", s.extra_knots);
+        // the value at every break: the data at a site, the bound's piece at a contact
+        let values: Vec<BigRational> = s
+            .breaks
+            .iter()
+            .map(
+                |&x| match p.t.iter().position(|t| t.to_bits() == x.to_bits()) {
+                    Some(i) => q(p.y[i]),
+                    None => {
+                        let k = s.extra_knots.iter().find(|k| k.t.to_bits() == x.to_bits());
+                        let k = k.expect("a contact");
+                        let bound = match k.kind {
+                            strip::KnotKind::Touch(strip::Side::Lower) => &p.lower,
+                            strip::KnotKind::Touch(strip::Side::Upper) => &p.upper,
+                            other => panic!("the bands are touched at points: {other:?}"),
+                        };
+                        let Bound::Pieces(pieces) = bound else {
+                            unreachable!("constant pieces")
+                        };
+                        q(pieces[k.interval][0])
+                    }
+                },
+            )
+            .collect();
+        assert_through_exactly(&s, &s.breaks, &values);
+    }
 }
