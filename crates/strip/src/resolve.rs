@@ -22,7 +22,11 @@
 //! bounds' exact values, to rounding. (Without the compensation, on `strip.py` seed 1, sites near
 //! 10⁶ with values 1e7 and slopes 3e4 lost four digits of their moments, ∫f''² 4.7e-13 of
 //! itself off; a contact's value rounded to ε|g| moved f'' by 1.1e-9 of its size at a break 1e-8
-//! from the next, `tests/offset.rs`.) It replaces the solver's answer only when
+//! from the next, `tests/offset.rs`.) Where that spline fails a test below, the spline through
+//! the contacts' values rounded to doubles is tried next: a contact whose multiplier is at
+//! rounding can change sign between the two (on `strip.py` seeds 3 and 727, by 4e-7 and 1.7e-7
+//! of the largest |f'''|, on data where one ulp of the contacts' values moves f'' by 1e-7 of its
+//! size). Either replaces the solver's answer only when
 //! - its slopes join to their rounding ([`SLOPE_ROUNDING`]) and every number is finite (moments
 //!   that underflow, values 1e-268 on spans of 1e34, leave a polygon that is no spline; on spans
 //!   of 1e-79 f''² overflows);
@@ -95,7 +99,50 @@ pub(crate) fn in_callers_frame(
     if at_site.len() != n || extra.next().is_some() {
         return None;
     }
-    let spline = Spline::through_exactly(sol.breaks.clone(), values, &low, problem.end_slopes);
+    let points = Points {
+        values,
+        at_site,
+        contacts,
+    };
+    let through = |low: &[f64]| formed(problem, sol, exchange, tolerance, &points, low);
+    // Through the bounds' exact values first; where that fails a test, through their doubles
+    // (the module docs: a contact whose multiplier is at rounding can change sign between them).
+    through(&low).or_else(|| {
+        let rounded = vec![0.0; low.len()];
+        low.iter()
+            .any(|&l| l != 0.0)
+            .then(|| through(&rounded))
+            .flatten()
+    })
+}
+
+/// The points an answer is formed through: the values at its breaks (the data at a site, a
+/// contact's bound value rounded to a double), where each data site is among them, and the
+/// contacts' breaks with their sides.
+struct Points {
+    values: Vec<f64>,
+    at_site: Vec<usize>,
+    contacts: Vec<(usize, Side)>,
+}
+
+/// The spline through `points` (their values plus the low parts `low`) as an answer in place of
+/// `sol`, or `None` where it fails a test ([`in_callers_frame`]).
+fn formed(
+    problem: &Problem,
+    sol: &Solution,
+    exchange: bool,
+    tolerance: f64,
+    points: &Points,
+    low: &[f64],
+) -> Option<Solution> {
+    let (t, n) = (&problem.t, problem.t.len());
+    let (at_site, contacts) = (&points.at_site, &points.contacts);
+    let spline = Spline::through_exactly(
+        sol.breaks.clone(),
+        points.values.clone(),
+        low,
+        problem.end_slopes,
+    );
     let energy = spline.energy();
     let coefficients = spline.to_curve().coeffs;
     if !energy.is_finite() || !coefficients.iter().flatten().all(|c| c.is_finite()) {
@@ -130,7 +177,7 @@ pub(crate) fn in_callers_frame(
     // each contact's multiplier, the f''' jump, on its side's sign
     let f3max = (0..k - 1).fold(0.0f64, |a, j| a.max(spline.third(j).abs()));
     let mut jumps = 0.0;
-    for &(j, side) in &contacts {
+    for &(j, side) in contacts {
         let jump = spline.jump(j).0;
         let wrong = match side {
             Side::Lower => -jump,
