@@ -48,7 +48,7 @@ pub(crate) fn cubic(c: &[f64; 4], x0: f64, x: f64) -> (f64, f64) {
 }
 
 /// The line through (a₀, a₁) and (b₀, b₁) at x, as its value rounded as
-/// [`crate::types::polyline_at`] rounds it, a₁ + ((b₁ − a₁)(x − a₀))/(b₀ − a₀), and the error of
+/// [`crate::types::line_at`] rounds it, a₁ + ((b₁ − a₁)(x − a₀))/(b₀ − a₀), and the error of
 /// that rounding.
 pub(crate) fn line(a: [f64; 2], b: [f64; 2], x: f64) -> (f64, f64) {
     let (dy, edy) = two_diff(b[1], a[1]);

@@ -127,35 +127,58 @@ impl Problem {
     /// The bound of `side` at x (the piece of the data interval holding x, the right one at a
     /// site); −∞ / +∞ where that side has none.
     pub(crate) fn bound_at(&self, side: Side, x: f64) -> f64 {
-        self.bound_at_compensated(side, x).0
+        self.on_bound(
+            side,
+            x,
+            |infinite| infinite,
+            |c, t0| crate::piece::cubic3(c, x - t0).0,
+            |a, b| line_at(a, b, x),
+        )
     }
 
-    /// [`Problem::bound_at`] as its rounded value and the error of that rounding, to first order
-    /// ([`crate::compensated`]: of the piece's Horner scheme or the polyline's interpolation);
-    /// the same rounded value (±∞ and 0 where a side is unbounded).
+    /// [`Problem::bound_at`] as its rounded value (the same) and the error of that rounding, to
+    /// first order ([`crate::compensated`]: of the piece's Horner scheme or the polyline's
+    /// interpolation); ±∞ and 0 where a side is unbounded.
     pub(crate) fn bound_at_compensated(&self, side: Side, x: f64) -> (f64, f64) {
+        self.on_bound(
+            side,
+            x,
+            |infinite| (infinite, 0.0),
+            |c, t0| crate::compensated::cubic(c, t0, x),
+            |a, b| crate::compensated::line(a, b, x),
+        )
+    }
+
+    /// What evaluates the bound of `side` at x: `none` with ±∞ where it has none, `piece` with
+    /// the cubic of the data interval holding x and that interval's start, `segment` with the
+    /// ends of the polyline's segment there.
+    fn on_bound<T>(
+        &self,
+        side: Side,
+        x: f64,
+        none: impl FnOnce(f64) -> T,
+        piece: impl FnOnce(&[f64; 4], f64) -> T,
+        segment: impl FnOnce([f64; 2], [f64; 2]) -> T,
+    ) -> T {
         let b = if side == Side::Lower {
             &self.lower
         } else {
             &self.upper
         };
         match b {
-            Bound::None => {
-                let infinite = if side == Side::Lower {
-                    f64::NEG_INFINITY
-                } else {
-                    f64::INFINITY
-                };
-                (infinite, 0.0)
-            }
+            Bound::None => none(if side == Side::Lower {
+                f64::NEG_INFINITY
+            } else {
+                f64::INFINITY
+            }),
             Bound::Pieces(p) => {
                 let n = self.t.len();
                 let i = self.t.partition_point(|v| *v <= x).clamp(1, n - 1) - 1;
-                crate::compensated::cubic(&p[i], self.t[i], x)
+                piece(&p[i], self.t[i])
             }
             Bound::Polyline(v) => {
                 let k = polyline_segment(v, x);
-                crate::compensated::line(v[k - 1], v[k], x)
+                segment(v[k - 1], v[k])
             }
         }
     }
@@ -371,7 +394,11 @@ pub const MAX_MAGNITUDE: f64 = 1e100;
 /// segments' lines outside its range).
 pub(crate) fn polyline_at(p: &[[f64; 2]], t: f64) -> f64 {
     let k = polyline_segment(p, t);
-    let (a, b) = (p[k - 1], p[k]);
+    line_at(p[k - 1], p[k], t)
+}
+
+/// The line through a and b at t, a₁ + ((b₁ − a₁)(t − a₀))/(b₀ − a₀).
+pub(crate) fn line_at(a: [f64; 2], b: [f64; 2], t: f64) -> f64 {
     a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
 }
 

@@ -197,28 +197,17 @@ fn contacts_on_clustered_sites_far_from_the_origin_are_exact() {
     );
     // the value at every break: the data at a site, the polygon ± w at a contact, exactly
     // (a + (b − a)(x − x₀)/(x₁ − x₀) between the bound's vertices, which are doubles)
-    let values: Vec<BigRational> = s
-        .breaks
-        .iter()
-        .map(
-            |&x| match p.t.iter().position(|t| t.to_bits() == x.to_bits()) {
-                Some(i) => q(p.y[i]),
-                None => {
-                    let k = s.extra_knots.iter().find(|k| k.t.to_bits() == x.to_bits());
-                    let k = k.expect("a contact");
-                    let sign = match k.kind {
-                        strip::KnotKind::Touch(strip::Side::Lower) => -1.0,
-                        strip::KnotKind::Touch(strip::Side::Upper) => 1.0,
-                        other => panic!("the exchange's contacts are touching points: {other:?}"),
-                    };
-                    let i = k.interval;
-                    let (a, b) = (q(p.y[i] + sign * w), q(p.y[i + 1] + sign * w));
-                    let along = (q(x) - q(p.t[i])) / (q(p.t[i + 1]) - q(p.t[i]));
-                    &a + (b - &a) * along
-                }
-            },
-        )
-        .collect();
+    let values = values_at_breaks(&p, &s, |k, x| {
+        let sign = match k.kind {
+            strip::KnotKind::Touch(strip::Side::Lower) => -1.0,
+            strip::KnotKind::Touch(strip::Side::Upper) => 1.0,
+            other => panic!("the exchange's contacts are touching points: {other:?}"),
+        };
+        let i = k.interval;
+        let (a, b) = (q(p.y[i] + sign * w), q(p.y[i + 1] + sign * w));
+        let along = (q(x) - q(p.t[i])) / (q(p.t[i + 1]) - q(p.t[i]));
+        &a + (b - &a) * along
+    });
     assert_through_exactly(&s, &s.breaks, &values);
 }
 
@@ -251,28 +240,37 @@ fn tangencies_on_clustered_sites_far_from_the_origin_are_exact() {
         assert_eq!(s.rounds, 1, "Newton on Φ's answer, not the exchange's");
         assert_eq!(s.extra_knots.len(), touches, "w = {w}: {:?}", s.extra_knots);
         // the value at every break: the data at a site, the bound's piece at a contact
-        let values: Vec<BigRational> = s
-            .breaks
-            .iter()
-            .map(
-                |&x| match p.t.iter().position(|t| t.to_bits() == x.to_bits()) {
-                    Some(i) => q(p.y[i]),
-                    None => {
-                        let k = s.extra_knots.iter().find(|k| k.t.to_bits() == x.to_bits());
-                        let k = k.expect("a contact");
-                        let bound = match k.kind {
-                            strip::KnotKind::Touch(strip::Side::Lower) => &p.lower,
-                            strip::KnotKind::Touch(strip::Side::Upper) => &p.upper,
-                            other => panic!("the bands are touched at points: {other:?}"),
-                        };
-                        let Bound::Pieces(pieces) = bound else {
-                            unreachable!("constant pieces")
-                        };
-                        q(pieces[k.interval][0])
-                    }
-                },
-            )
-            .collect();
+        let values = values_at_breaks(&p, &s, |k, _| {
+            let bound = match k.kind {
+                strip::KnotKind::Touch(strip::Side::Lower) => &p.lower,
+                strip::KnotKind::Touch(strip::Side::Upper) => &p.upper,
+                other => panic!("the bands are touched at points: {other:?}"),
+            };
+            let Bound::Pieces(pieces) = bound else {
+                unreachable!("constant pieces")
+            };
+            q(pieces[k.interval][0])
+        });
         assert_through_exactly(&s, &s.breaks, &values);
     }
+}
+
+/// The value at every break of `s`, exactly: the data at a site, `contact(knot, x)` at a contact.
+fn values_at_breaks(
+    p: &Problem,
+    s: &strip::Solution,
+    contact: impl Fn(&strip::ExtraKnot, f64) -> BigRational,
+) -> Vec<BigRational> {
+    s.breaks
+        .iter()
+        .map(
+            |&x| match p.t.iter().position(|t| t.to_bits() == x.to_bits()) {
+                Some(i) => q(p.y[i]),
+                None => {
+                    let k = s.extra_knots.iter().find(|k| k.t.to_bits() == x.to_bits());
+                    contact(k.expect("a contact"), x)
+                }
+            },
+        )
+        .collect()
 }
