@@ -61,12 +61,14 @@
 //! tolerance is relative to these scales, so the answer does not depend on the units: scaled
 //! problems agree to rounding for c ∈ \[1e-8, 1e8\], λ ∈ \[1e-4, 1e4\] (ROBUSTNESS.md). The
 //! subtraction of the line rounds each value by ~ε|y|, which on very short spans moves f'' (a
-//! slope moves by ε|y|/h): an answer that is a spline through points — the natural (or clamped)
-//! spline through the data when it touches no bound, or the exchange's spline through the data
-//! and the points it holds on the bounds — is therefore solved again through the same points in
-//! the caller's frame, where the divided differences carry one rounding of their own size, and
-//! returned when its contacts' multipliers keep their signs and it keeps to the strip (exact to
-//! the doubles: `tests/offset.rs`; the `resolve` module). The
+//! slope moves by ε|y|/h): the answer — the natural (or clamped) spline through the data when it
+//! touches no bound, the exchange's spline through the data and the points it holds on the
+//! bounds, or Newton's pieces with their tangencies and subarcs — is therefore solved again
+//! through the same points in the caller's frame (on the bound over each subarc, Newton's
+//! abscissae placed again on their conditions), where the divided differences carry one rounding
+//! of their own size, and returned when it meets the optimality conditions to rounding (f'' joins,
+//! its contacts' multipliers keep their signs) and keeps to the strip (exact to the doubles:
+//! `tests/offset.rs`; the `resolve` module). The
 //! returned pieces are then checked exactly against the strip in the caller's units: a violation
 //! above [`RESULT_FEASIBILITY_TOL`]·V (+ rounding, [`ROUNDING_TOL`]) is
 //! [`Error::StripViolated`], never an answer ([`Solution::violation`] reports it).

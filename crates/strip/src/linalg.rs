@@ -1,6 +1,7 @@
 //! The banded linear algebra of `strip`, in one place: the symmetric band Hessian of the outer
 //! Newton step, factored by [`banded::SymBand`] (LDLᵀ without square roots). The spline's
-//! tridiagonal systems go to [`banded::TridiagonalLu`] directly (`spline.rs`).
+//! tridiagonal systems, and the tridiagonal Jacobian that places Newton's abscissae again in the
+//! caller's frame, go to [`banded::TridiagonalLu`] directly (`spline.rs`, `resolve.rs`).
 //!
 //! Φ is a sum of terms that each couple the unknowns of two neighbouring grid points, so its
 //! Hessian is banded: half-bandwidth 1 (tridiagonal) when only slopes are unknown, up to

@@ -16,10 +16,11 @@ use crate::Progress;
 /// The solver works on the normalized problem (sites over a unit-order range starting at 0, the
 /// line through the first and last data point subtracted, values divided by the value scale V;
 /// see the crate documentation), so the answer is equivariant under t ↦ t₀ + λt, values ↦ c·v
-/// and adding a line, and every tolerance is relative to V or the site range. An answer that
-/// is a spline through points (the data, and touching points: every contact of the exchange,
-/// Newton on Φ's tangencies and pairs) is solved again through them in the caller's frame
-/// (`resolve`: the frame's rounding of the values moves f'' on short spans). The returned
+/// and adding a line, and every tolerance is relative to V or the site range. The answer is
+/// solved again in the caller's frame through its points (the data, and touching points: every
+/// contact of the exchange, Newton on Φ's tangencies and pairs), on its bound over each subarc,
+/// with Newton's tangencies and subarc ends placed again on their conditions (`resolve`: the
+/// frame's rounding of the values moves f'' on short spans). The returned
 /// pieces are checked against the strip in the caller's frame (exact extrema of every cubic
 /// piece): a violation above [`RESULT_FEASIBILITY_TOL`]·V plus the rounding allowance
 /// [`ROUNDING_TOL`]·M (M the magnitude of the values, see [`Solution::violation`]) is an

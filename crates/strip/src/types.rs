@@ -149,6 +149,12 @@ impl Problem {
         )
     }
 
+    /// The cubic piece of `side`'s bound that holds x, with the data site it is written about
+    /// (s = t − t_i); `None` where that side is a polyline or unbounded.
+    pub(crate) fn bound_piece(&self, side: Side, x: f64) -> Option<([f64; 4], f64)> {
+        self.on_bound(side, x, |_| None, |c, t0| Some((*c, t0)), |_, _| None)
+    }
+
     /// What evaluates the bound of `side` at x: `none` with ±∞ where it has none, `piece` with
     /// the cubic of the data interval holding x and that interval's start, `segment` with the
     /// ends of the polyline's segment there.
@@ -327,9 +333,9 @@ pub struct Solution {
     /// The estimated distance to the optimum in the units of ∫f''²: Newton's decrement
     /// ½ gᵀH⁻¹g (≈ Φ − min Φ, from above), or for the exchange, whose energy lies below the
     /// optimum, what holding every contact up by its remaining excursion would cost
-    /// (2 Σ |f''' jump| × excursion, to first order). An answer formed again through its points
-    /// in the caller's frame (no contact, or touching points only: [`crate::solve()`]) carries
-    /// the latter, whichever method found it.
+    /// (2 Σ |f''' jump| × excursion, to first order). An answer formed again in the caller's
+    /// frame (through its points, on its subarcs' bounds: [`crate::solve()`]) carries the
+    /// latter, whichever method found it.
     pub newton_decrement: f64,
     /// The optimality gap: `newton_decrement` over ∫f''². At most 1e-9 for every answer (a larger
     /// gap is refused with [`Error::NotConverged`](crate::Error::NotConverged) carrying it); measured ≤ 5·10⁻¹¹ on the

@@ -274,3 +274,191 @@ fn values_at_breaks(
         )
         .collect()
 }
+
+/// The clamped (or natural, `None`) cubic spline through (x, y) in exact rationals: its moments
+/// f''(x_k) (the tridiagonal system of `strip`'s spline module, by the Thomas algorithm).
+fn spline_exact(
+    x: &[BigRational],
+    y: &[BigRational],
+    ends: [Option<BigRational>; 2],
+) -> Vec<BigRational> {
+    let k = x.len();
+    let (three, six) = (
+        BigRational::from_integer(3.into()),
+        BigRational::from_integer(6.into()),
+    );
+    let h: Vec<BigRational> = (0..k - 1).map(|i| &x[i + 1] - &x[i]).collect();
+    let d: Vec<BigRational> = (0..k - 1).map(|i| (&y[i + 1] - &y[i]) / &h[i]).collect();
+    let zero = BigRational::zero;
+    // rows [sub, diagonal, super] and right-hand sides
+    let mut rows = Vec::with_capacity(k);
+    let mut r = Vec::with_capacity(k);
+    for i in 0..k {
+        let (row, rhs) = if i == 0 || i == k - 1 {
+            let end = &ends[usize::from(i > 0)];
+            match end {
+                None => (
+                    [zero(), BigRational::from_integer(1.into()), zero()],
+                    zero(),
+                ),
+                Some(s) if i == 0 => ([zero(), &h[0] / &three, &h[0] / &six], &d[0] - s),
+                Some(s) => (
+                    [&h[k - 2] / &six, &h[k - 2] / &three, zero()],
+                    s - &d[k - 2],
+                ),
+            }
+        } else {
+            (
+                [&h[i - 1] / &six, (&h[i - 1] + &h[i]) / &three, &h[i] / &six],
+                &d[i] - &d[i - 1],
+            )
+        };
+        rows.push(row);
+        r.push(rhs);
+    }
+    let (mut cp, mut dp) = (Vec::with_capacity(k), Vec::with_capacity(k));
+    for i in 0..k {
+        let [a, b, c] = &rows[i];
+        let (den, num) = if i == 0 {
+            (b.clone(), r[0].clone())
+        } else {
+            (b - a * &cp[i - 1], &r[i] - a * &dp[i - 1])
+        };
+        cp.push(c / &den);
+        dp.push(num / den);
+    }
+    let mut m = vec![zero(); k];
+    for i in (0..k).rev() {
+        m[i] = if i + 1 < k {
+            &dp[i] - &cp[i] * &m[i + 1]
+        } else {
+            dp[i].clone()
+        };
+    }
+    m
+}
+
+/// Even sites near t = 5·10⁵ over a smooth wave, a lower bound on each interval 1e-6 below the
+/// chord (linear pieces): the wave sags below its chords, so Newton on Φ answers with the curve on
+/// its bound over subarcs (f straight there) and a touching point. Formed in the caller's frame
+/// (`resolve`): between its subarcs the splines through its breaks (the data at a site, the
+/// bound's exact value at a contact), clamped to the bound's slope at a subarc's ends, and the
+/// bound itself on each subarc. Checked against that construction in exact rationals, through
+/// the answer's own breaks: ∫f''² to 1e-12 and f'' on both sides of every break to 1e-9 of its
+/// largest size (before: 2.3e-11 and 2.5e-8, Newton's pieces mapped back from the normalized
+/// frame); and where f leaves its bound, that f'' joins the bound's there to the rounding of
+/// the abscissa (the optimum's condition, which `resolve` places the subarcs' ends on).
+#[test]
+fn subarcs_far_from_the_origin_are_formed_exactly() {
+    let (n, w) = (40usize, 1e-6);
+    let t: Vec<f64> = (0..n).map(|i| 5e5 + 0.1 * i as f64).collect();
+    let y: Vec<f64> = (0..n).map(|i| 1.0 + (0.15 * i as f64).sin()).collect();
+    let pieces: Vec<[f64; 4]> = (0..n - 1)
+        .map(|i| [y[i] - w, (y[i + 1] - y[i]) / (t[i + 1] - t[i]), 0.0, 0.0])
+        .collect();
+    let p = Problem {
+        t,
+        y,
+        lower: Bound::Pieces(pieces.clone()),
+        upper: Bound::None,
+        end_slopes: [None, None],
+    };
+    let s = solve(&p, &Options::default()).expect("answered");
+    assert_eq!(s.rounds, 1, "Newton on Φ's answer");
+    let subarcs = s
+        .extra_knots
+        .iter()
+        .filter(|k| matches!(k.kind, strip::KnotKind::SubarcStart(_)))
+        .count();
+    assert!(subarcs >= 10, "subarcs: {:?}", s.extra_knots);
+    // the bound (g, g', g'') at x, exactly
+    let bound = |x: f64| {
+        let i = p.t.partition_point(|v| *v <= x).clamp(1, n - 1) - 1;
+        let c: Vec<BigRational> = pieces[i].iter().map(|&c| q(c)).collect();
+        let u = q(x) - q(p.t[i]);
+        let three = BigRational::from_integer(3.into());
+        let two = BigRational::from_integer(2.into());
+        (
+            &c[0] + &u * (&c[1] + &u * (&c[2] + &u * &c[3])),
+            &c[1] + &u * (&two * &c[2] + &three * &u * &c[3]),
+            &two * &c[2] + BigRational::from_integer(6.into()) * &u * &c[3],
+        )
+    };
+    let values = values_at_breaks(&p, &s, |_, x| bound(x).0);
+    let x: Vec<BigRational> = s.breaks.iter().map(|&b| q(b)).collect();
+    let kind = |j: usize| {
+        s.extra_knots
+            .iter()
+            .find(|k| k.t.to_bits() == s.breaks[j].to_bits())
+            .map(|k| k.kind)
+    };
+    // f'' at both ends of every piece, exactly: segments between the subarcs, the bound on each
+    let k = x.len();
+    let mut second: Vec<[BigRational; 2]> = Vec::with_capacity(k - 1);
+    let (mut from, mut left) = (0, None);
+    for j in 0..k {
+        let start = matches!(kind(j), Some(strip::KnotKind::SubarcStart(_)));
+        if start || j == k - 1 {
+            let right = start.then(|| bound(s.breaks[j]).1);
+            let m = spline_exact(&x[from..=j], &values[from..=j], [left.clone(), right]);
+            second.extend(m.windows(2).map(|m| [m[0].clone(), m[1].clone()]));
+            if start {
+                second.push([bound(s.breaks[j]).2, bound(s.breaks[j + 1]).2]);
+                (from, left) = (j + 1, Some(bound(s.breaks[j + 1]).1));
+            }
+        }
+    }
+    assert_eq!(second.len(), k - 1);
+    let three = BigRational::from_integer(3.into());
+    let energy = (0..k - 1)
+        .map(|i| {
+            let [a, b] = &second[i];
+            (&x[i + 1] - &x[i]) / &three * (a * a + a * b + b * b)
+        })
+        .fold(BigRational::zero(), |acc, e| acc + e)
+        .to_f64()
+        .unwrap();
+    let rel = (s.energy - energy).abs() / energy;
+    assert!(
+        rel <= 1e-12,
+        "∫f''² {} against {energy} exactly: {rel:e}",
+        s.energy
+    );
+    let exact: Vec<[f64; 2]> = second
+        .iter()
+        .map(|[a, b]| [a.to_f64().unwrap(), b.to_f64().unwrap()])
+        .collect();
+    let largest = exact.iter().flatten().fold(0.0f64, |a, m| a.max(m.abs()));
+    for (j, [a, b]) in exact.iter().enumerate() {
+        let (x0, x1) = (s.breaks[j], s.breaks[j + 1]);
+        let mid = 0.5 * (x0 + x1);
+        // (the piece's own f'' at its ends, from its coefficients)
+        let c = s.coefficients[j];
+        let ours = [2.0 * c[2], 2.0 * c[2] + 6.0 * c[3] * (x1 - x0)];
+        for (o, e) in ours.iter().zip([a, b]) {
+            assert!(
+                (o - e).abs() <= 1e-9 * largest,
+                "f'' {o} against {e} exactly on the piece about {mid} (largest |f''| {largest})"
+            );
+        }
+    }
+    // where f leaves its bound, f'' joins the bound's to the rounding of the abscissa
+    for j in 1..k - 1 {
+        if !matches!(
+            kind(j),
+            Some(strip::KnotKind::SubarcStart(_) | strip::KnotKind::SubarcEnd(_))
+        ) {
+            continue;
+        }
+        let (l, r) = (exact[j - 1], exact[j]);
+        let third = |i: usize| (exact[i][1] - exact[i][0]) / (s.breaks[i + 1] - s.breaks[i]);
+        let abscissa =
+            4.0 * f64::EPSILON * s.breaks[j].abs() * (third(j - 1).abs() + third(j).abs());
+        assert!(
+            (l[1] - r[0]).abs() <= abscissa,
+            "f'' jumps by {:e} at {} (the abscissa's rounding moves it by {abscissa:e})",
+            (l[1] - r[0]).abs(),
+            s.breaks[j]
+        );
+    }
+}
