@@ -30,8 +30,9 @@
 //! - its slopes join to their rounding ([`SLOPE_ROUNDING`]) and every number is finite (moments
 //!   that underflow, values 1e-268 on spans of 1e34, leave a polygon that is no spline; on spans
 //!   of 1e-79 f''² overflows);
-//! - f'' joins the bound's at every subarc's end to the rounding of the moments and of the
-//!   abscissa ([`ABSCISSA_ROUNDING`]; between them it joins by construction);
+//! - f'' joins the bound's at every subarc's end to its rounding (the test every answer of Newton
+//!   on Φ passes, [`crate::C2_ROUNDING`]) and that of the abscissa ([`ABSCISSA_ROUNDING`];
+//!   between them it joins by construction);
 //! - every contact's f''' jump, its multiplier, has the sign of its side (up at a lower contact,
 //!   down at an upper one; [`SIGN_TOLERANCE`] of the largest |f'''|): with the two tests above,
 //!   these are the strip problem's optimality conditions (f in C², a multiplier of its side's
@@ -61,7 +62,7 @@ use crate::check::worst_violation;
 use crate::piece::{cubic3, shift};
 use crate::spline::Spline;
 use crate::strategy::ACCEPT_GAP;
-use crate::types::{KnotKind, Problem, Side, Solution};
+use crate::types::{KnotKind, Problem, Side, Solution, C2_ROUNDING};
 use banded::TridiagonalLu;
 
 /// A spline's slopes join to this many ε times the size of the terms they are formed from.
@@ -216,12 +217,50 @@ struct Segment {
     to: (usize, Option<Side>),
 }
 
-/// Newton steps that place a segment's subarc ends ([`Breaks::place`]).
+/// Newton steps that place a segment's free abscissae ([`Breaks::place`]).
 const PLACE_STEPS: usize = 4;
 
-/// A subarc's end moves at most this fraction of the spans beside it (the solver's abscissa is
-/// off by rounding, not by a fraction of a span).
+/// A free abscissa moves at most this fraction of the spans beside it (the solver's abscissa is
+/// off by its tolerance, not by a fraction of a span; measured moves reach 4e-11 of the
+/// abscissa).
 const PLACE_REACH: f64 = 1e-6;
+
+/// Up to this many free abscissae in a segment, its Jacobian is taken whole ([`Breaks::place`]).
+const DENSE_PLACE: usize = 8;
+
+/// Beyond [`DENSE_PLACE`], every this-many-th abscissa moves at a time for the tridiagonal
+/// Jacobian's differences (what the others feel of it decays like 0.27⁵ or faster).
+const COLOURS: usize = 5;
+
+/// Solves the m × m system `a` (row-major, overwritten) x = `b` in place by Gaussian elimination
+/// with partial pivoting; `None` where a pivot vanishes or is not finite.
+fn solve_dense(a: &mut [f64], b: &mut [f64], m: usize) -> Option<()> {
+    for c in 0..m {
+        let p = (c..m).max_by(|&i, &k| a[i * m + c].abs().total_cmp(&a[k * m + c].abs()))?;
+        let pivot = a[p * m + c];
+        if pivot == 0.0 || !pivot.is_finite() {
+            return None;
+        }
+        if p != c {
+            for k in 0..m {
+                a.swap(p * m + k, c * m + k);
+            }
+            b.swap(p, c);
+        }
+        for i in c + 1..m {
+            let l = a[i * m + c] / pivot;
+            for k in c..m {
+                a[i * m + k] -= l * a[c * m + k];
+            }
+            b[i] -= l * b[c];
+        }
+    }
+    for c in (0..m).rev() {
+        let tail: f64 = (c + 1..m).map(|k| a[c * m + k] * b[k]).sum();
+        b[c] = (b[c] - tail) / a[c * m + c];
+    }
+    Some(())
+}
 
 /// An abscissa that Newton on Φ's answer leaves to its solver's tolerance, placed again
 /// ([`Breaks::place`]): break `j` on the bound of `side`, where f'' joins the bound's (a
@@ -285,10 +324,14 @@ impl Breaks {
     /// abscissa lies in one, and its spline depends on its own breaks only) where their
     /// conditions hold — the optimum's, which the solver's abscissae meet only to its own
     /// tolerance: Newton's method on [`Breaks::mismatch`], each abscissa on its bound, with a
-    /// tridiagonal Jacobian by differences (three sets of abscissae moved at a time; a condition
-    /// depends on the abscissae beyond its neighbours only through the moments' decay); at most
-    /// [`PLACE_STEPS`] steps, each abscissa within [`PLACE_REACH`] of the spans beside it and the
-    /// breaks in order (else `None`).
+    /// Jacobian by differences — whole up to [`DENSE_PLACE`] abscissae, tridiagonal beyond (every
+    /// [`COLOURS`]-th abscissa moved at a time); at most [`PLACE_STEPS`] steps, each abscissa
+    /// within [`PLACE_REACH`] of the spans beside it and the breaks in order (else `None`). The
+    /// steps end where none moves an abscissa by a unit in its last place: a condition can then
+    /// be off by what one such unit of its own abscissa, or of a neighbour's, moves it (on
+    /// `strip.py` seed 727, case 88, a subarc's end is 3400 units of its own from its condition
+    /// but within one of the tangency beside it; the test of f'' there then refuses the answer,
+    /// and the solver's stands).
     fn place(&mut self, problem: &Problem, s: &Segment, free: &[Free]) -> Option<()> {
         let m = free.len();
         if m == 0 {
@@ -313,10 +356,15 @@ impl Breaks {
             })
             .collect();
         let mut r = self.mismatch(problem, s, free)?;
-        let mut rows = vec![[0.0; 3]; m];
+        // the Jacobian: whole when there are few abscissae (a short segment's ends and the
+        // tangencies between them can all be coupled); else tridiagonal, from differences with
+        // every `stride`-th abscissa moved at a time (a condition depends on abscissae beyond its
+        // neighbours only through the moments' decay, ~0.27 a break)
+        let stride = if m <= DENSE_PLACE { m } else { COLOURS };
+        let mut jac = vec![0.0; m * if m <= DENSE_PLACE { m } else { 3 }];
         for _ in 0..PLACE_STEPS {
-            for colour in 0..m.min(3) {
-                let moved: Vec<usize> = (colour..m).step_by(3).collect();
+            for colour in 0..stride {
+                let moved: Vec<usize> = (colour..m).step_by(stride).collect();
                 let at: Vec<f64> = moved.iter().map(|&i| self.x[free[i].j]).collect();
                 for (&i, &x) in moved.iter().zip(&at) {
                     self.set(problem, (free[i].j, free[i].side), x + delta[i]);
@@ -327,19 +375,30 @@ impl Breaks {
                 }
                 let after = after?;
                 for &i in &moved {
-                    let dx = delta[i];
-                    rows[i][1] = (after[i] - r[i]) / dx;
-                    if i > 0 {
-                        rows[i - 1][2] = (after[i - 1] - r[i - 1]) / dx;
-                    }
-                    if i + 1 < m {
-                        rows[i + 1][0] = (after[i + 1] - r[i + 1]) / dx;
+                    let rows = if m <= DENSE_PLACE {
+                        0..m
+                    } else {
+                        i.saturating_sub(1)..(i + 2).min(m)
+                    };
+                    for row in rows {
+                        let d = (after[row] - r[row]) / delta[i];
+                        if m <= DENSE_PLACE {
+                            jac[row * m + i] = d;
+                        } else {
+                            // [sub, diagonal, super] of `row`
+                            jac[row * 3 + (i + 1 - row)] = d;
+                        }
                     }
                 }
             }
             let mut step = r.clone();
-            let lu = TridiagonalLu::factor(&rows).ok()?;
-            lu.solve_in_place(&mut step, 1).ok()?;
+            if m <= DENSE_PLACE {
+                solve_dense(&mut jac.clone(), &mut step, m)?;
+            } else {
+                let rows: Vec<[f64; 3]> = jac.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                let lu = TridiagonalLu::factor(&rows).ok()?;
+                lu.solve_in_place(&mut step, 1).ok()?;
+            }
             let mut moved = false;
             for (i, f) in free.iter().enumerate() {
                 let x = self.x[f.j] - step[i];
@@ -463,15 +522,23 @@ fn formed(
     }
     let third = |i: usize| (m[i][1] - m[i][0]) / h(i);
     let f3max = (0..k - 1).fold(0.0f64, |a, j| a.max(third(j).abs()));
-    // f'' joins at a subarc's ends (within a spline it joins by construction) to the rounding
-    // of the moments and of the break's abscissa
+    // f'' joins at a subarc's ends (within a spline it joins by construction) to its rounding,
+    // as every answer of Newton's does (`C2_ROUNDING`: R of a piece from its Hermite data), and
+    // to that of the break's abscissa
     let f2max = m.iter().flatten().fold(0.0f64, |a, s| a.max(s.abs()));
+    let hermite = |i: usize| {
+        let (s0, s1) = (
+            coefficients[i][1].abs(),
+            cubic3(&coefficients[i], h(i)).1.abs(),
+        );
+        (6.0 * (v[i].abs() + v[i + 1].abs()) / h(i) + 4.0 * s0.max(s1) + 2.0 * s0.min(s1)) / h(i)
+    };
     for &(j, _) in &points.subarcs {
         for i in [j, j + 1] {
             let by = (m[i - 1][1] - m[i][0]).abs();
-            let moments = f2max + slope_size(i - 1) / h(i - 1) + slope_size(i) / h(i);
             let abscissa = x[i].abs() * (third(i - 1).abs() + third(i).abs());
-            let rounding = f64::EPSILON * (SLOPE_ROUNDING * moments + ABSCISSA_ROUNDING * abscissa);
+            let rounding = C2_ROUNDING * (f2max + hermite(i - 1) + hermite(i))
+                + ABSCISSA_ROUNDING * f64::EPSILON * abscissa;
             if by.is_nan() || by > rounding {
                 return None;
             }
