@@ -53,10 +53,10 @@
 //! in a tangency's abscissa, and moves to second order only). Measured: `tests/offset.rs`'s
 //! clustered sites in bands of constant pieces (one and two tangencies) came back 1.3e-11 and
 //! 1.5e-11 of ∫f''² above the spline through the same points, f'' 1.6e-8 and 8.4e-9 of its size
-//! off; formed again, ∫f''² to the last bit and f'' to 2.2e-16 of its size. Its 40 even sites
-//! near 5·10⁵ under a bound 1e-6 below their chords (17 subarcs) came back 2.3e-11 of ∫f''²
-//! and f'' 2.5e-8 of its size off the construction above in exact rationals; formed again,
-//! 1.6e-16 and 4.3e-16.
+//! off; formed again, ∫f''² to the last bit and f'' to 2.2e-16 of its size. The same file's
+//! 40 even sites near 5·10⁵ under a bound 1e-6 below their chords (17 subarcs) came back
+//! 2.3e-11 of ∫f''² and f'' 2.5e-8 of its size off the construction above in exact rationals;
+//! formed again, 1.6e-16 and 4.3e-16.
 
 use crate::check::worst_violation;
 use crate::piece::{cubic3, shift};
