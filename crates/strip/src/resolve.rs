@@ -308,13 +308,13 @@ impl Breaks {
             &self.low[from..=to],
             self.ends(problem, s)?,
         );
-        let curve = spline.to_curve();
+        // (only the pieces the conditions read: the placement evaluates this many times)
         free.iter()
             .map(|f| {
                 let (_, slope, second) = Self::bound(problem, f.side, self.x[f.j])?;
                 Some(match f.second {
                     true => spline.m[f.j - from] - second,
-                    false => curve.coeffs[f.j - from][1] - slope,
+                    false => spline.slope(f.j - from) - slope,
                 })
             })
             .collect()
@@ -360,8 +360,9 @@ impl Breaks {
         // tangencies between them can all be coupled); else tridiagonal, from differences with
         // every `stride`-th abscissa moved at a time (a condition depends on abscissae beyond its
         // neighbours only through the moments' decay, ~0.27 a break)
-        let stride = if m <= DENSE_PLACE { m } else { COLOURS };
-        let mut jac = vec![0.0; m * if m <= DENSE_PLACE { m } else { 3 }];
+        let dense = m <= DENSE_PLACE;
+        let (stride, width) = if dense { (m, m) } else { (COLOURS, 3) };
+        let mut jac = vec![0.0; m * width];
         for _ in 0..PLACE_STEPS {
             for colour in 0..stride {
                 let moved: Vec<usize> = (colour..m).step_by(stride).collect();
@@ -375,24 +376,20 @@ impl Breaks {
                 }
                 let after = after?;
                 for &i in &moved {
-                    let rows = if m <= DENSE_PLACE {
+                    let rows = if dense {
                         0..m
                     } else {
                         i.saturating_sub(1)..(i + 2).min(m)
                     };
                     for row in rows {
-                        let d = (after[row] - r[row]) / delta[i];
-                        if m <= DENSE_PLACE {
-                            jac[row * m + i] = d;
-                        } else {
-                            // [sub, diagonal, super] of `row`
-                            jac[row * 3 + (i + 1 - row)] = d;
-                        }
+                        // column i of `row`; tridiagonal rows are [sub, diagonal, super]
+                        let column = if dense { i } else { i + 1 - row };
+                        jac[row * width + column] = (after[row] - r[row]) / delta[i];
                     }
                 }
             }
             let mut step = r.clone();
-            if m <= DENSE_PLACE {
+            if dense {
                 solve_dense(&mut jac.clone(), &mut step, m)?;
             } else {
                 let rows: Vec<[f64; 3]> = jac.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();

@@ -185,26 +185,32 @@ impl Spline {
     /// compensated slope, as its moments are; its value the double v_k).
     pub fn to_curve(&self) -> Curve {
         let k = self.x.len();
-        let mut coeffs = Vec::with_capacity(k - 1);
-        for i in 0..k - 1 {
-            let (x, v) = (&self.x, &self.v);
-            let h = x[i + 1] - x[i];
-            let (m0, m1) = (self.m[i], self.m[i + 1]);
-            let chord = match self.low.as_slice() {
-                [] => (v[i + 1] - v[i]) / h,
-                l => {
-                    let (d, c) =
-                        crate::compensated::slope(x[i], x[i + 1], v[i], v[i + 1], l[i], l[i + 1]);
-                    d + c
-                }
-            };
-            let slope = chord - h * (2.0 * m0 + m1) / 6.0;
-            coeffs.push([self.v[i], slope, 0.5 * m0, (m1 - m0) / (6.0 * h)]);
-        }
+        let coeffs = (0..k - 1)
+            .map(|i| {
+                let (h, m0, m1) = (self.x[i + 1] - self.x[i], self.m[i], self.m[i + 1]);
+                [self.v[i], self.slope(i), 0.5 * m0, (m1 - m0) / (6.0 * h)]
+            })
+            .collect();
         Curve {
             breaks: self.x.clone(),
             coeffs,
         }
+    }
+
+    /// f' at the start of piece i, as [`Spline::to_curve`] writes it: the values' chord (with
+    /// their low parts, compensated) less h(2m_i + m_{i+1})/6.
+    pub fn slope(&self, i: usize) -> f64 {
+        let (x, v) = (&self.x, &self.v);
+        let h = x[i + 1] - x[i];
+        let chord = match self.low.as_slice() {
+            [] => (v[i + 1] - v[i]) / h,
+            l => {
+                let (d, c) =
+                    crate::compensated::slope(x[i], x[i + 1], v[i], v[i + 1], l[i], l[i + 1]);
+                d + c
+            }
+        };
+        chord - h * (2.0 * self.m[i] + self.m[i + 1]) / 6.0
     }
 }
 

@@ -56,38 +56,22 @@ fn natural_exact(t: &[f64], y: &[f64]) -> (BigRational, Vec<BigRational>) {
 /// [`natural_exact`] through rational values.
 fn natural_exact_through(t: &[f64], y: &[BigRational]) -> (BigRational, Vec<BigRational>) {
     let t: Vec<_> = t.iter().map(|&x| q(x)).collect();
-    let n = t.len();
-    let h: Vec<BigRational> = (0..n - 1).map(|i| &t[i + 1] - &t[i]).collect();
-    let s: Vec<BigRational> = (0..n - 1).map(|i| (&y[i + 1] - &y[i]) / &h[i]).collect();
-    // h_{i−1} M_{i−1} + 2(h_{i−1} + h_i) M_i + h_i M_{i+1} = 6(s_i − s_{i−1}), M_0 = M_{n−1} = 0
-    let m = n - 2;
-    let two = BigRational::from_integer(2.into());
-    let six = BigRational::from_integer(6.into());
-    let (mut cp, mut dp) = (Vec::with_capacity(m), Vec::with_capacity(m));
-    for i in 0..m {
-        let (a, b, c) = (&h[i], &two * (&h[i] + &h[i + 1]), &h[i + 1]);
-        let d = &six * (&s[i + 1] - &s[i]);
-        let (den, num) = if i == 0 {
-            (b, d)
-        } else {
-            (b - a * &cp[i - 1], d - a * &dp[i - 1])
-        };
-        cp.push(c / &den);
-        dp.push(num / den);
-    }
-    let mut moments = vec![BigRational::zero(); n];
-    for i in (0..m).rev() {
-        let next = &moments[i + 2];
-        moments[i + 1] = &dp[i] - &cp[i] * next;
-    }
-    let three = BigRational::from_integer(3.into());
-    let energy = (0..n - 1)
-        .map(|i| {
-            let (a, b) = (&moments[i], &moments[i + 1]);
-            &h[i] / &three * (a * a + a * b + b * b)
-        })
-        .fold(BigRational::zero(), |acc, e| acc + e);
+    let moments = spline_exact(&t, y, [None, None]);
+    let energy = energy_exact(&t, moments.windows(2).map(|m| [&m[0], &m[1]]));
     (energy, moments)
+}
+
+/// ∫f''² of pieces on the breaks x with f'' = \[a, b\] at each piece's ends (f'' is linear on
+/// each piece: h/3 (a² + ab + b²)), exactly.
+fn energy_exact<'a>(
+    x: &[BigRational],
+    second: impl Iterator<Item = [&'a BigRational; 2]>,
+) -> BigRational {
+    let three = BigRational::from_integer(3.into());
+    second
+        .enumerate()
+        .map(|(i, [a, b])| (&x[i + 1] - &x[i]) / &three * (a * a + a * b + b * b))
+        .fold(BigRational::zero(), |acc, e| acc + e)
 }
 
 #[test]
@@ -409,13 +393,7 @@ fn subarcs_far_from_the_origin_are_formed_exactly() {
         }
     }
     assert_eq!(second.len(), k - 1);
-    let three = BigRational::from_integer(3.into());
-    let energy = (0..k - 1)
-        .map(|i| {
-            let [a, b] = &second[i];
-            (&x[i + 1] - &x[i]) / &three * (a * a + a * b + b * b)
-        })
-        .fold(BigRational::zero(), |acc, e| acc + e)
+    let energy = energy_exact(&x, second.iter().map(|[a, b]| [a, b]))
         .to_f64()
         .unwrap();
     let rel = (s.energy - energy).abs() / energy;
