@@ -51,6 +51,23 @@ const STALL_PROGRESS: f64 = 1e-3;
 const STALL_GRADIENT: f64 = 0.5;
 /// See [`STALL_GRADIENT`].
 const STALL_PHI: f64 = 0.1;
+/// Newton also stalls sooner, after this many iterations in a row whose steps the line search
+/// chose (the polish's full steps below [`DECREMENT_TOL`] keep Φ at its rounding on purpose, and
+/// are not counted), when Φ fell over them by no more than its rounding ([`PHI_ROUNDING`] of
+/// 1 + |Φ|) while ‖∇Φ‖∞ did not fall below [`STALL_GRADIENT`] of itself: the plateau of
+/// [`STALL_GRADIENT`]'s first kind, where the decrement is still above [`DECREMENT_TOL`] (so no
+/// full steps are tried) but the Armijo test's decrease lies below the rounding of Φ (a sum over
+/// every cell), so a step is accepted or refused by its roundings and the line search halves its
+/// way down to steps that change nothing. Such iterations cost the most: on `strip.py` seed 787,
+/// case 189 (5000 even sites, step values, a band of 2.6e-6 of the range), iterations 14 … 21
+/// moved Φ = 1.6456e19 by 6e3 in all (an ulp is 2e3) with ‖∇Φ‖∞ at 2.9e5 throughout, taking
+/// 9 … 19 halvings and 55 000 … 105 000 cell solves each — 25 of the problem's 39 s before the
+/// ten-iteration test stopped it and the exchange answered (refused, as now: gap 2.5e-9; now
+/// 14 s). A converging iteration halves ‖∇Φ‖∞ in fewer steps, or takes the polish's full steps.
+/// Once, on seed 719's case 9 (30 sites), Newton left such a plateau after five iterations (a
+/// step that moved the cells' shapes); stopped after three, the exchange's answer has ∫f''²
+/// 8.8e-11 of itself below Newton's (ROBUSTNESS.md item 52).
+const STALL_ROUNDING_ITERATIONS: usize = 3;
 
 /// Projected Newton on the banded Hessian. Returns (x, iterations, (cells, x, gradient)).
 pub(crate) fn newton(
@@ -81,6 +98,9 @@ pub(crate) fn newton(
     // Φ and ‖∇Φ‖∞ at the start of every iteration, for the stall test of STALL_GRADIENT
     let mut trail: Vec<(f64, f64)> = Vec::new();
     let mut stalled = false;
+    // iterations in a row whose step the line search chose (not a polish step, which keeps Φ
+    // at its rounding on purpose), for the test of STALL_ROUNDING_ITERATIONS
+    let mut searched = 0;
     while it < opts.max_iterations {
         let gnorm = inf_norm(&ev.grad);
         if gnorm <= tol(&ev) || nv == 0 {
@@ -95,6 +115,13 @@ pub(crate) fn newton(
             if phi0 - ev.phi <= STALL_PHI * phi0.abs() + PHI_ROUNDING * (1.0 + ev.phi.abs())
                 && gnorm > STALL_GRADIENT * g0
             {
+                stalled = true;
+                break;
+            }
+        }
+        if searched >= STALL_ROUNDING_ITERATIONS {
+            let (phi0, g0) = trail[trail.len() - 1 - STALL_ROUNDING_ITERATIONS];
+            if phi0 - ev.phi <= PHI_ROUNDING * (1.0 + ev.phi.abs()) && gnorm > STALL_GRADIENT * g0 {
                 stalled = true;
                 break;
             }
@@ -174,6 +201,7 @@ pub(crate) fn newton(
             .map(|(&d, g)| -g / if d > 0.0 { d } else { 1.0 })
             .collect();
         let grad_dir: Vec<f64> = ev.grad.iter().map(|g| -g).collect();
+        let polishing = polish.is_some();
         let mut accepted = polish;
         for dir in [&dir, &diag_dir, &grad_dir] {
             if accepted.is_some() {
@@ -199,6 +227,7 @@ pub(crate) fn newton(
         let Some((xn, h2, _)) = accepted else {
             break; // no further decrease representable: converged to rounding
         };
+        searched = if polishing { 0 } else { searched + 1 };
         x = xn;
         *hints = h2;
         band = Band::zeros(nv);
