@@ -12,7 +12,8 @@
 //!    the gradient; at the extra knots) at its rounding level ([`crate::C2_ROUNDING`]); if Newton
 //!    stops short of that (its
 //!    iteration limit, a line search that can no longer decrease Φ, or a stall: ten iterations
-//!    that neither lower Φ by a tenth nor halve the f'' jumps) or meets a cell outside
+//!    that neither lower Φ by a tenth nor halve the f'' jumps, or three line-search iterations
+//!    that lower Φ by no more than its rounding and do not halve them) or meets a cell outside
 //!    Theorem 2.1's shapes, step 3 solves the problem instead (BFGS, the seed's method chosen
 //!    explicitly, is refused with the gap).
 //! 3. **Polyline bounds** (§4, any M), and the fallback of step 2: the dual active-set exchange
