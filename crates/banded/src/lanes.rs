@@ -36,11 +36,11 @@ pub fn raise(m: &mut f64, v: f64) {
     }
 }
 
-/// max(m, max_k |x_k − mid|) for m ≥ 0 (a NaN m stays NaN; the lanes start at 0), a NaN |x_k −
-/// mid| passed over as [`raise`] does; [`MAX_LANES`] independent maxima, so that the compares of
-/// consecutive elements do not wait for each other. (Over arrays of `MAX_LANES`, `as_chunks`:
-/// `chunks_exact` re-split the slice at every step, a fifth of the certificate's samples at
-/// N = 8·10⁵.)
+/// max(m, max_k |x_k − mid|) for m ≥ 0 (a NaN m stays NaN; the lanes start at 0), a NaN
+/// |x_k − mid| passed over as [`raise`] does; sixteen independent maxima (four vectors of four),
+/// so that the compares of consecutive elements do not wait for each other. (Over arrays of
+/// sixteen, `as_chunks`: `chunks_exact` re-split the slice at every step, a fifth of the
+/// certificate's samples at N = 8·10⁵.)
 #[inline(always)]
 pub fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
     let mut lanes = [0.0f64; MAX_LANES];
