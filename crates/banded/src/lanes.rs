@@ -43,26 +43,24 @@ pub fn raise(m: &mut f64, v: f64) {
 /// certificate's samples at N = 8·10⁵.)
 #[inline(always)]
 pub fn raise_abs(m: &mut f64, x: &[f64], mid: f64) {
-    let mut lanes = [0.0f64; MAX_LANES];
-    let (groups, rest) = x.as_chunks::<MAX_LANES>();
+    let mut lanes = [0.0f64; MAXIMA_LANES];
+    let (groups, rest) = x.as_chunks::<MAXIMA_LANES>();
     for q in groups {
-        for l in 0..MAX_LANES {
+        for l in 0..MAXIMA_LANES {
             raise(&mut lanes[l], (q[l] - mid).abs());
         }
     }
     for v in rest {
         raise(&mut lanes[0], (v - mid).abs());
     }
-    for l in lanes {
-        raise(m, l);
-    }
+    raise_all(m, lanes);
 }
 
 /// The independent maxima of [`raise_abs`]: four vectors of four doubles. A maximum does not
 /// round, so any number of lanes gives the same result; with four (one vector) each compare
 /// waited for the one before, and the certificate's maxima over its blocks' coordinates were
 /// ~9 % of a certified 10⁵-point interpolation's samples.
-const MAX_LANES: usize = 16;
+const MAXIMA_LANES: usize = 16;
 
 /// max_k |x_k|, 0 for no elements ([`raise_abs`] from 0).
 #[inline(always)]
@@ -78,9 +76,9 @@ pub fn total(lanes: [f64; 4]) -> f64 {
     (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
 }
 
-/// m ← max(m, the four lanes' maxima), NaNs passed over as [`raise`] does.
+/// m ← max(m, the lanes' maxima), NaNs passed over as [`raise`] does.
 #[inline(always)]
-pub fn raise_all(m: &mut f64, lanes: [f64; 4]) {
+pub fn raise_all<const L: usize>(m: &mut f64, lanes: [f64; L]) {
     for l in lanes {
         raise(m, l);
     }
@@ -154,7 +152,7 @@ mod tests {
             s ^= s << 17;
             s
         };
-        for len in 0..=2 * MAX_LANES + 5 {
+        for len in 0..=2 * MAXIMA_LANES + 5 {
             for _ in 0..20 {
                 let x: Vec<f64> = (0..len)
                     .map(|_| match next() % 16 {

@@ -1,7 +1,8 @@
 //! The banded linear algebra of `strip`, in one place: the symmetric band Hessian of the outer
-//! Newton step, factored by [`banded::SymBand`] (LDLᵀ without square roots). The spline's
-//! tridiagonal systems, and the tridiagonal Jacobian that places Newton's abscissae again in the
-//! caller's frame, go to [`banded::TridiagonalLu`] directly (`spline.rs`, `resolve.rs`).
+//! Newton step, factored by [`banded::SymBand`] (LDLᵀ without square roots), and the small dense
+//! solve of the whole Jacobian that places a short segment's abscissae again in the caller's
+//! frame ([`solve_dense`], `resolve.rs`). The spline's tridiagonal systems, and that Jacobian
+//! when it is tridiagonal, go to [`banded::TridiagonalLu`] directly (`spline.rs`, `resolve.rs`).
 //!
 //! Φ is a sum of terms that each couple the unknowns of two neighbouring grid points, so its
 //! Hessian is banded: half-bandwidth 1 (tridiagonal) when only slopes are unknown, up to
@@ -50,6 +51,36 @@ impl Band {
         f.solve_in_place(&mut x, 1).ok()?;
         Some(x)
     }
+}
+
+/// Solves the m × m system `a` (row-major, overwritten) x = `b` in place by Gaussian elimination
+/// with partial pivoting; `None` where a pivot vanishes or is not finite.
+pub(crate) fn solve_dense(a: &mut [f64], b: &mut [f64], m: usize) -> Option<()> {
+    for c in 0..m {
+        let p = (c..m).max_by(|&i, &k| a[i * m + c].abs().total_cmp(&a[k * m + c].abs()))?;
+        let pivot = a[p * m + c];
+        if pivot == 0.0 || !pivot.is_finite() {
+            return None;
+        }
+        if p != c {
+            for k in 0..m {
+                a.swap(p * m + k, c * m + k);
+            }
+            b.swap(p, c);
+        }
+        for i in c + 1..m {
+            let l = a[i * m + c] / pivot;
+            for k in c..m {
+                a[i * m + k] -= l * a[c * m + k];
+            }
+            b[i] -= l * b[c];
+        }
+    }
+    for c in (0..m).rev() {
+        let tail: f64 = (c + 1..m).map(|k| a[c * m + k] * b[k]).sum();
+        b[c] = (b[c] - tail) / a[c * m + c];
+    }
+    Some(())
 }
 
 #[cfg(test)]

@@ -59,6 +59,7 @@
 //! formed again, 1.6e-16 and 4.3e-16.
 
 use crate::check::worst_violation;
+use crate::linalg::solve_dense;
 use crate::piece::{cubic3, shift};
 use crate::spline::Spline;
 use crate::strategy::ACCEPT_GAP;
@@ -232,36 +233,6 @@ const DENSE_PLACE: usize = 8;
 /// Jacobian's differences (what the others feel of it decays like 0.27⁵ or faster).
 const COLOURS: usize = 5;
 
-/// Solves the m × m system `a` (row-major, overwritten) x = `b` in place by Gaussian elimination
-/// with partial pivoting; `None` where a pivot vanishes or is not finite.
-fn solve_dense(a: &mut [f64], b: &mut [f64], m: usize) -> Option<()> {
-    for c in 0..m {
-        let p = (c..m).max_by(|&i, &k| a[i * m + c].abs().total_cmp(&a[k * m + c].abs()))?;
-        let pivot = a[p * m + c];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return None;
-        }
-        if p != c {
-            for k in 0..m {
-                a.swap(p * m + k, c * m + k);
-            }
-            b.swap(p, c);
-        }
-        for i in c + 1..m {
-            let l = a[i * m + c] / pivot;
-            for k in c..m {
-                a[i * m + k] -= l * a[c * m + k];
-            }
-            b[i] -= l * b[c];
-        }
-    }
-    for c in (0..m).rev() {
-        let tail: f64 = (c + 1..m).map(|k| a[c * m + k] * b[k]).sum();
-        b[c] = (b[c] - tail) / a[c * m + c];
-    }
-    Some(())
-}
-
 /// An abscissa that Newton on Φ's answer leaves to its solver's tolerance, placed again
 /// ([`Breaks::place`]): break `j` on the bound of `side`, where f'' joins the bound's (a
 /// subarc's end: `second`) or f' meets the bound's (a tangency).
@@ -390,10 +361,10 @@ impl Breaks {
             }
             let mut step = r.clone();
             if dense {
-                solve_dense(&mut jac.clone(), &mut step, m)?;
+                // (the elimination overwrites `jac`: the next step measures all of it again)
+                solve_dense(&mut jac, &mut step, m)?;
             } else {
-                let rows: Vec<[f64; 3]> = jac.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                let lu = TridiagonalLu::factor(&rows).ok()?;
+                let lu = TridiagonalLu::factor(jac.as_chunks::<3>().0).ok()?;
                 lu.solve_in_place(&mut step, 1).ok()?;
             }
             let mut moved = false;

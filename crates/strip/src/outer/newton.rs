@@ -107,24 +107,20 @@ pub(crate) fn newton(
             break;
         }
         trail.push((ev.phi, gnorm));
-        if let Some(&(phi0, g0)) = trail
-            .len()
-            .checked_sub(STALL_ITERATIONS + 1)
-            .map(|k| &trail[k])
+        // over the last `window` iterations Φ fell by no more than `fraction` of itself (plus
+        // its rounding) while ‖∇Φ‖∞ did not fall below STALL_GRADIENT of itself
+        let plateau = |window: usize, fraction: f64| {
+            trail.len().checked_sub(window + 1).is_some_and(|k| {
+                let (phi0, g0) = trail[k];
+                phi0 - ev.phi <= fraction * phi0.abs() + PHI_ROUNDING * (1.0 + ev.phi.abs())
+                    && gnorm > STALL_GRADIENT * g0
+            })
+        };
+        if plateau(STALL_ITERATIONS, STALL_PHI)
+            || (searched >= STALL_ROUNDING_ITERATIONS && plateau(STALL_ROUNDING_ITERATIONS, 0.0))
         {
-            if phi0 - ev.phi <= STALL_PHI * phi0.abs() + PHI_ROUNDING * (1.0 + ev.phi.abs())
-                && gnorm > STALL_GRADIENT * g0
-            {
-                stalled = true;
-                break;
-            }
-        }
-        if searched >= STALL_ROUNDING_ITERATIONS {
-            let (phi0, g0) = trail[trail.len() - 1 - STALL_ROUNDING_ITERATIONS];
-            if phi0 - ev.phi <= PHI_ROUNDING * (1.0 + ev.phi.abs()) && gnorm > STALL_GRADIENT * g0 {
-                stalled = true;
-                break;
-            }
+            stalled = true;
+            break;
         }
         it += 1;
         progress(&Progress::Newton {
