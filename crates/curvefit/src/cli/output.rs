@@ -6,7 +6,9 @@
 //! 2. the streams — standard output, devices, FIFOs, which cannot be taken back once written —
 //!    are written (when there are several, all but the last are rendered into memory first, so
 //!    a rendering cannot fail between two of them);
-//! 3. the temporaries are renamed over their targets.
+//! 3. the temporaries are renamed over their targets (on Linux a target that is a regular file is
+//!    exchanged with its temporary, and the temporary — now the old content — removed:
+//!    [`put_in_place`]).
 //!
 //! A failure in 1 or 2 removes every temporary, so no file is created or changed; the streams
 //! come before the renames because a write to a full disk or a closed pipe is far likelier than
@@ -218,13 +220,35 @@ impl<'a> Outputs<'a> {
             }
         }
         for (i, (tmp, path, flag)) in temps.iter().enumerate() {
-            if let Err(e) = std::fs::rename(tmp, path) {
+            if let Err(e) = put_in_place(tmp, path) {
                 cleanup(&temps[i..]);
                 return Err(fail(flag, &path.display().to_string(), e));
             }
         }
         Ok(())
     }
+}
+
+/// Renames the staged `tmp` to `path`, atomically: a reader of `path` sees its old content or the
+/// new, never neither. On Linux a regular file at `path` is exchanged with `tmp` instead
+/// (`renameat2` with `RENAME_EXCHANGE`) and its old content, now at `tmp`, removed: renaming over
+/// an existing file makes ext4 (`auto_da_alloc`, on by default) allocate and start writing back
+/// the new file's blocks inside the rename, which held a 52.7 MB JSON output's rename for
+/// 36–40 ms; exchanged, the data is written back as any new file's is, and the old content's
+/// removal takes ~13 ms. Anything else at `path` (nothing, a symbolic link, a directory), and a
+/// file system that cannot exchange, gets a plain rename and its errors.
+fn put_in_place(tmp: &Path, path: &Path) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
+        use rustix::fs::{renameat_with, RenameFlags, CWD};
+        if renameat_with(CWD, tmp, CWD, path, RenameFlags::EXCHANGE).is_ok() {
+            // The output is in place; what is left at `tmp` is the replaced content. (Were it
+            // not removable, the committed output would still be right: not an error.)
+            let _ = std::fs::remove_file(tmp);
+            return Ok(());
+        }
+    }
+    std::fs::rename(tmp, path)
 }
 
 #[cfg(test)]
@@ -273,6 +297,59 @@ mod tests {
         let e = o.commit(&mut Vec::new()).unwrap_err();
         assert_eq!(e.field, "--svg");
         assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0);
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// The names in `d`, sorted.
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// One output committed to `path` with `content`.
+    fn commit_one(path: &Path, content: &[u8]) -> Result<(), InputError> {
+        let mut o = Outputs::new();
+        o.add("-o", Some(path), bytes_writer(content.to_vec()))?;
+        o.commit(&mut Vec::new())
+    }
+
+    /// [`put_in_place`]: a regular file is replaced by the new content and its old content leaves
+    /// nothing behind (the exchange's temporary removed); a symbolic link is replaced as `rename`
+    /// replaces it (the link, not its target); a directory is refused and left as it was.
+    #[test]
+    fn replacing_leaves_the_new_content_and_nothing_else() {
+        let d = scratch("replace");
+        let a = d.join("a.json");
+        commit_one(&a, b"old").unwrap();
+        commit_one(&a, b"new").unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), b"new");
+        assert_eq!(names(&d), ["a.json"]);
+        #[cfg(unix)]
+        {
+            let target = d.join("target.json");
+            std::fs::write(&target, b"kept").unwrap();
+            let link = d.join("link.json");
+            std::os::unix::fs::symlink(&target, &link).unwrap();
+            commit_one(&link, b"through").unwrap();
+            assert_eq!(std::fs::read(&target).unwrap(), b"kept");
+            assert!(std::fs::symlink_metadata(&link).unwrap().is_file());
+            assert_eq!(std::fs::read(&link).unwrap(), b"through");
+        }
+        let dir = d.join("dir.json");
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::write(dir.join("inside"), b"x").unwrap();
+        let e = commit_one(&dir, b"no").unwrap_err();
+        assert_eq!(e.field, "-o");
+        assert_eq!(std::fs::read(dir.join("inside")).unwrap(), b"x");
+        assert!(
+            names(&d).iter().all(|n| !n.ends_with(".tmp")),
+            "{:?}",
+            names(&d)
+        );
         let _ = std::fs::remove_dir_all(&d);
     }
 }
