@@ -8,7 +8,7 @@
 //!    a rendering cannot fail between two of them);
 //! 3. the temporaries are renamed over their targets (on Linux a target that is a regular file is
 //!    exchanged with its temporary, and the temporary — now the old content — removed:
-//!    [`put_in_place`]).
+//!    `put_in_place`).
 //!
 //! A failure in 1 or 2 removes every temporary, so no file is created or changed; the streams
 //! come before the renames because a write to a full disk or a closed pipe is far likelier than
