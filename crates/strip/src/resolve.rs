@@ -359,7 +359,8 @@ impl Breaks {
                     }
                 }
             }
-            let mut step = r.clone();
+            // (solved in place: the step's right-hand side is the mismatch, measured again below)
+            let mut step = std::mem::take(&mut r);
             if dense {
                 // (the elimination overwrites `jac`: the next step measures all of it again)
                 solve_dense(&mut jac, &mut step, m)?;
